@@ -1,0 +1,140 @@
+// voxmesh: marching cubes on every compute device a machine has.
+// The whole public API: plain structs and free functions, no OpenCL types.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#define VOXMESH_VERSION_MAJOR 0
+#define VOXMESH_VERSION_MINOR 1
+#define VOXMESH_VERSION_PATCH 0
+#define VOXMESH_VERSION_STRING "0.1.0"
+
+namespace voxmesh {
+
+// Every failure throws this, with a message a user can act on.
+struct Error : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+enum class ScalarType { U8, I8, U16, I16, U32, I32, F32, F64 };
+std::size_t scalar_size(ScalarType type);
+const char* scalar_name(ScalarType type);  // "u8", "i16", "f32", ...
+
+enum class Backend { Auto, Cpu, OpenCL, Hybrid };
+const char* backend_name(Backend backend);  // "auto", "cpu", "opencl", "hybrid"
+
+// A non-owning view of x-fastest samples: index = x + nx * (y + ny * z).
+struct VolumeView {
+    const void* data = nullptr;
+    ScalarType type = ScalarType::F32;
+    std::array<std::size_t, 3> dims{0, 0, 0};
+    std::array<double, 3> spacing{1, 1, 1};
+    std::array<double, 3> origin{0, 0, 0};
+};
+
+// An owning volume, as readers return it. `storage` keeps the samples alive (a heap block
+// or a memory map); `data` points at the first sample.
+struct Volume {
+    ScalarType type = ScalarType::F32;
+    std::array<std::size_t, 3> dims{0, 0, 0};
+    std::array<double, 3> spacing{1, 1, 1};
+    std::array<double, 3> origin{0, 0, 0};
+    std::shared_ptr<void> storage;
+    void* data = nullptr;
+
+    // Zero-filled samples; throws Error when the size overflows or cannot be allocated.
+    static Volume allocate(ScalarType type, std::array<std::size_t, 3> dims);
+    std::size_t sample_count() const;
+    std::size_t byte_size() const;
+    VolumeView view() const;
+};
+
+// The checked product nx*ny*nz*scalar_size; throws Error on overflow.
+std::size_t checked_volume_bytes(std::array<std::size_t, 3> dims, ScalarType type);
+
+enum class DeviceType { Any, Cpu, Gpu, Accelerator };
+
+struct Options {
+    double iso = 0;
+    Backend backend = Backend::Auto;
+    unsigned threads = 0;       // CPU worker threads; 0 = all cores
+    bool normals = true;
+    bool inside_below = false;  // flip: inside where value < iso (SDFs); winding and normals only
+
+    // OpenCL device choice: indices into list_devices(); empty = every device of device_type.
+    std::vector<int> devices;
+    DeviceType device_type = DeviceType::Any;
+    std::size_t chunk_planes = 0;   // z-planes per chunk; 0 = automatic
+    std::size_t memory_budget = 0;  // bytes per device for one chunk; 0 = the device's limits
+    // Warnings (fallback to the CPU engine, smaller chunks after an allocation failure, ...).
+    std::function<void(const std::string&)> log;
+};
+
+// One vertex per crossed edge, welded; see README "The canonical mesh".
+struct Mesh {
+    std::vector<float> positions;  // xyz per vertex
+    std::vector<float> normals;    // xyz per vertex, unit, outward; empty when normals are off
+    std::vector<std::uint32_t> indices;  // three per triangle, counter-clockwise seen from outside
+
+    std::size_t vertex_count() const { return positions.size() / 3; }
+    std::size_t triangle_count() const { return indices.size() / 3; }
+};
+
+struct PassTimes {  // seconds
+    double classify = 0, scan = 0, generate = 0, total = 0;
+};
+
+struct DeviceStats {
+    std::string name;           // "cpu" or the OpenCL device name
+    std::size_t chunks = 0;
+    std::size_t voxels = 0;     // samples in the chunks it meshed
+    double kernel_s = 0;        // device execution time (profiling events)
+    double transfer_s = 0;      // host<->device copies
+    double wall_s = 0;
+};
+
+struct Stats {
+    Backend backend = Backend::Cpu;  // what actually ran
+    unsigned threads = 0;            // CPU workers used
+    PassTimes times;
+    std::vector<DeviceStats> devices;
+    std::vector<std::string> warnings;  // also sent to Options::log
+};
+
+// The iso-surface of `volume` at options.iso, as the canonical mesh.
+Mesh extract(const VolumeView& volume, const Options& options);
+Mesh extract(const VolumeView& volume, const Options& options, Stats& stats);
+
+// Writes .stl (binary), .ply (binary) or .obj, chosen by extension, through a temporary
+// file renamed into place: a failure never leaves a partial file.
+void write_mesh(const std::string& path, const Mesh& mesh);
+
+// Topology summary: closed means every edge is in exactly two triangles.
+struct MeshTopology {
+    std::size_t boundary_edges = 0;      // edges in one triangle
+    std::size_t nonmanifold_edges = 0;   // edges in three or more
+    long long euler = 0;                 // V - E + F over referenced vertices
+    bool closed() const { return boundary_edges == 0 && nonmanifold_edges == 0; }
+};
+MeshTopology analyze_topology(const Mesh& mesh);
+
+// OpenCL devices as plain structs (empty without OpenCL or without a platform).
+struct DeviceInfo {
+    int index = 0;
+    std::string platform, name, version;
+    DeviceType type = DeviceType::Cpu;
+    unsigned compute_units = 0;
+    std::uint64_t global_memory = 0, max_allocation = 0;
+    bool fp64 = false;
+};
+std::vector<DeviceInfo> list_devices();
+bool opencl_available();  // built with OpenCL and at least one usable device
+
+}  // namespace voxmesh

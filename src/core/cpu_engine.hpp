@@ -1,0 +1,65 @@
+// The multi-threaded CPU engine: classify, scan and generate over z-slabs.
+//
+// It meshes a range of sample planes [begin, end): those planes own their vertices (the
+// crossed +x, +y, +z edges of their samples) and cell planes [begin, min(end, nz-1)) own
+// their triangles. Vertex ids are local to the range and continue, in canonical order,
+// into plane `end` (the next range's first plane), so a chunk's global vertex id is
+// always its vertex base plus the local id. The OpenCL engine follows the same rule.
+#pragma once
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace voxmesh::detail {
+
+struct ZRange {
+    std::size_t begin = 0, end = 0;
+};
+
+constexpr std::uint32_t kEmptyRow = std::numeric_limits<std::uint32_t>::max();
+
+// What the classify pass learns about one sample row (y, z) and the cell row it starts.
+struct RowInfo {
+    std::uint32_t first = kEmptyRow;  // first x whose owned edges cross; kEmptyRow if none
+    std::uint32_t last = 0;           // last such x
+    std::uint32_t vertices = 0;       // crossed edges owned by the row
+    std::uint32_t triangles = 0;      // triangles of cells (x, y, z) for all x
+    std::uint8_t uniform_bit = 0;     // the row's inside bit when it has no crossing
+};
+
+// Classify + scan result for one z-range: per-row counts and their exclusive prefix sums.
+struct CpuChunkPlan {
+    ZRange range;
+    std::size_t meta_planes = 0;             // planes with RowInfo: the range plus plane `end` if it exists
+    std::vector<RowInfo> rows;               // meta_planes * ny
+    std::vector<std::uint32_t> vertex_base;  // local id of each row's first vertex
+    std::vector<std::uint64_t> triangle_base;
+    std::uint64_t vertices = 0;   // owned by the range (excludes plane `end`)
+    std::uint64_t triangles = 0;
+    bool uniform = false;         // no sample can cross iso: nothing to generate
+    double classify_seconds = 0, scan_seconds = 0;
+};
+
+// Where generate writes: positions/normals of vertex 0 of the range, its first triangle,
+// and the global id of its first vertex (added to every index). normals may be null.
+struct MeshOut {
+    float* positions = nullptr;
+    float* normals = nullptr;
+    std::uint32_t* indices = nullptr;
+    std::uint32_t vertex_base = 0;
+};
+
+CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRange range, unsigned threads);
+void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Options& options, unsigned threads,
+                  const MeshOut& out);
+
+// Whole-volume extraction written straight into the mesh (no merge copy).
+Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats);
+
+// Throws Error unless every dimension is >= 2, data is set and the size is addressable.
+void validate_volume(const VolumeView& volume);
+
+}  // namespace voxmesh::detail

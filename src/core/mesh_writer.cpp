@@ -1,0 +1,144 @@
+#include "atomic_file.hpp"
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+namespace voxmesh {
+
+namespace {
+
+using detail::write_bytes;
+
+std::string lower_extension(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return ext;
+}
+
+void check_mesh(const Mesh& mesh) {
+    if (mesh.positions.size() % 3 || mesh.indices.size() % 3) throw Error("mesh arrays are not multiples of 3");
+    if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
+        throw Error("mesh has normals for a different number of vertices than positions");
+    const std::size_t n = mesh.vertex_count();
+    for (std::uint32_t i : mesh.indices)
+        if (i >= n) throw Error("mesh index " + std::to_string(i) + " is out of range (" + std::to_string(n) + " vertices)");
+}
+
+// Binary STL: 80-byte header, uint32 count, then per triangle a facet normal, 3 vertices and
+// a 16-bit attribute, all little-endian (x86 and ARM hosts are little-endian).
+void write_stl(std::FILE* f, const Mesh& mesh) {
+    if (mesh.triangle_count() > 0xffffffffull) throw Error("too many triangles for STL");
+    char header[80] = {};
+    std::snprintf(header, sizeof header, "binary STL written by voxmesh %s", VOXMESH_VERSION_STRING);
+    write_bytes(f, header, 80);
+    const std::uint32_t count = static_cast<std::uint32_t>(mesh.triangle_count());
+    write_bytes(f, &count, 4);
+    std::vector<unsigned char> buffer;
+    buffer.reserve(50 * 4096);
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+        const float* p[3];
+        for (int k = 0; k < 3; ++k) p[k] = &mesh.positions[3 * static_cast<std::size_t>(mesh.indices[3 * t + k])];
+        const float u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        const float v[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        float n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (float& c : n) c = len > 0 ? c / len : 0.f;
+        unsigned char record[50] = {};
+        std::memcpy(record, n, 12);
+        for (int k = 0; k < 3; ++k) std::memcpy(record + 12 + 12 * k, p[k], 12);
+        buffer.insert(buffer.end(), record, record + 50);
+        if (buffer.size() >= 50 * 4096) {
+            write_bytes(f, buffer.data(), buffer.size());
+            buffer.clear();
+        }
+    }
+    write_bytes(f, buffer.data(), buffer.size());
+}
+
+void write_ply(std::FILE* f, const Mesh& mesh) {
+    const bool normals = !mesh.normals.empty();
+    std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by voxmesh " +
+                         std::string(VOXMESH_VERSION_STRING) + "\nelement vertex " +
+                         std::to_string(mesh.vertex_count()) + "\nproperty float x\nproperty float y\nproperty float z\n";
+    if (normals) header += "property float nx\nproperty float ny\nproperty float nz\n";
+    header += "element face " + std::to_string(mesh.triangle_count()) +
+              "\nproperty list uchar uint vertex_indices\nend_header\n";
+    write_bytes(f, header.data(), header.size());
+    std::vector<float> vertex_block;
+    const std::size_t stride = normals ? 6 : 3;
+    constexpr std::size_t kBatch = 8192;
+    for (std::size_t v = 0; v < mesh.vertex_count(); v += kBatch) {
+        const std::size_t n = std::min(kBatch, mesh.vertex_count() - v);
+        vertex_block.resize(n * stride);
+        for (std::size_t i = 0; i < n; ++i) {
+            std::memcpy(&vertex_block[i * stride], &mesh.positions[3 * (v + i)], 12);
+            if (normals) std::memcpy(&vertex_block[i * stride + 3], &mesh.normals[3 * (v + i)], 12);
+        }
+        write_bytes(f, vertex_block.data(), vertex_block.size() * sizeof(float));
+    }
+    std::vector<unsigned char> face_block;
+    for (std::size_t t = 0; t < mesh.triangle_count(); t += kBatch) {
+        const std::size_t n = std::min(kBatch, mesh.triangle_count() - t);
+        face_block.resize(n * 13);
+        for (std::size_t i = 0; i < n; ++i) {
+            face_block[i * 13] = 3;
+            std::memcpy(&face_block[i * 13 + 1], &mesh.indices[3 * (t + i)], 12);
+        }
+        write_bytes(f, face_block.data(), face_block.size());
+    }
+}
+
+void write_obj(std::FILE* f, const Mesh& mesh) {
+    const bool normals = !mesh.normals.empty();
+    std::string out = "# written by voxmesh " + std::string(VOXMESH_VERSION_STRING) + "\n";
+    char line[128];
+    auto flush = [&] {
+        if (out.size() > (1u << 20)) {
+            write_bytes(f, out.data(), out.size());
+            out.clear();
+        }
+    };
+    // %.9g round-trips a float exactly.
+    for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+        const float* p = &mesh.positions[3 * v];
+        out.append(line, std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", p[0], p[1], p[2]));
+        flush();
+    }
+    if (normals)
+        for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
+            const float* n = &mesh.normals[3 * v];
+            out.append(line, std::snprintf(line, sizeof line, "vn %.9g %.9g %.9g\n", n[0], n[1], n[2]));
+            flush();
+        }
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+        const unsigned long long a = mesh.indices[3 * t] + 1ull, b = mesh.indices[3 * t + 1] + 1ull,
+                                 c = mesh.indices[3 * t + 2] + 1ull;
+        const int n = normals ? std::snprintf(line, sizeof line, "f %llu//%llu %llu//%llu %llu//%llu\n", a, a, b, b, c, c)
+                              : std::snprintf(line, sizeof line, "f %llu %llu %llu\n", a, b, c);
+        out.append(line, n);
+        flush();
+    }
+    write_bytes(f, out.data(), out.size());
+}
+
+}  // namespace
+
+void write_mesh(const std::string& path, const Mesh& mesh) {
+    const std::string ext = lower_extension(path);
+    void (*writer)(std::FILE*, const Mesh&) = nullptr;
+    if (ext == ".stl") writer = write_stl;
+    else if (ext == ".ply") writer = write_ply;
+    else if (ext == ".obj") writer = write_obj;
+    else throw Error("cannot write '" + path + "': unknown mesh format '" + ext + "' (use .stl, .ply or .obj)");
+    check_mesh(mesh);
+    detail::write_file_atomically(path, [&](std::FILE* f) { writer(f, mesh); });
+}
+
+}  // namespace voxmesh

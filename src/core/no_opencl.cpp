@@ -1,0 +1,11 @@
+#include "opencl_hook.hpp"
+
+namespace voxmesh::detail {
+
+Mesh opencl_extract(const VolumeView&, const Options&, Stats&, bool) {
+    throw Error("voxmesh was built without OpenCL (VOXMESH_WITH_OPENCL=OFF); use the cpu backend");
+}
+
+std::vector<DeviceInfo> opencl_devices() { return {}; }
+
+}  // namespace voxmesh::detail

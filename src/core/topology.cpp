@@ -1,0 +1,37 @@
+#include <voxmesh/voxmesh.hpp>
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+namespace voxmesh {
+
+MeshTopology analyze_topology(const Mesh& mesh) {
+    std::vector<std::uint64_t> edges;
+    edges.reserve(mesh.indices.size());
+    std::vector<bool> used(mesh.vertex_count(), false);
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+        for (int k = 0; k < 3; ++k) {
+            const std::uint64_t a = mesh.indices[3 * t + k], b = mesh.indices[3 * t + (k + 1) % 3];
+            edges.push_back(std::min(a, b) << 32 | std::max(a, b));
+            if (a < used.size()) used[a] = true;
+        }
+    }
+    std::sort(edges.begin(), edges.end());
+    MeshTopology topo;
+    long long unique_edges = 0;
+    for (std::size_t i = 0; i < edges.size();) {
+        std::size_t j = i;
+        while (j < edges.size() && edges[j] == edges[i]) ++j;
+        const std::size_t uses = j - i;
+        ++unique_edges;
+        if (uses == 1) ++topo.boundary_edges;
+        else if (uses > 2) ++topo.nonmanifold_edges;
+        i = j;
+    }
+    const long long vertices = std::count(used.begin(), used.end(), true);
+    topo.euler = vertices - unique_edges + static_cast<long long>(mesh.triangle_count());
+    return topo;
+}
+
+}  // namespace voxmesh
