@@ -88,6 +88,24 @@ inline unsigned column_code(const std::uint8_t* a, const std::uint8_t* b, const 
     return a[i] | b[i] << 1 | c[i] << 2 | d[i] << 3;
 }
 
+inline std::uint64_t load8(const std::uint8_t* p) {
+    std::uint64_t w;
+    std::memcpy(&w, p, 8);
+    return w;
+}
+
+// Inside the surface and far outside it, long stretches of a row are one value. These
+// tests let the loops over a row's span step 8 samples at a time through such stretches.
+constexpr std::uint64_t kAllOnes = 0x0101010101010101ull;
+
+// Bytes [i, i+9) of rows a..d all equal row a's byte i: cells i..i+7 are trivial.
+inline bool eight_trivial_cells(const std::uint8_t* a, const std::uint8_t* b, const std::uint8_t* c,
+                                const std::uint8_t* d, std::size_t i) {
+    const std::uint64_t v = a[i] ? kAllOnes : 0;
+    return ((load8(a + i) ^ v) | (load8(a + i + 1) ^ v) | (load8(b + i) ^ v) | (load8(b + i + 1) ^ v) |
+            (load8(c + i) ^ v) | (load8(c + i + 1) ^ v) | (load8(d + i) ^ v) | (load8(d + i + 1) ^ v)) == 0;
+}
+
 // Bits of a plane: in the planes that have RowInfo, a row without crossings is uniform and
 // is filled without reading the volume.
 template <class T>
@@ -220,6 +238,11 @@ private:
             std::uint32_t* id = edges.id.data() + j * nx_;
             std::uint32_t next_id = bases[j];
             for (std::size_t i = info.first; i <= info.last; ++i) {
+                if (i + 9 <= info.last && next_y && next_z && eight_trivial_cells(row, row, next_y, next_z, i)) {
+                    std::memset(code + i, 0, 8);  // ids of samples without crossings are never read
+                    i += 7;
+                    continue;
+                }
                 unsigned c = i + 1 < nx_ ? row[i] ^ row[i + 1] : 0;
                 if (next_y) c |= (row[i] ^ next_y[i]) << 1;
                 if (next_z) c |= (row[i] ^ next_z[i]) << 2;
@@ -230,6 +253,7 @@ private:
             if (!write_vertices) continue;
             for (std::size_t i = info.first; i <= info.last; ++i) {
                 const unsigned c = code[i];
+                if (c == 0) continue;
                 for (unsigned axis = 0; axis < 3; ++axis)
                     if (c >> axis & 1) write_vertex(i, j, z, axis, edge_id(edges, j * nx_ + i, axis));
             }
@@ -277,11 +301,13 @@ private:
             if (!cell_span(rows[j], rows[j + 1], nx_, begin, end)) continue;
             const std::uint8_t *a = plane0 + j * nx_, *b = a + nx_, *c = plane1 + j * nx_, *d = c + nx_;
             std::uint32_t* out = out_.indices + 3 * tri_base[j];
-            unsigned left = column_code(a, b, c, d, begin);
             for (std::size_t i = begin; i < end; ++i) {
-                const unsigned right = column_code(a, b, c, d, i + 1);
-                const CaseEntry& entry = kCaseTable[kColumnPairToCase[left | right << 4]];
-                left = right;
+                if (i + 9 <= end && eight_trivial_cells(a, b, c, d, i)) {
+                    i += 7;
+                    continue;
+                }
+                const unsigned pair = column_code(a, b, c, d, i) | column_code(a, b, c, d, i + 1) << 4;
+                const CaseEntry& entry = kCaseTable[kColumnPairToCase[pair]];
                 for (unsigned t = 0; t < entry.count; ++t) {
                     std::uint32_t v[3];
                     for (unsigned e = 0; e < 3; ++e) {
@@ -329,11 +355,13 @@ void classify_planes(const CpuChunkPlan& plan, RowInfo* rows, const VolumeView& 
                 if (!cell_span(row_info[j], row_info[j + 1], nx, begin, end)) continue;
                 const std::uint8_t *ra = here.data() + j * nx, *rb = ra + nx, *rc = up.data() + j * nx, *rd = rc + nx;
                 std::uint32_t count = 0;
-                unsigned left = column_code(ra, rb, rc, rd, begin);
                 for (std::size_t i = begin; i < end; ++i) {
-                    const unsigned right = column_code(ra, rb, rc, rd, i + 1);
-                    count += kCaseTable[kColumnPairToCase[left | right << 4]].count;
-                    left = right;
+                    if (i + 9 <= end && eight_trivial_cells(ra, rb, rc, rd, i)) {
+                        i += 7;
+                        continue;
+                    }
+                    const unsigned pair = column_code(ra, rb, rc, rd, i) | column_code(ra, rb, rc, rd, i + 1) << 4;
+                    count += kCaseTable[kColumnPairToCase[pair]].count;
                 }
                 row_info[j].triangles = count;
             }
