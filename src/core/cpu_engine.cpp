@@ -1,6 +1,7 @@
 #include "cpu_engine.hpp"
 
 #include "case_tables.hpp"
+#include "edge_vertex.hpp"
 #include "parallel.hpp"
 #include "scalar_dispatch.hpp"
 #include "threshold.hpp"
@@ -137,30 +138,6 @@ std::vector<std::size_t> balanced_split(const std::vector<double>& cost, unsigne
 
 // ---------------------------------------------------------------- generate
 
-template <class T>
-struct Sampler {
-    const T* data;
-    std::size_t nx, ny, nz, sy, sz;
-    double inv_spacing[3];
-
-    double at(std::size_t i, std::size_t j, std::size_t k) const {
-        return static_cast<double>(data[i + j * sy + k * sz]);
-    }
-    // Central differences, one-sided at the border, divided by spacing.
-    void gradient(std::size_t i, std::size_t j, std::size_t k, double g[3]) const {
-        const std::size_t idx = i + j * sy + k * sz;
-        auto diff = [&](std::size_t pos, std::size_t n, std::size_t stride, double inv) {
-            const double hi = static_cast<double>(data[pos + 1 < n ? idx + stride : idx]);
-            const double lo = static_cast<double>(data[pos > 0 ? idx - stride : idx]);
-            const double step = (pos > 0 && pos + 1 < n) ? 0.5 : 1.0;
-            return (hi - lo) * step * inv;
-        };
-        g[0] = diff(i, nx, 1, inv_spacing[0]);
-        g[1] = diff(j, ny, sy, inv_spacing[1]);
-        g[2] = diff(k, nz, sz, inv_spacing[2]);
-    }
-};
-
 struct EdgePlane {  // per sample of one plane: crossed-edge code and first local vertex id
     std::vector<std::uint8_t> code;
     std::vector<std::uint32_t> id;
@@ -179,14 +156,15 @@ class Generator {
 public:
     Generator(const CpuChunkPlan& plan, const VolumeView& volume, const Options& options, const MeshOut& out,
               T threshold)
-        : plan_(plan), options_(options), out_(out), threshold_(threshold) {
+        : plan_(plan),
+          options_(options),
+          out_(out),
+          threshold_(threshold),
+          data_(static_cast<const T*>(volume.data)),
+          vertex_(volume, options.iso, options.inside_below) {
         nx_ = volume.dims[0];
         ny_ = volume.dims[1];
         nz_ = volume.dims[2];
-        sampler_ = {static_cast<const T*>(volume.data), nx_, ny_, nz_, nx_, nx_ * ny_,
-                    {1 / volume.spacing[0], 1 / volume.spacing[1], 1 / volume.spacing[2]}};
-        spacing_ = volume.spacing;
-        origin_ = volume.origin;
         const std::size_t plane = nx_ * ny_;
         for (auto& b : bits_) b.resize(plane);
         for (auto& e : edges_) {
@@ -221,7 +199,7 @@ private:
     }
 
     void fill_bits(std::size_t z, int slot) {
-        fill_plane_bits(sampler_.data + z * nx_ * ny_, meta_rows(z), nx_, ny_, threshold_, bits_[slot].data());
+        fill_plane_bits(data_ + z * nx_ * ny_, meta_rows(z), nx_, ny_, threshold_, bits_[slot].data());
     }
 
     void build_edges(std::size_t z, const std::uint8_t* bits, const std::uint8_t* bits_up, EdgePlane& edges,
@@ -261,33 +239,8 @@ private:
     }
 
     void write_vertex(std::size_t i, std::size_t j, std::size_t k, unsigned axis, std::uint32_t id) {
-        const std::size_t i1 = i + (axis == 0), j1 = j + (axis == 1), k1 = k + (axis == 2);
-        const double v0 = sampler_.at(i, j, k), v1 = sampler_.at(i1, j1, k1);
-        const double t = (options_.iso - v0) / (v1 - v0);
-        const double index[3] = {static_cast<double>(i), static_cast<double>(j), static_cast<double>(k)};
-        float* p = out_.positions + 3 * static_cast<std::size_t>(id);
-        for (unsigned d = 0; d < 3; ++d)
-            p[d] = static_cast<float>(origin_[d] + (index[d] + (d == axis ? t : 0.0)) * spacing_[d]);
-        if (!out_.normals) return;
-        double g0[3], g1[3], n[3];
-        sampler_.gradient(i, j, k, g0);
-        sampler_.gradient(i1, j1, k1, g1);
-        // Outward is toward decreasing values: the negated gradient (flipped for inside_below).
-        const double sign = options_.inside_below ? 1.0 : -1.0;
-        double len2 = 0;
-        for (unsigned d = 0; d < 3; ++d) {
-            n[d] = sign * (g0[d] + t * (g1[d] - g0[d]));
-            len2 += n[d] * n[d];
-        }
-        float* q = out_.normals + 3 * static_cast<std::size_t>(id);
-        if (len2 > 0 && std::isfinite(len2)) {
-            const double inv = 1 / std::sqrt(len2);
-            for (unsigned d = 0; d < 3; ++d) q[d] = static_cast<float>(n[d] * inv);
-        } else {
-            // Flat gradient: point along the edge, from its inside end to its outside end.
-            const bool first_inside = (v0 >= options_.iso) != options_.inside_below;
-            for (unsigned d = 0; d < 3; ++d) q[d] = d == axis ? (first_inside ? 1.f : -1.f) : 0.f;
-        }
+        const std::size_t at = 3 * static_cast<std::size_t>(id);
+        vertex_(i, j, k, axis, out_.positions + at, out_.normals ? out_.normals + at : nullptr);
     }
 
     void emit_triangles(std::size_t k) {
@@ -328,9 +281,9 @@ private:
     const Options& options_;
     MeshOut out_;
     T threshold_;
+    const T* data_;
+    EdgeVertex<T> vertex_;
     std::size_t nx_, ny_, nz_;
-    Sampler<T> sampler_;
-    std::array<double, 3> spacing_, origin_;
     std::vector<std::uint8_t> bits_[3];
     EdgePlane edges_[2];
 };
