@@ -1,0 +1,346 @@
+// Triangle mesh -> volume. See include/voxmesh/voxelize.hpp for the rules.
+//
+// Two passes over z-slabs, one slab per worker, each writing only its own samples:
+//  1. distance (Distance field only): every triangle near the slab updates the squared
+//     distance of the samples within `band` voxels of its plane and box;
+//  2. inside test: for every row (y, z) the crossings of the ray along +x with the mesh,
+//     decided on a fixed-point lattice with exact integer predicates and a symbolic
+//     perturbation of the ray, sorted; a sample is inside after an odd number of them.
+// Every sample is a function of the mesh alone, so the result does not depend on threads.
+
+#include <voxmesh/voxelize.hpp>
+
+#include "core/parallel.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <string>
+#include <vector>
+
+namespace voxmesh {
+
+namespace {
+
+constexpr int kFixedBits = 16;                  // lattice step 2^-16 voxel
+constexpr double kFixedScale = 65536.0;         // 2^kFixedBits
+constexpr std::size_t kMaxResolution = 4096;
+constexpr std::size_t kMaxPadding = 256;
+// Grid coordinates stay below 2^13, lattice coordinates below 2^29, so the 2x2
+// determinants below (products of two differences) stay below 2^60: exact in int64.
+constexpr std::size_t kMaxDim = std::size_t(1) << 13;
+
+using Vec3 = std::array<double, 3>;
+
+Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec3 cross(const Vec3& a, const Vec3& b) {
+    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+// A welded, validated triangle list.
+struct Soup {
+    std::vector<Vec3> points;                        // model coordinates, welded
+    std::vector<std::array<std::uint32_t, 3>> tris;  // non-degenerate (three distinct ids)
+};
+
+Soup weld_and_check(const Mesh& mesh) {
+    if (mesh.positions.size() % 3 || mesh.indices.size() % 3)
+        throw Error("voxelize: mesh arrays are not multiples of 3");
+    const std::size_t nv = mesh.vertex_count();
+    if (mesh.indices.empty()) throw Error("voxelize: the mesh has no triangles");
+    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
+        if (!std::isfinite(mesh.positions[i]))
+            throw Error("voxelize: vertex " + std::to_string(i / 3) + " has a non-finite coordinate");
+    for (std::uint32_t i : mesh.indices)
+        if (i >= nv)
+            throw Error("voxelize: triangle index " + std::to_string(i) + " is out of range (" +
+                        std::to_string(nv) + " vertices)");
+
+    // Weld by exact position: sort vertex ids by coordinates, equal runs share one id.
+    std::vector<std::uint32_t> order(nv);
+    std::iota(order.begin(), order.end(), 0u);
+    const float* p = mesh.positions.data();
+    auto key = [p](std::uint32_t v) { return std::array<float, 3>{p[3 * v], p[3 * v + 1], p[3 * v + 2]}; };
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
+    Soup soup;
+    std::vector<std::uint32_t> remap(nv);
+    for (std::size_t i = 0; i < nv; ++i) {
+        if (i == 0 || key(order[i]) != key(order[i - 1])) {
+            const auto k = key(order[i]);
+            soup.points.push_back({double(k[0]), double(k[1]), double(k[2])});
+        }
+        remap[order[i]] = static_cast<std::uint32_t>(soup.points.size() - 1);
+    }
+
+    std::vector<std::uint64_t> edges;
+    edges.reserve(mesh.indices.size());
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+        const std::array<std::uint32_t, 3> tri{remap[mesh.indices[3 * t]], remap[mesh.indices[3 * t + 1]],
+                                               remap[mesh.indices[3 * t + 2]]};
+        if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;  // no area, no edges
+        soup.tris.push_back(tri);
+        for (int e = 0; e < 3; ++e) {
+            const std::uint64_t a = tri[e], b = tri[(e + 1) % 3];
+            edges.push_back(a < b ? (a << 32 | b) : (b << 32 | a));
+        }
+    }
+    if (soup.tris.empty()) throw Error("voxelize: every triangle of the mesh is degenerate (no area)");
+    std::sort(edges.begin(), edges.end());
+    std::size_t open = 0, nonmanifold = 0;
+    for (std::size_t i = 0; i < edges.size();) {
+        std::size_t j = i;
+        while (j < edges.size() && edges[j] == edges[i]) ++j;
+        if (j - i == 1) ++open;
+        if (j - i > 2) ++nonmanifold;
+        i = j;
+    }
+    if (open)
+        throw Error("voxelize: the mesh is not closed: " + std::to_string(open) +
+                    " edges belong to only one triangle (holes); a watertight mesh is needed to tell inside from outside");
+    if (nonmanifold)
+        throw Error("voxelize: the mesh is not manifold: " + std::to_string(nonmanifold) +
+                    " edges belong to more than two triangles");
+    return soup;
+}
+
+// Sign of orient(a, b, p) for the ray point p perturbed to p + (eps, eps^2) in (y, z).
+// Antisymmetric in (a, b), never 0 unless a == b: both triangles at an edge see one answer.
+int orient_sos(std::int64_t ay, std::int64_t az, std::int64_t by, std::int64_t bz, std::int64_t py,
+               std::int64_t pz, std::int64_t& det) {
+    det = (by - ay) * (pz - az) - (bz - az) * (py - ay);
+    if (det != 0) return det > 0 ? 1 : -1;
+    if (bz != az) return az > bz ? 1 : -1;
+    if (by != ay) return by > ay ? 1 : -1;
+    return 0;
+}
+
+struct Grid {
+    std::array<std::size_t, 3> dims{};
+    std::array<double, 3> origin{};
+    double h = 1;
+    Vec3 to_grid(const Vec3& p) const {
+        return {(p[0] - origin[0]) / h, (p[1] - origin[1]) / h, (p[2] - origin[2]) / h};
+    }
+};
+
+Grid make_grid(const Soup& soup, const VoxelizeOptions& options) {
+    Vec3 lo = soup.points[0], hi = soup.points[0];
+    for (const auto& tri : soup.tris)
+        for (std::uint32_t v : tri)
+            for (int d = 0; d < 3; ++d) {
+                lo[d] = std::min(lo[d], soup.points[v][d]);
+                hi[d] = std::max(hi[d], soup.points[v][d]);
+            }
+    const double longest = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+    if (!(longest > 0) || !std::isfinite(longest)) throw Error("voxelize: the mesh has an empty bounding box");
+    Grid g;
+    const std::size_t n = options.resolution, pad = options.padding;
+    g.h = longest / double(n);
+    for (int d = 0; d < 3; ++d) {
+        const double cells = (hi[d] - lo[d]) / g.h;
+        const std::size_t m = std::clamp<std::size_t>(static_cast<std::size_t>(std::ceil(cells - 1e-6)), 1, n);
+        g.dims[d] = m + 2 * pad;
+        g.origin[d] = 0.5 * (lo[d] + hi[d]) - (0.5 * double(m - 1) + double(pad)) * g.h;
+    }
+    return g;
+}
+
+using Lattice = std::array<std::int64_t, 3>;
+
+// One row's crossings along +x (grid x coordinates of the hits).
+void row_crossings(const std::vector<Lattice>& q, const std::vector<std::array<std::uint32_t, 3>>& tris,
+                   const std::uint32_t* cand, std::size_t ncand, std::int64_t py, std::int64_t pz,
+                   std::vector<double>& hits) {
+    hits.clear();
+    for (std::size_t c = 0; c < ncand; ++c) {
+        const auto& t = tris[cand[c]];
+        const Lattice &a = q[t[0]], &b = q[t[1]], &cc = q[t[2]];
+        if (py < std::min({a[1], b[1], cc[1]}) || py > std::max({a[1], b[1], cc[1]})) continue;
+        const std::int64_t area = (b[1] - a[1]) * (cc[2] - a[2]) - (b[2] - a[2]) * (cc[1] - a[1]);
+        if (area == 0) continue;  // parallel to the ray: no crossing
+        const int s = area > 0 ? 1 : -1;
+        std::int64_t wc = 0, wa = 0, wb = 0;
+        if (orient_sos(a[1], a[2], b[1], b[2], py, pz, wc) != s) continue;
+        if (orient_sos(b[1], b[2], cc[1], cc[2], py, pz, wa) != s) continue;
+        if (orient_sos(cc[1], cc[2], a[1], a[2], py, pz, wb) != s) continue;
+        const double inv = 1.0 / double(area);
+        const double x = (double(wa) * double(a[0]) + double(wb) * double(b[0]) + double(wc) * double(cc[0])) * inv;
+        hits.push_back(x / kFixedScale);
+    }
+    std::sort(hits.begin(), hits.end());
+}
+
+// Squared distance from p to the segment ab (ab may have zero length).
+double segment_distance2(const Vec3& p, const Vec3& a, const Vec3& b) {
+    const Vec3 ab = sub(b, a), ap = sub(p, a);
+    const double len2 = dot(ab, ab);
+    double t = len2 > 0 ? dot(ap, ab) / len2 : 0.0;
+    t = std::clamp(t, 0.0, 1.0);
+    const Vec3 d{ap[0] - t * ab[0], ap[1] - t * ab[1], ap[2] - t * ab[2]};
+    return dot(d, d);
+}
+
+struct GridTriangle {
+    Vec3 a, b, c, n;  // grid coordinates; n = (b - a) x (c - a)
+    double n2 = 0;    // |n|^2
+};
+
+double triangle_distance2(const Vec3& p, const GridTriangle& t) {
+    if (t.n2 > 0) {
+        const Vec3 ap = sub(p, t.a);
+        const bool inside = dot(cross(sub(t.b, t.a), ap), t.n) >= 0 &&
+                            dot(cross(sub(t.c, t.b), sub(p, t.b)), t.n) >= 0 &&
+                            dot(cross(sub(t.a, t.c), sub(p, t.c)), t.n) >= 0;
+        if (inside) {
+            const double d = dot(ap, t.n);
+            return d * d / t.n2;
+        }
+    }
+    return std::min({segment_distance2(p, t.a, t.b), segment_distance2(p, t.b, t.c), segment_distance2(p, t.c, t.a)});
+}
+
+}  // namespace
+
+Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
+    if (options.resolution < 2 || options.resolution > kMaxResolution)
+        throw Error("voxelize: resolution " + std::to_string(options.resolution) + " is out of range (2.." +
+                    std::to_string(kMaxResolution) + ")");
+    if (options.padding > kMaxPadding)
+        throw Error("voxelize: padding " + std::to_string(options.padding) + " is out of range (0.." +
+                    std::to_string(kMaxPadding) + ")");
+    const bool distance = options.field == VoxelField::Distance;
+    if (distance && !(options.band >= 2 && options.band <= 1000))
+        throw Error("voxelize: band must be between 2 and 1000 voxels");
+
+    const Soup soup = weld_and_check(mesh);
+    const Grid grid = make_grid(soup, options);
+    const std::size_t nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
+    static_assert(kMaxResolution + 2 * kMaxPadding <= kMaxDim);
+
+    Volume volume = Volume::allocate(distance ? ScalarType::F32 : ScalarType::U8, grid.dims);
+    volume.spacing = {grid.h, grid.h, grid.h};
+    volume.origin = grid.origin;
+
+    // Grid coordinates (for distances) and lattice coordinates (for the inside test).
+    std::vector<Vec3> gp(soup.points.size());
+    std::vector<Lattice> q(soup.points.size());
+    for (std::size_t i = 0; i < soup.points.size(); ++i) {
+        gp[i] = grid.to_grid(soup.points[i]);
+        for (int d = 0; d < 3; ++d) q[i][d] = std::llround(gp[i][d] * kFixedScale);
+    }
+
+    // Triangles per z row (CSR): those whose lattice z range contains the row's z.
+    std::vector<std::uint32_t> row_start(nz + 1, 0), row_tris;
+    auto z_rows = [&](const std::array<std::uint32_t, 3>& t, std::size_t& k0, std::size_t& k1) {
+        const std::int64_t zmin = std::min({q[t[0]][2], q[t[1]][2], q[t[2]][2]});
+        const std::int64_t zmax = std::max({q[t[0]][2], q[t[1]][2], q[t[2]][2]});
+        const std::int64_t step = std::int64_t(1) << kFixedBits;
+        const std::int64_t lo = (zmin + step - 1) / step, hi = zmax / step;  // coordinates are >= 0
+        k0 = static_cast<std::size_t>(std::max<std::int64_t>(lo, 0));
+        k1 = static_cast<std::size_t>(std::min<std::int64_t>(hi + 1, std::int64_t(nz)));
+    };
+    for (const auto& t : soup.tris) {
+        std::size_t k0 = 0, k1 = 0;
+        z_rows(t, k0, k1);
+        for (std::size_t k = k0; k < k1; ++k) ++row_start[k + 1];
+    }
+    for (std::size_t k = 0; k < nz; ++k) row_start[k + 1] += row_start[k];
+    row_tris.resize(row_start[nz]);
+    {
+        std::vector<std::uint32_t> fill(row_start.begin(), row_start.end() - 1);
+        for (std::size_t i = 0; i < soup.tris.size(); ++i) {
+            std::size_t k0 = 0, k1 = 0;
+            z_rows(soup.tris[i], k0, k1);
+            for (std::size_t k = k0; k < k1; ++k) row_tris[fill[k]++] = static_cast<std::uint32_t>(i);
+        }
+    }
+
+    std::vector<GridTriangle> gtris;
+    if (distance) {
+        gtris.reserve(soup.tris.size());
+        for (const auto& t : soup.tris) {
+            GridTriangle g{gp[t[0]], gp[t[1]], gp[t[2]], {}, 0};
+            g.n = cross(sub(g.b, g.a), sub(g.c, g.a));
+            g.n2 = dot(g.n, g.n);
+            gtris.push_back(g);
+        }
+    }
+
+    const double band = options.band, band2 = band * band;
+    const unsigned workers =
+        static_cast<unsigned>(std::min<std::size_t>(detail::resolve_threads(options.threads), nz));
+    detail::run_workers(workers, [&](unsigned w) {
+        const std::size_t z0 = nz * w / workers, z1 = nz * (w + 1) / workers;
+        const std::size_t plane = nx * ny;
+        float* dist = distance ? static_cast<float*>(volume.data) : nullptr;
+
+        // Pass 1: squared distances (grid units) to the nearest triangle, capped at band^2.
+        if (distance) {
+            std::fill(dist + z0 * plane, dist + z1 * plane, static_cast<float>(band2));
+            auto range = [&](double lo, double hi, std::size_t n, std::size_t& i0, std::size_t& i1) {
+                i0 = static_cast<std::size_t>(std::clamp(std::ceil(lo), 0.0, double(n)));
+                i1 = static_cast<std::size_t>(std::clamp(std::floor(hi) + 1, 0.0, double(n)));
+            };
+            for (const GridTriangle& t : gtris) {
+                std::size_t i0, i1, j0, j1, k0, k1;
+                range(std::min({t.a[2], t.b[2], t.c[2]}) - band, std::max({t.a[2], t.b[2], t.c[2]}) + band, nz, k0, k1);
+                k0 = std::max(k0, z0);
+                k1 = std::min(k1, z1);
+                if (k0 >= k1) continue;
+                range(std::min({t.a[1], t.b[1], t.c[1]}) - band, std::max({t.a[1], t.b[1], t.c[1]}) + band, ny, j0, j1);
+                range(std::min({t.a[0], t.b[0], t.c[0]}) - band, std::max({t.a[0], t.b[0], t.c[0]}) + band, nx, i0, i1);
+                const double nlen = std::sqrt(t.n2), reach = band * nlen, na = dot(t.n, t.a);
+                for (std::size_t k = k0; k < k1; ++k)
+                    for (std::size_t j = j0; j < j1; ++j) {
+                        // Only the x span within `band` of the triangle's plane can be near it.
+                        std::size_t xa = i0, xb = i1;
+                        if (t.n2 > 0) {
+                            const double c = na - t.n[1] * double(j) - t.n[2] * double(k);
+                            if (std::abs(t.n[0]) > 1e-9 * nlen) {
+                                const double u = (c - reach) / t.n[0], v = (c + reach) / t.n[0];
+                                std::size_t s0, s1;
+                                range(std::min(u, v), std::max(u, v), nx, s0, s1);
+                                xa = std::max(xa, s0);
+                                xb = std::min(xb, s1);
+                            } else if (std::abs(c) > reach) {
+                                continue;
+                            }
+                        }
+                        float* row = dist + plane * k + nx * j;
+                        for (std::size_t i = xa; i < xb; ++i) {
+                            const float d2 = static_cast<float>(triangle_distance2({double(i), double(j), double(k)}, t));
+                            if (d2 < row[i]) row[i] = d2;
+                        }
+                    }
+            }
+        }
+
+        // Pass 2: inside test per row, then the final sample values.
+        std::vector<double> hits;
+        std::uint8_t* occ = distance ? nullptr : static_cast<std::uint8_t*>(volume.data);
+        for (std::size_t k = z0; k < z1; ++k)
+            for (std::size_t j = 0; j < ny; ++j) {
+                const std::int64_t py = std::int64_t(j) << kFixedBits, pz = std::int64_t(k) << kFixedBits;
+                row_crossings(q, soup.tris, row_tris.data() + row_start[k], row_start[k + 1] - row_start[k], py, pz,
+                              hits);
+                std::size_t passed = 0;
+                const std::size_t base = plane * k + nx * j;
+                for (std::size_t i = 0; i < nx; ++i) {
+                    while (passed < hits.size() && hits[passed] < double(i)) ++passed;
+                    const bool inside = passed % 2 == 1;
+                    if (distance) {
+                        const double d = std::sqrt(double(dist[base + i])) * grid.h;
+                        dist[base + i] = static_cast<float>(inside ? d : -d);
+                    } else {
+                        occ[base + i] = inside ? 255 : 0;
+                    }
+                }
+            }
+    });
+    return volume;
+}
+
+}  // namespace voxmesh

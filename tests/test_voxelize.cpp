@@ -1,0 +1,298 @@
+#include <catch2/catch.hpp>
+#include <voxmesh/voxelize.hpp>
+#include <voxmesh/voxmesh.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+namespace {
+
+// A private binary-STL loader (unwelded soup) so these tests do not depend on src/io.
+voxmesh::Mesh load_binary_stl(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    REQUIRE(in.good());
+    std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    REQUIRE(bytes.size() >= 84);
+    std::uint32_t n = 0;
+    std::memcpy(&n, bytes.data() + 80, 4);
+    REQUIRE(bytes.size() == 84 + 50 * std::size_t(n));
+    voxmesh::Mesh m;
+    for (std::uint32_t t = 0; t < n; ++t) {
+        const char* rec = bytes.data() + 84 + 50 * std::size_t(t) + 12;
+        for (int v = 0; v < 3; ++v) {
+            float p[3];
+            std::memcpy(p, rec + 12 * v, 12);
+            m.positions.insert(m.positions.end(), p, p + 3);
+            m.indices.push_back(3 * t + static_cast<std::uint32_t>(v));
+        }
+    }
+    return m;
+}
+
+std::string data_file(const std::string& name) { return std::string("/work/shared/data/") + name; }
+
+std::string model_path(const std::string& name) {
+    const std::string local = std::string(VOXMESH_TEST_DATA) + "/" + name;
+    if (std::ifstream(local).good()) return local;
+    return data_file(name);
+}
+
+double signed_volume(const voxmesh::Mesh& m) {
+    double v = 0;
+    const auto& p = m.positions;
+    for (std::size_t t = 0; t < m.triangle_count(); ++t) {
+        const std::uint32_t a = m.indices[3 * t], b = m.indices[3 * t + 1], c = m.indices[3 * t + 2];
+        const double ax = p[3 * a], ay = p[3 * a + 1], az = p[3 * a + 2];
+        const double bx = p[3 * b], by = p[3 * b + 1], bz = p[3 * b + 2];
+        const double cx = p[3 * c], cy = p[3 * c + 1], cz = p[3 * c + 2];
+        v += ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+    }
+    return v / 6.0;
+}
+
+struct Check {
+    double model_volume = 0, mesh_volume = 0;
+    bool closed = false;
+    std::array<float, 3> lo{}, hi{}, mlo{}, mhi{};
+    double h = 0;
+};
+
+void bounds(const voxmesh::Mesh& m, std::array<float, 3>& lo, std::array<float, 3>& hi) {
+    lo = {1e30f, 1e30f, 1e30f};
+    hi = {-1e30f, -1e30f, -1e30f};
+    for (std::size_t i = 0; i < m.positions.size(); ++i) {
+        lo[i % 3] = std::min(lo[i % 3], m.positions[i]);
+        hi[i % 3] = std::max(hi[i % 3], m.positions[i]);
+    }
+}
+
+Check round_trip(const voxmesh::Mesh& model, std::size_t resolution, voxmesh::VoxelField field) {
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = resolution;
+    vo.field = field;
+    const voxmesh::Volume vol = voxmesh::voxelize(model, vo);
+    voxmesh::Options o;
+    o.backend = voxmesh::Backend::Cpu;
+    o.iso = field == voxmesh::VoxelField::Distance ? 0.0 : 127.5;
+    const voxmesh::Mesh m = voxmesh::extract(vol.view(), o);
+    Check c;
+    c.model_volume = std::abs(signed_volume(model));
+    c.mesh_volume = signed_volume(m);  // outward winding: positive
+    c.closed = voxmesh::analyze_topology(m).closed();
+    bounds(model, c.lo, c.hi);
+    bounds(m, c.mlo, c.mhi);
+    c.h = vol.spacing[0];
+    return c;
+}
+
+// A closed axis-aligned box [lo, hi] with every face cut into `cuts` x `cuts` squares.
+voxmesh::Mesh subdivided_box(std::array<double, 3> lo, std::array<double, 3> hi, int cuts) {
+    voxmesh::Mesh m;
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = 0; side < 2; ++side) {
+            const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+            const auto base = static_cast<std::uint32_t>(m.vertex_count());
+            for (int b = 0; b <= cuts; ++b)
+                for (int a = 0; a <= cuts; ++a) {
+                    std::array<float, 3> p{};
+                    p[axis] = static_cast<float>(side ? hi[axis] : lo[axis]);
+                    p[u] = static_cast<float>(lo[u] + (hi[u] - lo[u]) * a / cuts);
+                    p[v] = static_cast<float>(lo[v] + (hi[v] - lo[v]) * b / cuts);
+                    m.positions.insert(m.positions.end(), p.begin(), p.end());
+                }
+            auto id = [&](int a, int b) { return base + static_cast<std::uint32_t>(a + (cuts + 1) * b); };
+            for (int b = 0; b < cuts; ++b)
+                for (int a = 0; a < cuts; ++a) {
+                    std::array<std::uint32_t, 6> t{id(a, b), id(a + 1, b), id(a + 1, b + 1),
+                                                   id(a, b), id(a + 1, b + 1), id(a, b + 1)};
+                    if (!side) {  // outward winding on the low side
+                        std::swap(t[1], t[2]);
+                        std::swap(t[4], t[5]);
+                    }
+                    m.indices.insert(m.indices.end(), t.begin(), t.end());
+                }
+        }
+    return m;  // unwelded along the box edges: voxelize welds by position
+}
+
+voxmesh::Mesh octahedron(double r) {
+    voxmesh::Mesh m;
+    const float f = static_cast<float>(r);
+    m.positions = {f, 0, 0, -f, 0, 0, 0, f, 0, 0, -f, 0, 0, 0, f, 0, 0, -f};
+    m.indices = {0, 2, 4, 2, 1, 4, 1, 3, 4, 3, 0, 4, 2, 0, 5, 1, 2, 5, 3, 1, 5, 0, 3, 5};
+    return m;
+}
+
+template <class F>
+void for_each_sample(const voxmesh::Volume& v, F&& f) {
+    for (std::size_t k = 0; k < v.dims[2]; ++k)
+        for (std::size_t j = 0; j < v.dims[1]; ++j)
+            for (std::size_t i = 0; i < v.dims[0]; ++i) {
+                const std::size_t idx = i + v.dims[0] * (j + v.dims[1] * k);
+                f(idx, v.origin[0] + double(i) * v.spacing[0], v.origin[1] + double(j) * v.spacing[1],
+                  v.origin[2] + double(k) * v.spacing[2]);
+            }
+}
+
+}  // namespace
+
+TEST_CASE("voxelize: closed STL round trips at 128 within 2 % (distance field)", "[voxelize]") {
+    for (const char* name : {"unit_sphere.stl", "torus.stl", "20mm-xyz-cube.stl"}) {
+        INFO(name);
+        const voxmesh::Mesh model = load_binary_stl(model_path(name));
+        const Check c = round_trip(model, 128, voxmesh::VoxelField::Distance);
+        CHECK(c.closed);
+        CHECK(c.mesh_volume == Approx(c.model_volume).epsilon(0.02));
+        for (int d = 0; d < 3; ++d) {  // lands in the model's coordinates
+            CHECK(std::abs(c.mlo[d] - c.lo[d]) < c.h);
+            CHECK(std::abs(c.mhi[d] - c.hi[d]) < c.h);
+        }
+        if (std::string(name) == "unit_sphere.stl") {
+            CHECK(c.model_volume == Approx(4.0 / 3.0 * M_PI).epsilon(0.02));
+            CHECK(c.mesh_volume == Approx(4.0 / 3.0 * M_PI).epsilon(0.02));
+        }
+    }
+}
+
+TEST_CASE("voxelize: occupancy field round trips at low resolution", "[voxelize]") {
+    const voxmesh::Mesh model = load_binary_stl(model_path("torus.stl"));
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 48;
+    vo.field = voxmesh::VoxelField::Occupancy;
+    const voxmesh::Volume vol = voxmesh::voxelize(model, vo);
+    REQUIRE(vol.type == voxmesh::ScalarType::U8);
+    const auto* s = static_cast<const std::uint8_t*>(vol.data);
+    CHECK(std::all_of(s, s + vol.sample_count(), [](std::uint8_t x) { return x == 0 || x == 255; }));
+    const Check c = round_trip(model, 48, voxmesh::VoxelField::Occupancy);
+    CHECK(c.closed);
+    CHECK(c.mesh_volume == Approx(c.model_volume).epsilon(0.03));
+}
+
+TEST_CASE("voxelize: result does not depend on the thread count", "[voxelize]") {
+    const voxmesh::Mesh model = load_binary_stl(model_path("torus.stl"));
+    for (auto field : {voxmesh::VoxelField::Distance, voxmesh::VoxelField::Occupancy}) {
+        voxmesh::VoxelizeOptions vo;
+        vo.resolution = 40;
+        vo.field = field;
+        vo.threads = 1;
+        const voxmesh::Volume a = voxmesh::voxelize(model, vo);
+        for (unsigned t : {2u, 3u, 7u}) {
+            vo.threads = t;
+            const voxmesh::Volume b = voxmesh::voxelize(model, vo);
+            REQUIRE(a.dims == b.dims);
+            CHECK(a.origin == b.origin);
+            CHECK(a.spacing == b.spacing);
+            CHECK(std::memcmp(a.data, b.data, a.byte_size()) == 0);
+        }
+    }
+}
+
+TEST_CASE("voxelize: grid geometry", "[voxelize]") {
+    const voxmesh::Mesh box = subdivided_box({0, 0, 0}, {20, 10, 5}, 1);
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 16;
+    vo.padding = 3;
+    const voxmesh::Volume v = voxmesh::voxelize(box, vo);
+    CHECK(v.dims == std::array<std::size_t, 3>{22, 14, 10});
+    CHECK(v.spacing[0] == Approx(1.25));
+    CHECK(v.spacing[1] == v.spacing[0]);
+    CHECK(v.spacing[2] == v.spacing[0]);
+    CHECK(v.origin[0] == Approx(0.625 - 3 * 1.25));  // first voxel centre, less the padding
+}
+
+TEST_CASE("voxelize: rays through vertices and along edges leave no streaks", "[voxelize]") {
+    SECTION("box whose face vertices lie on sample rows") {
+        // Box [0, 1]^3 at resolution 8: samples at odd multiples of 1/16; faces cut at every
+        // 1/16, so rays along x pass exactly through face vertices and along diagonals.
+        const voxmesh::Mesh box = subdivided_box({0, 0, 0}, {1, 1, 1}, 16);
+        for (auto field : {voxmesh::VoxelField::Occupancy, voxmesh::VoxelField::Distance}) {
+            voxmesh::VoxelizeOptions vo;
+            vo.resolution = 8;
+            vo.field = field;
+            const voxmesh::Volume v = voxmesh::voxelize(box, vo);
+            std::size_t wrong = 0;
+            for_each_sample(v, [&](std::size_t idx, double x, double y, double z) {
+                const bool inside = x > 0 && x < 1 && y > 0 && y < 1 && z > 0 && z < 1;
+                const bool got = field == voxmesh::VoxelField::Occupancy
+                                     ? static_cast<const std::uint8_t*>(v.data)[idx] == 255
+                                     : static_cast<const float*>(v.data)[idx] > 0;
+                if (inside != got) ++wrong;
+                if (field == voxmesh::VoxelField::Distance) {  // exact distance to the box
+                    double out2 = 0, in = 1e30;
+                    for (double c : {x, y, z}) {
+                        const double o = c < 0 ? -c : c > 1 ? c - 1 : 0;
+                        out2 += o * o;
+                        in = std::min({in, c, 1 - c});
+                    }
+                    const double expect = inside ? in : -std::sqrt(out2);
+                    const double got_d = static_cast<const float*>(v.data)[idx];
+                    if (std::abs(expect) < 2.5 * v.spacing[0]) CHECK(got_d == Approx(expect).margin(1e-5));
+                }
+            });
+            CHECK(wrong == 0);
+        }
+    }
+    SECTION("octahedron with vertices and edges on sample rows") {
+        // Resolution 9 puts the centre on a sample: the rays y = z = 0 go through two
+        // vertices, and rays in the planes y = 0 and z = 0 run through edges.
+        const double r = 4.5;
+        const voxmesh::Mesh oct = octahedron(r);
+        voxmesh::VoxelizeOptions vo;
+        vo.resolution = 9;
+        vo.field = voxmesh::VoxelField::Occupancy;
+        vo.threads = 2;
+        const voxmesh::Volume v = voxmesh::voxelize(oct, vo);
+        CHECK(v.spacing[0] == Approx(1.0));
+        std::size_t wrong = 0, checked = 0;
+        for_each_sample(v, [&](std::size_t idx, double x, double y, double z) {
+            const double l1 = std::abs(x) + std::abs(y) + std::abs(z);
+            if (std::abs(l1 - r) < 1e-6) return;  // on the surface: either answer is right
+            ++checked;
+            if ((l1 < r) != (static_cast<const std::uint8_t*>(v.data)[idx] == 255)) ++wrong;
+        });
+        CHECK(checked > 500);
+        CHECK(wrong == 0);
+        // Inverted winding does not matter to the parity rule.
+        voxmesh::Mesh flipped = oct;
+        for (std::size_t t = 0; t < flipped.triangle_count(); ++t)
+            std::swap(flipped.indices[3 * t + 1], flipped.indices[3 * t + 2]);
+        const voxmesh::Volume w = voxmesh::voxelize(flipped, vo);
+        CHECK(std::memcmp(v.data, w.data, v.byte_size()) == 0);
+    }
+}
+
+TEST_CASE("voxelize: open, non-manifold and empty meshes are rejected", "[voxelize]") {
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 16;
+    voxmesh::Mesh open = octahedron(1);
+    open.indices.resize(open.indices.size() - 3);
+    CHECK_THROWS_WITH(voxmesh::voxelize(open, vo), Catch::Contains("not closed"));
+
+    // Two closed tetrahedra sharing the edge 0-1: that edge is in four triangles.
+    voxmesh::Mesh nm;
+    nm.positions = {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, -1, 0, 0, 0, -1, 0};
+    auto tet = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
+        for (std::uint32_t i : {a, b, c, a, d, b, b, d, c, c, d, a}) nm.indices.push_back(i);
+    };
+    tet(0, 1, 2, 3);
+    tet(0, 1, 4, 5);
+    CHECK_THROWS_WITH(voxmesh::voxelize(nm, vo), Catch::Contains("not manifold"));
+
+    voxmesh::Mesh empty;
+    CHECK_THROWS_WITH(voxmesh::voxelize(empty, vo), Catch::Contains("no triangles"));
+    voxmesh::Mesh nan = octahedron(1);
+    nan.positions[4] = std::nanf("");
+    CHECK_THROWS_WITH(voxmesh::voxelize(nan, vo), Catch::Contains("non-finite"));
+    voxmesh::Mesh bad_index = octahedron(1);
+    bad_index.indices[0] = 99;
+    CHECK_THROWS_WITH(voxmesh::voxelize(bad_index, vo), Catch::Contains("out of range"));
+    vo.resolution = 1;
+    CHECK_THROWS_WITH(voxmesh::voxelize(octahedron(1), vo), Catch::Contains("resolution"));
+}
