@@ -3,6 +3,8 @@
 
 #include <voxmesh/voxmesh.hpp>
 
+#include <algorithm>
+
 namespace voxmesh {
 
 namespace {
@@ -10,6 +12,8 @@ void warn(const Options& options, Stats& stats, const std::string& message) {
     stats.warnings.push_back(message);
     if (options.log) options.log(message);
 }
+
+bool is_discrete(const DeviceInfo& d) { return d.type == DeviceType::Gpu || d.type == DeviceType::Accelerator; }
 }  // namespace
 
 Mesh extract(const VolumeView& volume, const Options& options) {
@@ -26,15 +30,30 @@ Mesh extract(const VolumeView& volume, const Options& options, Stats& stats) {
         case Backend::OpenCL:
             return detail::opencl_extract(volume, options, stats, false);
         case Backend::Hybrid:
-        case Backend::Auto:
-            if (detail::opencl_devices().empty()) {
-                warn(options, stats, std::string("no usable OpenCL device; ") + backend_name(options.backend) +
-                                         " backend runs the CPU engine");
+        case Backend::Auto: {
+            const auto devices = detail::opencl_devices();
+            if (devices.empty()) {
+                warn(options, stats, std::string("no usable OpenCL device (no OpenCL platform found); ") +
+                                         backend_name(options.backend) + " backend runs the CPU engine");
                 return detail::cpu_extract(volume, options, stats);
             }
             if (options.backend == Backend::Hybrid) return detail::opencl_extract(volume, options, stats, true);
-            // Auto: on a machine whose only OpenCL device is the CPU itself, the CPU engine is faster.
+            // Auto with devices chosen explicitly: those devices.
+            if (!options.devices.empty() || options.device_type != DeviceType::Any)
+                return detail::opencl_extract(volume, options, stats, false);
+            // Auto: a GPU or accelerator meshes faster than the CPU's threads; an OpenCL device
+            // that is the CPU itself (PoCL) is slower than the CPU engine, so that one is not used.
+            if (std::any_of(devices.begin(), devices.end(), is_discrete)) {
+                Options gpu = options;
+                gpu.device_type = std::find_if(devices.begin(), devices.end(), [](const DeviceInfo& d) {
+                                      return d.type == DeviceType::Gpu;
+                                  }) != devices.end()
+                                      ? DeviceType::Gpu
+                                      : DeviceType::Accelerator;
+                return detail::opencl_extract(volume, gpu, stats, false);
+            }
             return detail::cpu_extract(volume, options, stats);
+        }
     }
     throw Error("unknown backend");
 }

@@ -4,13 +4,28 @@
 
 #include <voxmesh/voxmesh.hpp>
 
+#include <cstdint>
+#include <vector>
+
 namespace voxmesh::detail {
 
 // Meshes with OpenCL devices (Backend::OpenCL) or devices plus CPU threads (Backend::Hybrid).
-// Throws Error when no usable device exists.
+// Throws Error when no usable device exists (OpenCL); Hybrid then runs the CPU engine
+// alone, with a warning.
 Mesh opencl_extract(const VolumeView& volume, const Options& options, Stats& stats, bool hybrid);
 
 // Every usable OpenCL device; empty when there is none (never throws for a missing platform).
 std::vector<DeviceInfo> opencl_devices();
+
+// Test and benchmark hooks, defined only when the library is built with the OpenCL engine
+// (then VOXMESH_HAS_OPENCL is defined for everything linking voxmesh).
+#ifdef VOXMESH_HAS_OPENCL
+// The scan kernel on device `device`: the exclusive prefix sums of `values`, followed by
+// their total (values.size() + 1 entries).
+std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t>& values, int device = 0);
+// Presents each partitionable OpenCL device as (at most two) sub-devices of one compute
+// unit each, or undoes that; list_devices() indices change. Not for use while meshing.
+void opencl_split_devices(bool split);
+#endif
 
 }  // namespace voxmesh::detail

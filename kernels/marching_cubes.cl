@@ -1,0 +1,189 @@
+// Marching cubes over one z-chunk: classify, compact, vertices, triangles.
+// (The prefix sums in between are scan.cl.)
+//
+// Build options chosen by the host:
+//   -DVOXEL_T=<uchar|char|ushort|short|uint|int|float|double>  the sample type, read in place
+//   -DVOXEL_INTEGER   integer samples (differences taken exactly in long)
+//   -DUSE_FP64        the device has cl_khr_fp64: interpolate in double like the CPU engine
+//
+// Index spaces (all chunk-local, uint; the host keeps them below 2^29):
+//   meta sample l = x + nx*(y + ny*(z - begin)) for z in [begin, meta_end): the chunk's own
+//   planes [begin, end) plus plane `end` when it exists, whose vertex ids the chunk's last
+//   cell plane refers to. Cell (x, y, z) shares index l with its corner-0 sample.
+//   The sample buffer holds planes [zlo, zhi) = [max(begin,1)-1, min(end+2, nz)).
+//
+// "Inside" is sample >= thr, with thr made by the host exactly as the CPU engine makes it,
+// so every case index is identical. The case tables come from the host's single copy
+// (src/core/case_tables.cpp) as __constant buffers:
+//   case_table: 16 bytes per case, triangle count then 15 signed edge numbers;
+//   cell_edge:  4 bytes per edge (dx, dy, dz, axis); corner_offset: 3 bytes per corner.
+
+#pragma OPENCL FP_CONTRACT OFF
+
+#ifdef USE_FP64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+typedef double real;
+#else
+typedef float real;
+#endif
+
+typedef VOXEL_T voxel;
+
+#ifdef VOXEL_INTEGER
+#define DIFF(hi, lo) ((real)((long)(hi) - (long)(lo)))
+#define IS_NAN(v) 0
+#else
+#define DIFF(hi, lo) ((real)(hi) - (real)(lo))
+#define IS_NAN(v) ((v) != (v))
+#endif
+
+// iso - v0. Without fp64, integer samples subtract from iso's integer part exactly and add
+// its fraction, so that large integers keep their precision.
+#if defined(USE_FP64) || !defined(VOXEL_INTEGER)
+#define ISO_MINUS(v) (iso - (real)(v))
+#else
+#define ISO_MINUS(v) ((float)(iso_int - (long)(v)) + iso_frac)
+#endif
+
+__kernel void classify(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint nz,
+                       const uint begin, const uint cell_end, const uint zlo, const uint count,
+                       __constant uchar* corner_offset, __constant uchar* case_table, __global uchar* codes,
+                       __global uchar* cases, __global uint* vcount, __global uint* tcount,
+                       __global int* nan_plane) {
+    const uint l = (uint)get_global_id(0);
+    if (l >= count) return;
+    const uint plane = nx * ny;
+    const uint zl = l / plane;
+    const uint rest = l - zl * plane;
+    const uint y = rest / nx;
+    const uint x = rest - y * nx;
+    const uint z = begin + zl;
+    const uint idx = l + (begin - zlo) * plane;
+
+    const voxel v = data[idx];
+    if (IS_NAN(v)) atomic_min(nan_plane, (int)z);
+    const int in = v >= thr;
+    uint code = 0;
+    if (x + 1 < nx) code |= (uint)(in != (data[idx + 1] >= thr));
+    if (y + 1 < ny) code |= (uint)(in != (data[idx + nx] >= thr)) << 1;
+    if (z + 1 < nz) code |= (uint)(in != (data[idx + plane] >= thr)) << 2;
+    codes[l] = (uchar)code;
+    vcount[l] = popcount(code);
+
+    uint c = 0;
+    if (x + 1 < nx && y + 1 < ny && z < cell_end) {
+        for (uint k = 0; k < 8; ++k) {
+            const uint at = idx + corner_offset[3 * k] + nx * corner_offset[3 * k + 1] +
+                            plane * corner_offset[3 * k + 2];
+            c |= (uint)(data[at] >= thr) << k;
+        }
+    }
+    cases[l] = (uchar)c;
+    tcount[l] = case_table[16 * c];
+}
+
+// Compaction: after the scans, every crossed edge and every triangle learns its slot, and
+// each slot records its owner (sample << 2 | axis, cell << 3 | triangle), so the generate
+// kernels run over exactly the vertices and triangles there are.
+__kernel void compact(__global const uchar* codes, __global const uchar* cases, __global const uint* vbase,
+                      __global const uint* tbase, const uint count, const uint owned,
+                      __constant uchar* case_table, __global uint* vowner, __global uint* towner) {
+    const uint l = (uint)get_global_id(0);
+    if (l >= count) return;
+    if (l < owned) {
+        const uint code = codes[l];
+        uint slot = vbase[l];
+        for (uint axis = 0; axis < 3; ++axis)
+            if (code >> axis & 1) vowner[slot++] = l << 2 | axis;
+    }
+    const uint n = case_table[16 * cases[l]];
+    const uint first = tbase[l];
+    for (uint q = 0; q < n; ++q) towner[first + q] = l << 3 | q;
+}
+
+// Central differences, one-sided at the volume border, divided by spacing (as the CPU).
+inline real axis_diff(__global const voxel* data, uint idx, uint pos, uint n, uint stride, real inv) {
+    const voxel hi = data[pos + 1 < n ? idx + stride : idx];
+    const voxel lo = data[pos > 0 ? idx - stride : idx];
+    const real step = (pos > 0 && pos + 1 < n) ? (real)0.5 : (real)1.0;
+    return DIFF(hi, lo) * step * inv;
+}
+
+__kernel void vertices(__global const voxel* data, const voxel thr, const real iso, const long iso_int,
+                       const float iso_frac, const uint nx, const uint ny, const uint nz, const uint begin,
+                       const uint zlo, const uint count, __global const uint* vowner, const real ox,
+                       const real oy, const real oz, const real sx, const real sy, const real sz,
+                       const real ix, const real iy, const real iz, const int inside_below,
+                       const int want_normals, __global float* positions, __global float* normals) {
+    const uint v = (uint)get_global_id(0);
+    if (v >= count) return;
+    const uint owner = vowner[v];
+    const uint l = owner >> 2;
+    const uint axis = owner & 3;
+    const uint plane = nx * ny;
+    const uint zl = l / plane;
+    const uint rest = l - zl * plane;
+    const uint y = rest / nx;
+    const uint x = rest - y * nx;
+    const uint z = begin + zl;
+    const uint idx = l + (begin - zlo) * plane;
+    const uint stride = axis == 0 ? 1u : axis == 1 ? nx : plane;
+    const uint idx1 = idx + stride;
+
+    const voxel v0 = data[idx];
+    const voxel v1 = data[idx1];
+    const real t = ISO_MINUS(v0) / DIFF(v1, v0);
+    positions[3 * v + 0] = (float)(ox + ((real)x + (axis == 0 ? t : (real)0)) * sx);
+    positions[3 * v + 1] = (float)(oy + ((real)y + (axis == 1 ? t : (real)0)) * sy);
+    positions[3 * v + 2] = (float)(oz + ((real)z + (axis == 2 ? t : (real)0)) * sz);
+    if (!want_normals) return;
+
+    const uint x1 = x + (axis == 0), y1 = y + (axis == 1), z1 = z + (axis == 2);
+    const real g0x = axis_diff(data, idx, x, nx, 1, ix), g1x = axis_diff(data, idx1, x1, nx, 1, ix);
+    const real g0y = axis_diff(data, idx, y, ny, nx, iy), g1y = axis_diff(data, idx1, y1, ny, nx, iy);
+    const real g0z = axis_diff(data, idx, z, nz, plane, iz), g1z = axis_diff(data, idx1, z1, nz, plane, iz);
+    // Outward is toward decreasing values: the negated gradient (flipped for inside_below).
+    const real sign = inside_below ? (real)1 : (real)-1;
+    const real n0 = sign * (g0x + t * (g1x - g0x));
+    const real n1 = sign * (g0y + t * (g1y - g0y));
+    const real n2 = sign * (g0z + t * (g1z - g0z));
+    const real len2 = n0 * n0 + n1 * n1 + n2 * n2;
+    if (len2 > 0 && isfinite(len2)) {
+        const real inv = (real)1 / sqrt(len2);
+        normals[3 * v + 0] = (float)(n0 * inv);
+        normals[3 * v + 1] = (float)(n1 * inv);
+        normals[3 * v + 2] = (float)(n2 * inv);
+    } else {
+        // Flat gradient: along the edge, from its inside end to its outside end.
+        const int first_inside = (v0 >= thr) != (inside_below != 0);
+        const float s = first_inside ? 1.f : -1.f;
+        normals[3 * v + 0] = axis == 0 ? s : 0.f;
+        normals[3 * v + 1] = axis == 1 ? s : 0.f;
+        normals[3 * v + 2] = axis == 2 ? s : 0.f;
+    }
+}
+
+__kernel void triangles(__global const uchar* codes, __global const uchar* cases, __global const uint* vbase,
+                        __global const uint* towner, const uint count, const uint nx, const uint plane,
+                        __constant uchar* case_table, __constant uchar* cell_edge, const int inside_below,
+                        __global uint* indices) {
+    const uint t = (uint)get_global_id(0);
+    if (t >= count) return;
+    const uint owner = towner[t];
+    const uint l = owner >> 3;
+    const uint q = owner & 7;
+    const uint c = cases[l];
+    uint id[3];
+    for (uint e = 0; e < 3; ++e) {
+        const uint edge = case_table[16 * c + 1 + 3 * q + e];
+        __constant uchar* ce = cell_edge + 4 * edge;
+        const uint s = l + ce[0] + nx * ce[1] + plane * ce[2];
+        const uint code = codes[s];
+        const uint axis = ce[3];
+        const uint offset = axis == 0 ? 0u : axis == 1 ? (code & 1) : (code & 1) + (code >> 1 & 1);
+        id[e] = vbase[s] + offset;
+    }
+    indices[3 * t + 0] = id[0];
+    indices[3 * t + 1] = inside_below ? id[2] : id[1];
+    indices[3 * t + 2] = inside_below ? id[1] : id[2];
+}

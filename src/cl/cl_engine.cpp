@@ -1,0 +1,633 @@
+// The OpenCL engine: z-chunks from one shared queue, pulled by every selected device (and by
+// the CPU engine in Hybrid), each chunk meshed with classify -> scan -> compact -> generate,
+// and the chunks assembled into the canonical mesh.
+//
+// A chunk is a z-range [begin, end) with the CPU engine's ownership rule (cpu_engine.hpp):
+// it owns the vertices of sample planes [begin, end) and the triangles of cell planes
+// [begin, min(end, nz-1)); its local vertex ids continue into plane `end`. So its device
+// buffers hold sample planes [begin-1, end+2) (clamped): one plane below and two above for
+// the gradients at the chunk's faces and the edge codes of plane `end`.
+
+#include "cl_runtime.hpp"
+
+#include "core/cpu_engine.hpp"
+#include "core/opencl_hook.hpp"
+#include "core/parallel.hpp"
+#include "core/scalar_dispatch.hpp"
+#include "core/threshold.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cfloat>
+#include <cstring>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <set>
+#include <thread>
+
+namespace voxmesh::detail {
+
+namespace {
+
+using namespace cl_engine;
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+// Buffer slots of a device.
+enum : unsigned { kData, kCodes, kCases, kVBase, kTBase, kVOwner, kTOwner, kPositions, kNormals, kIndices, kNan };
+
+constexpr std::size_t kMaxChunkSamples = std::size_t(1) << 29;  // owner ids pack l << 3 in a uint
+
+// Thrown inside a worker when a chunk does not fit the device: cut it smaller.
+struct TooBig {};
+
+struct Piece {  // one meshed z-range, with chunk-local vertex ids
+    ZRange range;
+    std::uint64_t vertices = 0;
+    std::vector<float> positions, normals;
+    std::vector<std::uint32_t> indices;
+};
+
+const char* cl_type_name(ScalarType type) {
+    switch (type) {
+        case ScalarType::U8: return "uchar";
+        case ScalarType::I8: return "char";
+        case ScalarType::U16: return "ushort";
+        case ScalarType::I16: return "short";
+        case ScalarType::U32: return "uint";
+        case ScalarType::I32: return "int";
+        case ScalarType::F32: return "float";
+        case ScalarType::F64: return "double";
+    }
+    return "float";
+}
+
+bool is_integer(ScalarType type) { return type != ScalarType::F32 && type != ScalarType::F64; }
+
+std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
+
+// What one call needs to know about a device: how samples reach it and the kernel arguments
+// that do not change from chunk to chunk.
+struct DeviceJob {
+    std::shared_ptr<Device> device;
+    ScalarType device_type = ScalarType::F32;  // the type the kernels read
+    bool convert = false;                      // f64 without cl_khr_fp64: converted to f32 per chunk
+    bool cpu_only = false;                     // converted, but iso is out of float range
+    std::string options;
+    std::vector<unsigned char> threshold;      // bytes of a device_type value
+    std::size_t limit = 0;                     // bytes one chunk may use
+    DeviceStats stats;
+    double pass_seconds[3] = {0, 0, 0};
+};
+
+class Engine {
+public:
+    Engine(const VolumeView& volume, const Options& options, bool hybrid)
+        : volume_(volume), options_(options), hybrid_(hybrid) {
+        nx_ = volume.dims[0];
+        ny_ = volume.dims[1];
+        nz_ = volume.dims[2];
+        plane_ = nx_ * ny_;
+        threads_ = resolve_threads(options.threads);
+    }
+
+    Mesh run(Stats& stats);
+
+private:
+    std::vector<std::shared_ptr<Device>> select_devices() const;
+    void prepare(DeviceJob& job);
+    std::size_t fixed_bytes(const DeviceJob& job, std::size_t planes) const;
+    bool fits(const DeviceJob& job, std::size_t planes) const;
+    std::vector<ZRange> make_chunks(const std::vector<DeviceJob>& jobs) const;
+    void device_worker(DeviceJob& job);
+    void process(DeviceJob& job, ZRange range, std::vector<Piece>& out);
+    Piece run_on_device(DeviceJob& job, ZRange range);
+    Piece run_on_cpu(ZRange range, unsigned threads);
+    void cpu_worker();
+    Mesh assemble(std::vector<std::vector<Piece>>& results);
+    void warn(const std::string& message);
+    bool next_chunk(std::size_t& index);
+
+    const VolumeView& volume_;
+    const Options& options_;
+    bool hybrid_;
+    std::size_t nx_, ny_, nz_, plane_;
+    unsigned threads_;
+
+    std::vector<ZRange> chunks_;
+    std::vector<std::vector<Piece>> results_;
+    std::atomic<std::size_t> next_{0};
+    std::atomic<bool> abort_{false};
+    std::mutex mutex_;  // warnings_, fallback_ stats
+    std::vector<std::string> warnings_;
+    DeviceStats cpu_stats_, fallback_stats_;
+    double cpu_pass_seconds_[3] = {0, 0, 0};
+};
+
+void Engine::warn(const std::string& message) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (std::find(warnings_.begin(), warnings_.end(), message) == warnings_.end()) warnings_.push_back(message);
+}
+
+std::vector<std::shared_ptr<Device>> Engine::select_devices() const {
+    const auto all = cl_engine::devices();
+    std::vector<std::shared_ptr<Device>> chosen;
+    if (!options_.devices.empty()) {
+        std::set<int> seen;
+        for (int index : options_.devices) {
+            if (index < 0 || static_cast<std::size_t>(index) >= all.size())
+                throw Error("OpenCL device index " + std::to_string(index) + " does not exist; list_devices() has " +
+                            std::to_string(all.size()) + " device(s)");
+            if (seen.insert(index).second) chosen.push_back(all[static_cast<std::size_t>(index)]);
+        }
+        return chosen;
+    }
+    for (const auto& d : all)
+        if (options_.device_type == DeviceType::Any || d->info.type == options_.device_type) chosen.push_back(d);
+    return chosen;
+}
+
+void Engine::prepare(DeviceJob& job) {
+    const DeviceInfo& info = job.device->info;
+    job.stats.name = info.name;
+    job.convert = volume_.type == ScalarType::F64 && !info.fp64;
+    job.device_type = job.convert ? ScalarType::F32 : volume_.type;
+    job.options = std::string("-cl-std=CL1.2 -DVOXEL_T=") + cl_type_name(job.device_type);
+    if (is_integer(job.device_type)) job.options += " -DVOXEL_INTEGER";
+    if (info.fp64) job.options += " -DUSE_FP64";
+    dispatch_scalar(job.device_type, [&](auto tag) {
+        using T = decltype(tag);
+        const Threshold<T> t = make_threshold<T>(options_.iso);
+        if (t.uniform != Uniform::Mixed) job.cpu_only = true;  // only reachable for converted f64
+        job.threshold.resize(sizeof(T));
+        std::memcpy(job.threshold.data(), &t.value, sizeof(T));
+    });
+    if (job.cpu_only)
+        warn("OpenCL device '" + info.name + "' has no fp64 and iso " + std::to_string(options_.iso) +
+             " is outside the float range; its chunks run on the CPU engine");
+    std::size_t limit = info.global_memory / 2;
+    if (options_.memory_budget > 0) limit = std::min(limit, options_.memory_budget);
+    job.limit = limit;
+    // Build now, in the caller's thread, so that a build failure surfaces at once.
+    std::lock_guard<std::mutex> lock(job.device->mutex);
+    for (const char* name : {"classify", "compact", "vertices", "triangles"}) job.device->mc_kernel(job.options, name);
+    job.device->scan_local_size();
+}
+
+// Device bytes of a chunk of `planes` planes, outputs excluded.
+std::size_t Engine::fixed_bytes(const DeviceJob& job, std::size_t planes) const {
+    const std::size_t data = std::min(planes + 3, nz_) * plane_ * scalar_size(job.device_type);
+    const std::size_t meta = std::min(planes + 1, nz_) * plane_;
+    return data + meta * (1 + 1 + 4 + 4) + meta / 256 + 64;
+}
+
+// Whether a chunk of `planes` planes can fit the device before its outputs are known: the
+// fixed part must leave at least as much again for vertices and triangles.
+bool Engine::fits(const DeviceJob& job, std::size_t planes) const {
+    const std::size_t data = std::min(planes + 3, nz_) * plane_ * scalar_size(job.device_type);
+    const std::size_t meta = std::min(planes + 1, nz_) * plane_;
+    return meta <= kMaxChunkSamples && data <= job.device->info.max_allocation &&
+           meta * 4 <= job.device->info.max_allocation && 2 * fixed_bytes(job, planes) <= job.limit;
+}
+
+std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) const {
+    std::size_t planes = nz_;
+    if (options_.chunk_planes > 0) {
+        planes = options_.chunk_planes;
+    } else {
+        // Largest chunk every device can take; with several workers, about four chunks
+        // each so that faster workers pull more.
+        for (const DeviceJob& job : jobs) {
+            std::size_t lo = 1, hi = nz_;
+            while (lo < hi) {
+                const std::size_t mid = (lo + hi + 1) / 2;
+                if (fits(job, mid)) lo = mid; else hi = mid - 1;
+            }
+            planes = std::min(planes, lo);
+        }
+        const std::size_t workers = jobs.size() + (hybrid_ ? 1 : 0);
+        if (workers > 1) planes = std::min(planes, std::max<std::size_t>(1, (nz_ + 4 * workers - 1) / (4 * workers)));
+    }
+    planes = std::max<std::size_t>(planes, 1);
+    std::vector<ZRange> chunks;
+    for (std::size_t z = 0; z < nz_; z += planes) chunks.push_back(ZRange{z, std::min(z + planes, nz_)});
+    return chunks;
+}
+
+bool Engine::next_chunk(std::size_t& index) {
+    if (abort_) return false;
+    index = next_++;
+    return index < chunks_.size();
+}
+
+Piece Engine::run_on_cpu(ZRange range, unsigned threads) {
+    Piece piece;
+    piece.range = range;
+    CpuChunkPlan plan = cpu_classify(volume_, options_, range, threads);
+    piece.vertices = plan.vertices;
+    piece.positions.resize(3 * plan.vertices);
+    if (options_.normals) piece.normals.resize(3 * plan.vertices);
+    piece.indices.resize(3 * plan.triangles);
+    cpu_generate(plan, volume_, options_, threads,
+                 MeshOut{piece.positions.data(), options_.normals ? piece.normals.data() : nullptr,
+                         piece.indices.data(), 0});
+    return piece;
+}
+
+Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
+    Device& d = *job.device;
+    const std::size_t planes = range.end - range.begin;
+    if (!fits(job, planes) && planes > 1) throw TooBig{};
+
+    const std::size_t meta_end = std::min(range.end + 1, nz_);
+    const std::size_t cell_end = std::min(range.end, nz_ - 1);
+    const std::size_t zlo = range.begin > 0 ? range.begin - 1 : 0;
+    const std::size_t zhi = std::min(range.end + 2, nz_);
+    const std::size_t count = (meta_end - range.begin) * plane_;
+    const std::size_t owned = planes * plane_;
+    const std::size_t data_samples = (zhi - zlo) * plane_;
+    const std::size_t sample_bytes = scalar_size(job.device_type);
+    const DeviceInfo& info = d.info;
+    if (count > kMaxChunkSamples || data_samples * sample_bytes > info.max_allocation ||
+        count * 4 > info.max_allocation || fixed_bytes(job, planes) > job.limit)
+        throw TooBig{};
+
+    EventLog log;
+    std::vector<float> converted;
+    Piece piece;
+    piece.range = range;
+    try {
+        // Upload the planes, in place (or converted from f64 keeping every inside bit).
+        cl::Buffer& data = d.buffer(kData, data_samples * sample_bytes);
+        const auto* bytes = static_cast<const unsigned char*>(volume_.data) + zlo * plane_ * scalar_size(volume_.type);
+        if (job.convert) {
+            const double* src = reinterpret_cast<const double*>(bytes);
+            float thr;
+            std::memcpy(&thr, job.threshold.data(), sizeof(thr));
+            converted.resize(data_samples);
+            for (std::size_t i = 0; i < data_samples; ++i) {
+                const double v = src[i];
+                float f = static_cast<float>(std::clamp(v, -static_cast<double>(FLT_MAX), static_cast<double>(FLT_MAX)));
+                if (v != v) f = std::numeric_limits<float>::quiet_NaN();
+                else if (v >= options_.iso && !(f >= thr)) f = thr;
+                else if (v < options_.iso && f >= thr) f = std::nextafter(thr, -std::numeric_limits<float>::infinity());
+                converted[i] = f;
+            }
+            bytes = reinterpret_cast<const unsigned char*>(converted.data());
+        }
+        d.queue.enqueueWriteBuffer(data, CL_FALSE, 0, data_samples * sample_bytes, bytes, nullptr,
+                                   &log.add(Pass::Transfer));
+        cl::Buffer& codes = d.buffer(kCodes, count);
+        cl::Buffer& cases = d.buffer(kCases, count);
+        cl::Buffer& vbase = d.buffer(kVBase, count * 4);
+        cl::Buffer& tbase = d.buffer(kTBase, count * 4);
+        cl::Buffer& nan = d.buffer(kNan, sizeof(cl_int));
+        const cl_int no_nan = INT_MAX;
+        d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
+
+        const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
+        cl::Kernel& classify = d.mc_kernel(job.options, "classify");
+        classify.setArg(0, data);
+        classify.setArg(1, job.threshold.size(), job.threshold.data());
+        classify.setArg(2, u(nx_));
+        classify.setArg(3, u(ny_));
+        classify.setArg(4, u(nz_));
+        classify.setArg(5, u(range.begin));
+        classify.setArg(6, u(cell_end));
+        classify.setArg(7, u(zlo));
+        classify.setArg(8, u(count));
+        classify.setArg(9, d.corner_offset);
+        classify.setArg(10, d.case_table);
+        classify.setArg(11, codes);
+        classify.setArg(12, cases);
+        classify.setArg(13, vbase);
+        classify.setArg(14, tbase);
+        classify.setArg(15, nan);
+        d.queue.enqueueNDRangeKernel(classify, cl::NullRange, cl::NDRange(round_up(count, 64)), cl::NullRange,
+                                     nullptr, &log.add(Pass::Classify));
+
+        const std::uint64_t all_vertices = scan(d, vbase, count, log);
+        const std::uint64_t triangles = scan(d, tbase, count, log);
+        cl_int nan_plane = INT_MAX;
+        d.queue.enqueueReadBuffer(nan, CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr, &log.add(Pass::Transfer));
+        if (nan_plane != INT_MAX)
+            throw Error("volume has NaN samples (first seen in z-plane " + std::to_string(nan_plane) +
+                        "); replace them before meshing");
+        std::uint64_t vertices = all_vertices;
+        if (owned < count) {
+            cl_uint v = 0;
+            d.queue.enqueueReadBuffer(vbase, CL_TRUE, owned * 4, sizeof(v), &v, nullptr, &log.add(Pass::Transfer));
+            vertices = v;
+        }
+        if (all_vertices > std::numeric_limits<std::uint32_t>::max() ||
+            triangles > std::numeric_limits<std::uint32_t>::max())
+            throw TooBig{};
+        // Outputs, sized by the scan totals.
+        const std::size_t out_bytes = vertices * (12 + (options_.normals ? 12 : 0) + 4) + triangles * 16;
+        if (vertices * 12 > info.max_allocation || triangles * 12 > info.max_allocation ||
+            fixed_bytes(job, planes) + out_bytes > job.limit) {
+            if (planes > 1) throw TooBig{};
+        }
+        piece.vertices = vertices;
+        piece.positions.resize(3 * vertices);
+        if (options_.normals) piece.normals.resize(3 * vertices);
+        piece.indices.resize(3 * triangles);
+        if (vertices > 0 || triangles > 0) {
+            cl::Buffer& vowner = d.buffer(kVOwner, vertices * 4);
+            cl::Buffer& towner = d.buffer(kTOwner, triangles * 4);
+            cl::Kernel& compact = d.mc_kernel(job.options, "compact");
+            compact.setArg(0, codes);
+            compact.setArg(1, cases);
+            compact.setArg(2, vbase);
+            compact.setArg(3, tbase);
+            compact.setArg(4, u(count));
+            compact.setArg(5, u(owned));
+            compact.setArg(6, d.case_table);
+            compact.setArg(7, vowner);
+            compact.setArg(8, towner);
+            d.queue.enqueueNDRangeKernel(compact, cl::NullRange, cl::NDRange(round_up(count, 64)), cl::NullRange,
+                                         nullptr, &log.add(Pass::Generate));
+            if (vertices > 0) {
+                cl::Buffer& positions = d.buffer(kPositions, vertices * 12);
+                cl::Buffer& normals = d.buffer(kNormals, options_.normals ? vertices * 12 : 16);
+                cl::Kernel& k = d.mc_kernel(job.options, "vertices");
+                k.setArg(0, data);
+                k.setArg(1, job.threshold.size(), job.threshold.data());
+                const double fl = std::floor(options_.iso);
+                const cl_long iso_int =
+                    is_integer(job.device_type) ? static_cast<cl_long>(fl) : 0;  // in range: the threshold is mixed
+                const cl_float iso_frac = is_integer(job.device_type) ? static_cast<float>(options_.iso - fl) : 0.f;
+                auto real = [&](unsigned index, double value) {
+                    if (info.fp64) {
+                        k.setArg(index, value);
+                    } else {
+                        k.setArg(index, static_cast<cl_float>(value));
+                    }
+                };
+                real(2, options_.iso);
+                k.setArg(3, iso_int);
+                k.setArg(4, iso_frac);
+                k.setArg(5, u(nx_));
+                k.setArg(6, u(ny_));
+                k.setArg(7, u(nz_));
+                k.setArg(8, u(range.begin));
+                k.setArg(9, u(zlo));
+                k.setArg(10, u(vertices));
+                k.setArg(11, vowner);
+                for (unsigned a = 0; a < 3; ++a) {
+                    real(12 + a, volume_.origin[a]);
+                    real(15 + a, volume_.spacing[a]);
+                    real(18 + a, 1 / volume_.spacing[a]);
+                }
+                k.setArg(21, static_cast<cl_int>(options_.inside_below));
+                k.setArg(22, static_cast<cl_int>(options_.normals));
+                k.setArg(23, positions);
+                k.setArg(24, normals);
+                d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(round_up(vertices, 64)), cl::NullRange,
+                                             nullptr, &log.add(Pass::Generate));
+                d.queue.enqueueReadBuffer(positions, CL_FALSE, 0, vertices * 12, piece.positions.data(), nullptr,
+                                          &log.add(Pass::Transfer));
+                if (options_.normals)
+                    d.queue.enqueueReadBuffer(normals, CL_FALSE, 0, vertices * 12, piece.normals.data(), nullptr,
+                                              &log.add(Pass::Transfer));
+            }
+            if (triangles > 0) {
+                cl::Buffer& indices = d.buffer(kIndices, triangles * 12);
+                cl::Kernel& k = d.mc_kernel(job.options, "triangles");
+                k.setArg(0, codes);
+                k.setArg(1, cases);
+                k.setArg(2, vbase);
+                k.setArg(3, towner);
+                k.setArg(4, u(triangles));
+                k.setArg(5, u(nx_));
+                k.setArg(6, u(plane_));
+                k.setArg(7, d.case_table);
+                k.setArg(8, d.cell_edge);
+                k.setArg(9, static_cast<cl_int>(options_.inside_below));
+                k.setArg(10, indices);
+                d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(round_up(triangles, 64)), cl::NullRange,
+                                             nullptr, &log.add(Pass::Generate));
+                d.queue.enqueueReadBuffer(indices, CL_FALSE, 0, triangles * 12, piece.indices.data(), nullptr,
+                                          &log.add(Pass::Transfer));
+            }
+        }
+        d.queue.finish();
+    } catch (...) {
+        // Nothing may still read from or write into host memory we are about to free.
+        try {
+            d.queue.finish();
+        } catch (const cl::Error&) {
+        }
+        throw;
+    }
+    for (const auto& [pass, event] : log.events) {
+        const double s = event_seconds(event);
+        if (pass == Pass::Transfer) {
+            job.stats.transfer_s += s;
+        } else {
+            job.stats.kernel_s += s;
+            job.pass_seconds[static_cast<int>(pass)] += s;
+        }
+    }
+    return piece;
+}
+
+void Engine::process(DeviceJob& job, ZRange range, std::vector<Piece>& out) {
+    const std::size_t planes = range.end - range.begin;
+    if (!job.cpu_only) {
+        bool too_big = false;
+        try {
+            out.push_back(run_on_device(job, range));
+            job.stats.chunks += 1;
+            job.stats.voxels += planes * plane_;
+            return;
+        } catch (const TooBig&) {
+            too_big = true;
+        } catch (const cl::Error& e) {
+            if (!is_out_of_memory(e.err()))
+                throw Error("OpenCL error on device '" + job.device->info.name + "' in " + e.what() + ": " +
+                            error_name(e.err()));
+            job.device->drop_buffers();
+            too_big = true;
+        }
+        if (too_big && planes > 1) {
+            warn("a " + std::to_string(planes) + "-plane chunk does not fit OpenCL device '" + job.device->info.name +
+                 "' (out of memory, max allocation or memory budget); using smaller chunks");
+            const ZRange a{range.begin, range.begin + planes / 2}, b{range.begin + planes / 2, range.end};
+            process(job, a, out);
+            process(job, b, out);
+            return;
+        }
+        warn("OpenCL device '" + job.device->info.name + "' cannot hold even one z-plane of this volume within " +
+             "its memory limits; those chunks run on the CPU engine");
+    }
+    const auto t0 = Clock::now();
+    out.push_back(run_on_cpu(range, 1));
+    std::lock_guard<std::mutex> lock(mutex_);
+    fallback_stats_.chunks += 1;
+    fallback_stats_.voxels += planes * plane_;
+    fallback_stats_.wall_s += seconds_since(t0);
+}
+
+void Engine::device_worker(DeviceJob& job) {
+    const auto t0 = Clock::now();
+    std::lock_guard<std::mutex> lock(job.device->mutex);
+    std::size_t index;
+    while (next_chunk(index)) process(job, chunks_[index], results_[index]);
+    job.stats.wall_s = seconds_since(t0);
+}
+
+void Engine::cpu_worker() {
+    const auto t0 = Clock::now();
+    std::size_t index;
+    while (next_chunk(index)) {
+        const ZRange range = chunks_[index];
+        const auto t = Clock::now();
+        results_[index].push_back(run_on_cpu(range, threads_));
+        cpu_pass_seconds_[2] += seconds_since(t);
+        cpu_stats_.chunks += 1;
+        cpu_stats_.voxels += (range.end - range.begin) * plane_;
+    }
+    cpu_stats_.wall_s = seconds_since(t0);
+}
+
+Mesh Engine::assemble(std::vector<std::vector<Piece>>& results) {
+    std::vector<Piece*> pieces;
+    for (auto& chunk : results)
+        for (Piece& p : chunk) pieces.push_back(&p);
+    std::vector<std::uint64_t> vbase(pieces.size()), tbase(pieces.size());
+    std::uint64_t vertices = 0, triangles = 0;
+    for (std::size_t i = 0; i < pieces.size(); ++i) {
+        vbase[i] = vertices;
+        tbase[i] = triangles;
+        vertices += pieces[i]->vertices;
+        triangles += pieces[i]->indices.size() / 3;
+    }
+    if (vertices > std::numeric_limits<std::uint32_t>::max())
+        throw Error("the mesh would have more than 2^32-1 vertices; 32-bit indices cannot address it "
+                    "(mesh a sub-volume or a coarser volume)");
+    Mesh mesh;
+    mesh.positions.resize(3 * vertices);
+    if (options_.normals) mesh.normals.resize(3 * vertices);
+    mesh.indices.resize(3 * triangles);
+    const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(threads_, std::max<std::size_t>(pieces.size(), 1)));
+    run_workers(workers, [&](unsigned w) {
+        for (std::size_t i = w; i < pieces.size(); i += workers) {
+            const Piece& p = *pieces[i];
+            std::copy(p.positions.begin(), p.positions.end(), mesh.positions.begin() + 3 * vbase[i]);
+            if (options_.normals) std::copy(p.normals.begin(), p.normals.end(), mesh.normals.begin() + 3 * vbase[i]);
+            const auto base = static_cast<std::uint32_t>(vbase[i]);
+            std::transform(p.indices.begin(), p.indices.end(), mesh.indices.begin() + 3 * tbase[i],
+                           [base](std::uint32_t id) { return id + base; });
+        }
+    });
+    return mesh;
+}
+
+Mesh Engine::run(Stats& stats) {
+    const auto t0 = Clock::now();
+    stats.backend = hybrid_ ? Backend::Hybrid : Backend::OpenCL;
+    stats.threads = hybrid_ ? threads_ : 0;
+    auto report = [&] {
+        for (const std::string& w : warnings_) {
+            stats.warnings.push_back(w);
+            if (options_.log) options_.log(w);
+        }
+    };
+
+    const auto chosen = select_devices();
+    if (chosen.empty()) {
+        const std::string why = cl_engine::devices().empty()
+                                    ? "no OpenCL platform or usable device was found"
+                                    : "no OpenCL device matches the requested devices/device_type";
+        if (!hybrid_) throw Error(why + "; use Backend::Cpu, Backend::Auto or check the OpenCL installation (clinfo)");
+        warn(why + "; the hybrid backend runs the CPU engine alone");
+        report();
+        return cpu_extract(volume_, options_, stats);
+    }
+    // A threshold no sample can cross: nothing to mesh (as the CPU engine).
+    const bool uniform = dispatch_scalar(volume_.type, [&](auto tag) {
+        return make_threshold<decltype(tag)>(options_.iso).uniform != Uniform::Mixed;
+    });
+    if (uniform) {
+        stats.times.total = seconds_since(t0);
+        return Mesh{};
+    }
+
+    std::vector<DeviceJob> jobs(chosen.size());
+    for (std::size_t i = 0; i < chosen.size(); ++i) {
+        jobs[i].device = chosen[i];
+        prepare(jobs[i]);
+    }
+    chunks_ = make_chunks(jobs);
+    results_.assign(chunks_.size(), {});
+    cpu_stats_.name = "cpu";
+    fallback_stats_.name = "cpu (fallback)";
+
+    const unsigned workers = static_cast<unsigned>(jobs.size() + (hybrid_ ? 1 : 0));
+    run_workers(workers, [&](unsigned w) {
+        try {
+            if (w < jobs.size()) device_worker(jobs[w]);
+            else cpu_worker();
+        } catch (...) {
+            abort_ = true;
+            throw;
+        }
+    });
+    Mesh mesh = assemble(results_);
+
+    for (DeviceJob& job : jobs) {
+        stats.devices.push_back(job.stats);
+        for (int p = 0; p < 3; ++p) cpu_pass_seconds_[p] += job.pass_seconds[p];
+    }
+    if (hybrid_) stats.devices.push_back(cpu_stats_);
+    if (fallback_stats_.chunks > 0) stats.devices.push_back(fallback_stats_);
+    stats.times.classify = cpu_pass_seconds_[0];
+    stats.times.scan = cpu_pass_seconds_[1];
+    stats.times.generate = cpu_pass_seconds_[2];
+    stats.times.total = seconds_since(t0);
+    report();
+    return mesh;
+}
+
+}  // namespace
+
+Mesh opencl_extract(const VolumeView& volume, const Options& options, Stats& stats, bool hybrid) {
+    validate_volume(volume);
+    Engine engine(volume, options, hybrid);
+    try {
+        return engine.run(stats);
+    } catch (const cl::Error& e) {
+        throw Error(std::string("OpenCL error in ") + e.what() + ": " + error_name(e.err()));
+    }
+}
+
+std::vector<DeviceInfo> opencl_devices() {
+    std::vector<DeviceInfo> out;
+    for (const auto& d : cl_engine::devices()) out.push_back(d->info);
+    return out;
+}
+
+std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t>& values, int device) {
+    const auto all = cl_engine::devices();
+    if (device < 0 || static_cast<std::size_t>(device) >= all.size())
+        throw Error("OpenCL device index " + std::to_string(device) + " does not exist");
+    Device& d = *all[static_cast<std::size_t>(device)];
+    std::lock_guard<std::mutex> lock(d.mutex);
+    std::vector<std::uint32_t> out(values.size() + 1, 0);
+    if (values.empty()) return out;
+    cl::Buffer buffer(d.context, CL_MEM_READ_WRITE, values.size() * 4);
+    EventLog log;
+    d.queue.enqueueWriteBuffer(buffer, CL_TRUE, 0, values.size() * 4, values.data());
+    const std::uint64_t total = scan(d, buffer, values.size(), log);
+    d.queue.enqueueReadBuffer(buffer, CL_TRUE, 0, values.size() * 4, out.data());
+    out.back() = static_cast<std::uint32_t>(total);
+    return out;
+}
+
+void opencl_split_devices(bool split) { cl_engine::split_devices(split); }
+
+}  // namespace voxmesh::detail

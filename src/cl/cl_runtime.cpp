@@ -1,0 +1,265 @@
+#include "cl_runtime.hpp"
+
+#include "core/case_tables.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+namespace voxmesh::detail::cl_engine {
+
+static_assert(sizeof(CaseEntry) == 16, "kernels read the case table as 16 bytes per case");
+static_assert(sizeof(CellEdge) == 4, "kernels read cell edges as 4 bytes each");
+static_assert(sizeof(kCornerOffset) == 24, "kernels read corner offsets as 3 bytes each");
+
+namespace {
+
+cl::Buffer constant_buffer(const cl::Context& context, const void* data, std::size_t bytes) {
+    // CL_MEM_COPY_HOST_PTR only reads the host memory.
+    return cl::Buffer(context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, bytes, const_cast<void*>(data));
+}
+
+DeviceType device_type_of(cl_device_type type) {
+    if (type & CL_DEVICE_TYPE_GPU) return DeviceType::Gpu;
+    if (type & CL_DEVICE_TYPE_ACCELERATOR) return DeviceType::Accelerator;
+    return DeviceType::Cpu;
+}
+
+DeviceInfo describe(const cl::Device& device, const std::string& platform, const std::string& suffix) {
+    DeviceInfo info;
+    info.platform = platform;
+    info.name = device.getInfo<CL_DEVICE_NAME>() + suffix;
+    info.version = device.getInfo<CL_DEVICE_VERSION>();
+    info.type = device_type_of(device.getInfo<CL_DEVICE_TYPE>());
+    info.compute_units = device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>();
+    info.global_memory = device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
+    info.max_allocation = device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
+    info.fp64 = device.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos;
+    return info;
+}
+
+struct Registry {
+    std::mutex mutex;
+    bool discovered = false;
+    bool split = false;
+    std::vector<std::shared_ptr<Device>> devices;
+};
+
+Registry& registry() {
+    static Registry r;
+    return r;
+}
+
+// Sub-devices of one compute unit each (at most two), or none when the device cannot split.
+std::vector<cl::Device> sub_devices(const cl::Device& device) {
+    std::vector<cl::Device> subs;
+    try {
+        if (device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>() < 2) return {};
+        const auto types = device.getInfo<CL_DEVICE_PARTITION_PROPERTIES>();
+        if (std::find(types.begin(), types.end(), CL_DEVICE_PARTITION_EQUALLY) == types.end()) return {};
+        const cl_device_partition_property props[] = {CL_DEVICE_PARTITION_EQUALLY, 1, 0};
+        cl::Device parent = device;
+        parent.createSubDevices(props, &subs);
+    } catch (const cl::Error&) {
+        return {};
+    }
+    if (subs.size() > 2) subs.resize(2);
+    return subs;
+}
+
+void discover(Registry& r) {
+    r.devices.clear();
+    std::vector<cl::Platform> platforms;
+    try {
+        cl::Platform::get(&platforms);
+    } catch (const cl::Error&) {
+        return;  // no ICD, no platform: no devices
+    }
+    for (const cl::Platform& platform : platforms) {
+        std::vector<cl::Device> found;
+        std::string platform_name;
+        try {
+            platform_name = platform.getInfo<CL_PLATFORM_NAME>();
+            platform.getDevices(CL_DEVICE_TYPE_ALL, &found);
+        } catch (const cl::Error&) {
+            continue;
+        }
+        for (const cl::Device& device : found) {
+            try {
+                if (!device.getInfo<CL_DEVICE_AVAILABLE>() || !device.getInfo<CL_DEVICE_COMPILER_AVAILABLE>()) continue;
+                std::vector<cl::Device> subs = r.split ? sub_devices(device) : std::vector<cl::Device>{};
+                if (subs.empty()) {
+                    r.devices.push_back(std::make_shared<Device>(device, describe(device, platform_name, "")));
+                } else {
+                    for (std::size_t i = 0; i < subs.size(); ++i)
+                        r.devices.push_back(std::make_shared<Device>(
+                            subs[i], describe(subs[i], platform_name,
+                                              " [sub-device " + std::to_string(i + 1) + "/" +
+                                                  std::to_string(subs.size()) + "]")));
+                }
+            } catch (const cl::Error&) {
+                continue;  // a device we cannot open is not usable
+            }
+        }
+    }
+    for (std::size_t i = 0; i < r.devices.size(); ++i) r.devices[i]->info.index = static_cast<int>(i);
+}
+
+std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
+
+}  // namespace
+
+Device::Device(const cl::Device& dev, DeviceInfo description)
+    : info(std::move(description)), device(dev), context(dev), queue(context, dev, CL_QUEUE_PROFILING_ENABLE) {
+    case_table = constant_buffer(context, kCaseTable, sizeof(kCaseTable));
+    cell_edge = constant_buffer(context, kCellEdge, sizeof(kCellEdge));
+    corner_offset = constant_buffer(context, kCornerOffset, sizeof(kCornerOffset));
+}
+
+cl::Kernel& Device::kernel(const unsigned char* source, const std::string& options, const char* name) {
+    const std::string key = (source == kKernel_scan ? "scan " : "mc ") + options;
+    auto it = programs_.find(key);
+    if (it == programs_.end()) {
+        cl::Program program(context, std::string(reinterpret_cast<const char*>(source)));
+        try {
+            program.build(std::vector<cl::Device>{device}, options.c_str());
+        } catch (const cl::Error& e) {
+            std::string log;
+            try {
+                log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device);
+            } catch (const cl::Error&) {
+                log = "(no build log)";
+            }
+            throw Error("OpenCL program build failed on device '" + info.name + "' (options \"" + options +
+                        "\", " + error_name(e.err()) + "); build log:\n" + log);
+        }
+        it = programs_.emplace(key, Program{program, {}}).first;
+    }
+    auto& kernels = it->second.kernels;
+    auto k = kernels.find(name);
+    if (k == kernels.end()) k = kernels.emplace(name, cl::Kernel(it->second.program, name)).first;
+    return k->second;
+}
+
+cl::Kernel& Device::mc_kernel(const std::string& options, const char* name) {
+    return kernel(kKernel_marching_cubes, options, name);
+}
+
+cl::Kernel& Device::scan_kernel(const char* name) {
+    return kernel(kKernel_scan, "-DSCAN_ITEMS=" + std::to_string(kScanItems), name);
+}
+
+std::size_t Device::scan_local_size() {
+    if (scan_local_ == 0) {
+        std::size_t limit = std::min<std::size_t>(256, device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>());
+        for (const char* name : {"scan_blocks", "scan_add"})
+            limit = std::min<std::size_t>(
+                limit, scan_kernel(name).getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(device));
+        const std::size_t local_mem = device.getInfo<CL_DEVICE_LOCAL_MEM_SIZE>();
+        while (limit * sizeof(cl_uint) > local_mem / 2 && limit > 1) limit /= 2;
+        std::size_t pow2 = 1;
+        while (pow2 * 2 <= limit) pow2 *= 2;
+        scan_local_ = pow2;
+    }
+    return scan_local_;
+}
+
+cl::Buffer& Device::buffer(unsigned id, std::size_t bytes) {
+    bytes = std::max<std::size_t>(bytes, 16);
+    auto it = buffers_.find(id);
+    if (it != buffers_.end() && it->second.second >= bytes) return it->second.first;
+    if (it != buffers_.end()) buffers_.erase(it);  // release the old one before allocating
+    // Some headroom so that slightly larger chunks reuse the buffer, within the device limit.
+    std::size_t size = std::min<std::size_t>(round_up(bytes + bytes / 8, 4096), info.max_allocation);
+    size = std::max(size, bytes);
+    cl::Buffer buffer(context, CL_MEM_READ_WRITE, size);
+    return buffers_.emplace(id, std::make_pair(buffer, size)).first->second.first;
+}
+
+void Device::drop_buffers() { buffers_.clear(); }
+
+std::vector<std::shared_ptr<Device>> devices() {
+    Registry& r = registry();
+    std::lock_guard<std::mutex> lock(r.mutex);
+    if (!r.discovered) {
+        discover(r);
+        r.discovered = true;
+    }
+    return r.devices;
+}
+
+void split_devices(bool split) {
+    Registry& r = registry();
+    std::lock_guard<std::mutex> lock(r.mutex);
+    if (r.discovered && r.split == split) return;
+    r.split = split;
+    discover(r);
+    r.discovered = true;
+}
+
+double event_seconds(const cl::Event& event) {
+    const cl_ulong start = event.getProfilingInfo<CL_PROFILING_COMMAND_START>();
+    const cl_ulong end = event.getProfilingInfo<CL_PROFILING_COMMAND_END>();
+    return end > start ? static_cast<double>(end - start) * 1e-9 : 0.0;
+}
+
+std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& log, unsigned level) {
+    if (n == 0) return 0;
+    const std::size_t local = d.scan_local_size();
+    const std::size_t block = local * kScanItems;
+    const std::size_t blocks = (n + block - 1) / block;
+    cl::Buffer& sums = d.buffer(kScanBufferBase + level, blocks * sizeof(cl_uint));
+
+    cl::Kernel& scan_blocks = d.scan_kernel("scan_blocks");
+    scan_blocks.setArg(0, data);
+    scan_blocks.setArg(1, static_cast<cl_uint>(n));
+    scan_blocks.setArg(2, sums);
+    scan_blocks.setArg(3, cl::Local(local * sizeof(cl_uint)));
+    d.queue.enqueueNDRangeKernel(scan_blocks, cl::NullRange, cl::NDRange(blocks * local), cl::NDRange(local),
+                                 nullptr, &log.add(Pass::Scan));
+    std::uint64_t total = 0;
+    if (blocks == 1) {
+        cl_uint value = 0;
+        d.queue.enqueueReadBuffer(sums, CL_TRUE, 0, sizeof(value), &value, nullptr, &log.add(Pass::Transfer));
+        total = value;
+    } else {
+        total = scan(d, sums, blocks, log, level + 1);
+        cl::Kernel& add = d.scan_kernel("scan_add");
+        add.setArg(0, data);
+        add.setArg(1, static_cast<cl_uint>(n));
+        add.setArg(2, sums);
+        d.queue.enqueueNDRangeKernel(add, cl::NullRange, cl::NDRange(blocks * local), cl::NDRange(local), nullptr,
+                                     &log.add(Pass::Scan));
+    }
+    return total;
+}
+
+bool is_out_of_memory(cl_int code) {
+    return code == CL_MEM_OBJECT_ALLOCATION_FAILURE || code == CL_OUT_OF_RESOURCES ||
+           code == CL_OUT_OF_HOST_MEMORY || code == CL_INVALID_BUFFER_SIZE;
+}
+
+std::string error_name(cl_int code) {
+    const char* name = nullptr;
+    switch (code) {
+        case CL_DEVICE_NOT_FOUND: name = "CL_DEVICE_NOT_FOUND"; break;
+        case CL_DEVICE_NOT_AVAILABLE: name = "CL_DEVICE_NOT_AVAILABLE"; break;
+        case CL_COMPILER_NOT_AVAILABLE: name = "CL_COMPILER_NOT_AVAILABLE"; break;
+        case CL_MEM_OBJECT_ALLOCATION_FAILURE: name = "CL_MEM_OBJECT_ALLOCATION_FAILURE"; break;
+        case CL_OUT_OF_RESOURCES: name = "CL_OUT_OF_RESOURCES"; break;
+        case CL_OUT_OF_HOST_MEMORY: name = "CL_OUT_OF_HOST_MEMORY"; break;
+        case CL_BUILD_PROGRAM_FAILURE: name = "CL_BUILD_PROGRAM_FAILURE"; break;
+        case CL_INVALID_VALUE: name = "CL_INVALID_VALUE"; break;
+        case CL_INVALID_BUFFER_SIZE: name = "CL_INVALID_BUFFER_SIZE"; break;
+        case CL_INVALID_BUILD_OPTIONS: name = "CL_INVALID_BUILD_OPTIONS"; break;
+        case CL_INVALID_KERNEL_NAME: name = "CL_INVALID_KERNEL_NAME"; break;
+        case CL_INVALID_KERNEL_ARGS: name = "CL_INVALID_KERNEL_ARGS"; break;
+        case CL_INVALID_ARG_SIZE: name = "CL_INVALID_ARG_SIZE"; break;
+        case CL_INVALID_WORK_GROUP_SIZE: name = "CL_INVALID_WORK_GROUP_SIZE"; break;
+        case CL_INVALID_GLOBAL_WORK_SIZE: name = "CL_INVALID_GLOBAL_WORK_SIZE"; break;
+        case CL_INVALID_OPERATION: name = "CL_INVALID_OPERATION"; break;
+        default: break;
+    }
+    return std::string(name ? name : "OpenCL error") + " (" + std::to_string(code) + ")";
+}
+
+}  // namespace voxmesh::detail::cl_engine

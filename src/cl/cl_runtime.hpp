@@ -1,0 +1,87 @@
+// The OpenCL runtime of the engine: device discovery, one context + profiling queue per
+// device, programs built once per device and options, reusable buffers, the scan.
+// Process-wide and created lazily; a Device is used by one thread at a time (its mutex).
+#pragma once
+
+#include <CL/opencl.hpp>
+#include <voxmesh/voxmesh.hpp>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace voxmesh::detail {
+
+extern const unsigned char kKernel_marching_cubes[];
+extern const unsigned char kKernel_scan[];
+
+namespace cl_engine {
+
+constexpr unsigned kScanItems = 8;  // elements per work-item in scan.cl (passed as -DSCAN_ITEMS)
+
+enum class Pass { Classify, Scan, Generate, Transfer };
+
+// Events of one chunk, summed into seconds per pass after the queue finished.
+struct EventLog {
+    std::vector<std::pair<Pass, cl::Event>> events;
+    cl::Event& add(Pass pass) {
+        events.emplace_back(pass, cl::Event());
+        return events.back().second;
+    }
+};
+double event_seconds(const cl::Event& event);
+
+class Device {
+public:
+    Device(const cl::Device& device, DeviceInfo info);
+
+    DeviceInfo info;
+    cl::Device device;
+    cl::Context context;
+    cl::CommandQueue queue;
+    cl::Buffer case_table, cell_edge, corner_offset;  // from src/core/case_tables.cpp
+    std::mutex mutex;  // whoever uses queue, kernels or buffers holds it
+
+    // Kernels of marching_cubes.cl built with `options`, and of scan.cl. Build failures
+    // throw Error with the device name and the build log.
+    cl::Kernel& mc_kernel(const std::string& options, const char* name);
+    cl::Kernel& scan_kernel(const char* name);
+    std::size_t scan_local_size();
+
+    // A buffer of at least `bytes` for slot `id`, kept for the next chunk and call.
+    cl::Buffer& buffer(unsigned id, std::size_t bytes);
+    void drop_buffers();
+
+private:
+    struct Program {
+        cl::Program program;
+        std::map<std::string, cl::Kernel> kernels;
+    };
+    cl::Kernel& kernel(const unsigned char* source, const std::string& options, const char* name);
+    std::map<std::string, Program> programs_;
+    std::map<unsigned, std::pair<cl::Buffer, std::size_t>> buffers_;
+    std::size_t scan_local_ = 0;
+};
+
+// Every usable device (available, with a compiler), discovered once per process.
+std::vector<std::shared_ptr<Device>> devices();
+// Test hook: present each partitionable device as sub-devices of 1 compute unit each (at
+// most 2), i.e. several OpenCL devices on a machine that has one.
+void split_devices(bool split);
+
+// Exclusive prefix sum of n uints in `data`, in place, on d's queue; returns the total.
+// Blocking (reads the total back). Buffer ids >= kScanBufferBase are used for block sums.
+constexpr unsigned kScanBufferBase = 100;
+std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& log, unsigned level = 0);
+
+// True for errors that mean "this did not fit" (allocation failures, out of resources).
+bool is_out_of_memory(cl_int code);
+// "CL_OUT_OF_RESOURCES (-5)" etc.
+std::string error_name(cl_int code);
+
+}  // namespace cl_engine
+}  // namespace voxmesh::detail

@@ -1,0 +1,15 @@
+# cmake -DOUTPUT=file.cpp -DINPUTS=a.cl|b.cl -P embed_kernels.cmake
+# Writes one NUL-terminated unsigned char array per kernel file, named kKernel_<stem>.
+string(REPLACE "|" ";" inputs "${INPUTS}")
+set(text "// Generated from kernels/*.cl by src/cl/embed_kernels.cmake - do not edit.\nnamespace voxmesh::detail {\n")
+foreach(input ${inputs})
+  get_filename_component(stem ${input} NAME_WE)
+  file(READ ${input} hex HEX)
+  string(REGEX REPLACE "([0-9a-f][0-9a-f])" "0x\\1," hex "${hex}")
+  string(REGEX REPLACE "((0x..,){32})" "\\1\n" hex "${hex}")
+  string(APPEND text "extern const unsigned char kKernel_${stem}[];\nconst unsigned char kKernel_${stem}[] = {\n${hex}0x00};\n")
+endforeach()
+string(APPEND text "}  // namespace voxmesh::detail\n")
+file(WRITE ${OUTPUT}.tmp "${text}")
+file(COPY_FILE ${OUTPUT}.tmp ${OUTPUT} ONLY_IF_DIFFERENT)
+file(REMOVE ${OUTPUT}.tmp)
