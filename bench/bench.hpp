@@ -1,0 +1,105 @@
+// voxmesh-bench internals: what is measured, how results are kept and printed.
+#pragma once
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <array>
+#include <csignal>
+#include <cstddef>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace vmbench {
+
+// Set by SIGINT; the run loops stop between measurements and print what finished.
+extern volatile std::sig_atomic_t g_interrupted;
+
+// One volume to mesh: a built-in field at one size and type, or a file.
+struct Input {
+    std::string field;  // "sphere", ..., or the file name
+    std::string type;   // scalar name
+    std::array<std::size_t, 3> dims{0, 0, 0};
+    double iso = 0;
+    voxmesh::Volume volume;
+};
+
+// How to run one extraction.
+struct Combo {
+    voxmesh::Backend backend = voxmesh::Backend::Cpu;
+    std::string device;        // "cpu", "all", "#0", "#0+1"
+    std::vector<int> devices;  // Options::devices
+    unsigned threads = 1;
+};
+
+struct Result {
+    // What ran.
+    std::string field, type;
+    std::array<std::size_t, 3> dims{0, 0, 0};
+    double iso = 0;
+    std::string backend, backend_ran, device;
+    unsigned threads = 0;
+    bool normals = true;
+    int repeat = 0, warmup = 0;
+    std::string status = "ok";  // "ok", "unavailable", "error"
+    std::string error;
+    std::vector<std::string> warnings;
+
+    // End-to-end extract() wall time, seconds, over `repeat` runs.
+    std::vector<double> times;
+    double median_s = 0, min_s = 0, max_s = 0;
+    // Medians of the library's own accounting (voxmesh::Stats).
+    double classify_s = 0, scan_s = 0, generate_s = 0, total_s = 0;
+    double kernel_s = 0, transfer_s = 0;  // summed over devices (OpenCL)
+    std::string device_names;             // Stats::devices names, '+'-joined
+
+    std::size_t triangles = 0, vertices = 0;
+    double mvox_s = 0;
+    double floor_s = 0, floor_ratio = 0;  // streaming floor on the same threads
+    double speedup = -1;                  // vs the fewest threads of the same series; -1: none
+    unsigned speedup_base_threads = 0;
+
+    double peak_rss_mb = 0;     // process peak while extracting (VmHWM after a reset)
+    double extract_rss_mb = 0;  // that peak minus the RSS just before extract()
+    std::string rss_scope;      // "run" (VmHWM reset per run) or "process" (lifetime peak)
+    double volume_mb = 0, mesh_mb = 0;
+
+    std::size_t samples() const { return dims[0] * dims[1] * dims[2]; }
+    std::string size_label() const;  // "256" for cubes, else "NXxNYxNZ"
+};
+
+struct Settings {
+    int repeat = 3, warmup = 1;
+    bool normals = true;
+    bool quiet = false;
+};
+
+// ---- measure.cpp ----
+double now_s();
+double median(std::vector<double> v);
+// Time to read every sample once with `threads` threads (median over repeats, after warmup).
+double streaming_floor(const voxmesh::VolumeView& view, unsigned threads, int repeat, int warmup);
+// Runs one combination on one input: warmup, then `repeat` timed extract() calls.
+Result measure(const Input& input, const Combo& combo, const Settings& settings);
+// Whether /proc/self/clear_refs can reset VmHWM (per-run peaks) on this system.
+bool rss_reset_works();
+unsigned hardware_threads();
+
+// ---- report.cpp ----
+void compute_speedups(std::vector<Result>& results);
+void print_table(const std::vector<Result>& results);
+void print_csv(const std::vector<Result>& results);
+void print_json(const std::vector<Result>& results);
+// Table 1 of the paper beside ours: threads down, resolution across.
+void print_paper(const std::vector<Result>& results, const std::string& field, const std::string& type);
+
+// ---- nrrd_lite.cpp ----
+// Raw little-endian NRRD with the iso and field as key/value pairs (voxmesh_iso:=...).
+void write_volume_nrrd(const std::string& path, const Input& input);
+// The iso stored by write_volume_nrrd, if the file has one.
+bool read_nrrd_iso(const std::string& path, double& iso);
+// The volume in `path`: voxmesh::read_volume when the library has readers, else the raw
+// NRRD files write_volume_nrrd writes.
+voxmesh::Volume load_volume(const std::string& path);
+
+}  // namespace vmbench

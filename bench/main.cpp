@@ -1,0 +1,288 @@
+// voxmesh-bench: how fast is marching cubes here, on CPU threads and OpenCL devices?
+//
+//   voxmesh-bench --field sphere,gyroid --sizes 128,256 --threads 1,2 --backends cpu,opencl
+//   voxmesh-bench --paper --repeat 5          # the paper's Table 1 grid, beside the paper
+//   voxmesh-bench --input head.nrrd --iso 400.5 --json
+//   voxmesh-bench --field gyroid --sizes 512 --write-volume gyroid512.nrrd   # for bench/peers
+#include "bench.hpp"
+
+#include <voxmesh/fields.hpp>
+
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <sstream>
+
+using namespace vmbench;
+
+namespace {
+
+extern "C" void on_sigint(int) { g_interrupted = 1; }
+
+voxmesh::ScalarType parse_type(const std::string& s) {
+    using voxmesh::ScalarType;
+    for (auto t : {ScalarType::U8, ScalarType::I8, ScalarType::U16, ScalarType::I16, ScalarType::U32, ScalarType::I32,
+                   ScalarType::F32, ScalarType::F64})
+        if (s == voxmesh::scalar_name(t)) return t;
+    throw voxmesh::Error("unknown type '" + s + "' (expected u8, i8, u16, i16, u32, i32, f32 or f64)");
+}
+
+voxmesh::Backend parse_backend(const std::string& s) {
+    using voxmesh::Backend;
+    for (auto b : {Backend::Cpu, Backend::OpenCL, Backend::Hybrid, Backend::Auto})
+        if (s == voxmesh::backend_name(b)) return b;
+    throw voxmesh::Error("unknown backend '" + s + "' (expected cpu, opencl, hybrid or auto)");
+}
+
+// "all": one run on every device; "0,2": device 0 alone, then device 2 alone; "0+2": both together.
+std::vector<Combo> parse_devices(const std::string& spec) {
+    std::vector<Combo> out;
+    if (spec == "all" || spec.empty()) {
+        Combo c;
+        c.device = "all";
+        out.push_back(c);
+        return out;
+    }
+    std::istringstream list(spec);
+    std::string item;
+    while (std::getline(list, item, ',')) {
+        Combo c;
+        c.device = "#" + item;
+        std::istringstream parts(item);
+        std::string p;
+        while (std::getline(parts, p, '+')) {
+            try {
+                std::size_t used = 0;
+                const int i = std::stoi(p, &used);
+                if (used != p.size() || i < 0) throw std::invalid_argument(p);
+                c.devices.push_back(i);
+            } catch (const std::exception&) {
+                throw voxmesh::Error("bad --devices entry '" + item + "' (expected all, I,J or I+J)");
+            }
+        }
+        out.push_back(c);
+    }
+    return out;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"voxmesh-bench: marching-cubes timings on CPU threads and OpenCL devices"};
+    std::vector<std::string> fields, inputs, types{"f32"}, backends{"cpu"};
+    std::vector<std::size_t> sizes{64, 128, 256};
+    std::vector<unsigned> threads;
+    std::string devices = "all", write_path;
+    double iso = NAN;
+    std::uint32_t seed = 1;
+    Settings settings;
+    bool paper = false, csv = false, json = false, no_normals = false, list = false, no_floor = false;
+
+    app.add_option("--field", fields, "built-in fields: sphere, gyroid, blobs, ct (comma list; default sphere)")
+        ->delimiter(',');
+    app.add_option("--input", inputs, "volume files (NRRD, MetaImage, NIfTI); loading is not timed")->delimiter(',');
+    app.add_option("--iso", iso, "iso value (default: the field's, or voxmesh_iso in a file written by --write-volume)");
+    app.add_option("--type", types, "scalar types of built-in fields: f32, u8, u16, i16, i8, u32, i32, f64")
+        ->delimiter(',');
+    auto* sizes_opt = app.add_option("--sizes", sizes, "cube sizes of built-in fields (default 64,128,256)")->delimiter(',');
+    auto* threads_opt =
+        app.add_option("--threads", threads, "CPU thread counts (default 1 and all cores; 0 = all cores)")->delimiter(',');
+    app.add_option("--backends", backends, "cpu, opencl, hybrid, auto (comma list)")->delimiter(',');
+    app.add_option("--devices", devices, "OpenCL devices: all (together), I,J (each alone) or I+J (together)");
+    app.add_option("--repeat", settings.repeat, "timed runs per combination (median/min/max)")->check(CLI::Range(1, 1000));
+    app.add_option("--warmup", settings.warmup, "untimed runs first")->check(CLI::Range(0, 100));
+    app.add_option("--seed", seed, "seed of the blobs and ct fields");
+    app.add_flag("--no-normals", no_normals, "mesh without normals (default: normals on)");
+    app.add_flag("--paper", paper, "the paper's Table 1 grid: sizes 64..512 x threads 1,2,4,6,16 on the CPU");
+    app.add_flag("--csv", csv, "CSV output");
+    app.add_flag("--json", json, "one JSON object per line");
+    app.add_flag("--no-floor", no_floor, "skip the streaming-floor measurement");
+    app.add_flag("--quiet,-q", settings.quiet, "no progress on stderr");
+    app.add_flag("--list-devices", list, "list OpenCL devices and exit");
+    app.add_option("--write-volume", write_path,
+                   "write the (one) built-in field as a raw NRRD for bench/peers, with its iso, and exit");
+    CLI11_PARSE(app, argc, argv);
+    settings.normals = !no_normals;
+    if (csv && json) {
+        std::fprintf(stderr, "voxmesh-bench: choose one of --csv and --json\n");
+        return 2;
+    }
+
+    try {
+        if (list) {
+            const auto devs = voxmesh::list_devices();
+            if (devs.empty()) std::printf("no usable OpenCL device\n");
+            for (const auto& d : devs)
+                std::printf("#%d  %s / %s (%s), %u compute units, %.0f MiB, max alloc %.0f MiB\n", d.index,
+                            d.platform.c_str(), d.name.c_str(), d.version.c_str(), d.compute_units,
+                            double(d.global_memory) / 1048576.0, double(d.max_allocation) / 1048576.0);
+            return 0;
+        }
+        if (paper) {
+            if (!sizes_opt->count()) sizes = {64, 128, 256, 512};
+            if (!threads_opt->count()) threads = {1, 2, 4, 6, 16};
+        }
+        if (threads.empty()) threads = {1u, hardware_threads()};
+        for (auto& t : threads)
+            if (t == 0) t = hardware_threads();
+        if (fields.empty() && inputs.empty()) fields = {"sphere"};
+        std::vector<voxmesh::Field> field_ids;
+        for (const auto& f : fields) field_ids.push_back(voxmesh::parse_field(f));
+        std::vector<voxmesh::ScalarType> type_ids;
+        for (const auto& t : types) type_ids.push_back(parse_type(t));
+        std::vector<voxmesh::Backend> backend_ids;
+        for (const auto& b : backends) backend_ids.push_back(parse_backend(b));
+        const std::vector<Combo> device_sel = parse_devices(devices);
+
+        // The inputs, as recipes: built-in ones are generated one at a time (512^3 f32 is 512 MiB).
+        struct Recipe {
+            bool file = false;
+            std::string path;
+            voxmesh::Field field{};
+            voxmesh::ScalarType type{};
+            std::size_t size = 0;
+        };
+        std::vector<Recipe> recipes;
+        for (auto f : field_ids)
+            for (auto t : type_ids)
+                for (auto n : sizes) recipes.push_back({false, "", f, t, n});
+        for (const auto& p : inputs) recipes.push_back({true, p, {}, {}, 0});
+
+        if (!write_path.empty()) {
+            if (recipes.size() != 1 || recipes[0].file)
+                throw voxmesh::Error("--write-volume needs exactly one built-in field, type and size");
+            const Recipe& rc = recipes[0];
+            voxmesh::FieldVolume fv = voxmesh::make_field(rc.field, rc.size, rc.type, seed);
+            Input in;
+            in.field = voxmesh::field_name(rc.field);
+            in.type = voxmesh::scalar_name(rc.type);
+            in.dims = fv.volume.dims;
+            in.iso = std::isnan(iso) ? fv.iso : iso;
+            in.volume = std::move(fv.volume);
+            write_volume_nrrd(write_path, in);
+            std::fprintf(stderr, "wrote %s: %s %s %zu^3, iso %.17g\n", write_path.c_str(), in.field.c_str(),
+                         in.type.c_str(), rc.size, in.iso);
+            return 0;
+        }
+
+        // Every combination for one input.
+        auto combos_for = [&]() {
+            std::vector<Combo> out;
+            for (auto b : backend_ids) {
+                if (b == voxmesh::Backend::Cpu || b == voxmesh::Backend::Auto) {
+                    for (unsigned t : threads) {
+                        Combo c;
+                        c.backend = b;
+                        c.device = b == voxmesh::Backend::Cpu ? "cpu" : "auto";
+                        c.threads = t;
+                        out.push_back(c);
+                    }
+                } else {
+                    for (const Combo& d : device_sel) {
+                        if (b == voxmesh::Backend::OpenCL) {
+                            // Device-only: CPU thread counts do not apply; the host side uses all cores.
+                            Combo c = d;
+                            c.backend = b;
+                            c.threads = hardware_threads();
+                            out.push_back(c);
+                        } else {
+                            for (unsigned t : threads) {
+                                Combo c = d;
+                                c.backend = b;
+                                c.threads = t;
+                                out.push_back(c);
+                            }
+                        }
+                    }
+                }
+            }
+            return out;
+        };
+        const std::size_t total = recipes.size() * combos_for().size();
+
+        struct sigaction sa {};
+        sa.sa_handler = on_sigint;
+        sa.sa_flags = SA_RESETHAND;  // a second Ctrl-C ends the process at once
+        sigemptyset(&sa.sa_mask);
+        sigaction(SIGINT, &sa, nullptr);
+
+        std::vector<Result> results;
+        std::size_t done = 0;
+        for (const Recipe& rc : recipes) {
+            if (g_interrupted) break;
+            Input in;
+            const double g0 = now_s();
+            if (rc.file) {
+                in.field = rc.path;
+                in.volume = load_volume(rc.path);
+                double file_iso = 0;
+                if (!std::isnan(iso)) in.iso = iso;
+                else if (read_nrrd_iso(rc.path, file_iso)) in.iso = file_iso;
+                else throw voxmesh::Error("'" + rc.path + "' has no voxmesh_iso: give --iso");
+            } else {
+                voxmesh::FieldVolume fv = voxmesh::make_field(rc.field, rc.size, rc.type, seed);
+                in.field = voxmesh::field_name(rc.field);
+                in.iso = std::isnan(iso) ? fv.iso : iso;
+                in.volume = std::move(fv.volume);
+            }
+            in.type = voxmesh::scalar_name(in.volume.type);
+            in.dims = in.volume.dims;
+            if (!settings.quiet)
+                std::fprintf(stderr, "input %s %s %zux%zux%zu iso %g (%s in %.2f s)\n", in.field.c_str(),
+                             in.type.c_str(), in.dims[0], in.dims[1], in.dims[2], in.iso,
+                             rc.file ? "loaded" : "generated", now_s() - g0);
+
+            std::map<unsigned, double> floors;
+            for (const Combo& c : combos_for()) {
+                if (g_interrupted) break;
+                ++done;
+                if (!settings.quiet)
+                    std::fprintf(stderr, "[%zu/%zu] %s %s %s %s %s t=%u ...", done, total, in.field.c_str(),
+                                 in.type.c_str(), std::to_string(in.dims[0]).c_str(), voxmesh::backend_name(c.backend),
+                                 c.device.c_str(), c.threads);
+                std::fflush(stderr);
+                Result r = measure(in, c, settings);
+                if (r.status == "interrupted") break;
+                if (!no_floor && !g_interrupted) {
+                    auto it = floors.find(c.threads);
+                    if (it == floors.end())
+                        it = floors.emplace(c.threads, streaming_floor(in.volume.view(), c.threads, settings.repeat,
+                                                                       1)).first;
+                    r.floor_s = it->second;
+                    if (r.status == "ok" && r.floor_s > 0) r.floor_ratio = r.median_s / r.floor_s;
+                }
+                if (!settings.quiet) {
+                    if (r.status == "ok")
+                        std::fprintf(stderr, " %.4f s median, %zu triangles, %.2fx floor\n", r.median_s, r.triangles,
+                                     r.floor_ratio);
+                    else
+                        std::fprintf(stderr, " %s: %s\n", r.status.c_str(), r.error.c_str());
+                }
+                results.push_back(std::move(r));
+            }
+        }
+        if (g_interrupted)
+            std::fprintf(stderr, "\ninterrupted: printing the %zu finished result(s)\n", results.size());
+
+        compute_speedups(results);
+        if (json) print_json(results);
+        else if (csv) print_csv(results);
+        else {
+            print_table(results);
+            if (paper) {
+                const std::string f = fields.empty() ? "sphere" : fields[0];
+                print_paper(results, f, types[0]);
+            }
+        }
+        std::fflush(stdout);
+        return g_interrupted ? 130 : 0;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "voxmesh-bench: %s\n", e.what());
+        return 1;
+    }
+}

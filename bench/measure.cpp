@@ -1,0 +1,244 @@
+// Timing one extraction combination, the streaming floor, and peak memory.
+#include "bench.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+namespace vmbench {
+
+volatile std::sig_atomic_t g_interrupted = 0;
+
+double now_s() {
+    using clock = std::chrono::steady_clock;
+    return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
+}
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0;
+    std::sort(v.begin(), v.end());
+    const std::size_t m = v.size() / 2;
+    return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+unsigned hardware_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
+
+// ---- streaming floor -----------------------------------------------------------------------
+
+namespace {
+
+// Sum of the samples' bit patterns as unsigned integers of the sample width: reads every
+// byte once, vectorises, and cannot be optimised away (the sum is consumed).
+template <class U>
+std::uint64_t sum_bits(const unsigned char* p, std::size_t count) {
+    std::uint64_t s = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        U u;
+        std::memcpy(&u, p + i * sizeof(U), sizeof(U));
+        s += u;
+    }
+    return s;
+}
+
+std::uint64_t sum_range(const unsigned char* p, std::size_t count, std::size_t width) {
+    switch (width) {
+        case 1: return sum_bits<std::uint8_t>(p, count);
+        case 2: return sum_bits<std::uint16_t>(p, count);
+        case 4: return sum_bits<std::uint32_t>(p, count);
+        default: return sum_bits<std::uint64_t>(p, count);
+    }
+}
+
+volatile std::uint64_t g_sink = 0;
+
+double floor_once(const voxmesh::VolumeView& view, unsigned threads) {
+    const std::size_t width = voxmesh::scalar_size(view.type);
+    const std::size_t count = view.dims[0] * view.dims[1] * view.dims[2];
+    const auto* base = static_cast<const unsigned char*>(view.data);
+    std::vector<std::uint64_t> partial(threads, 0);
+    const double t0 = now_s();
+    std::vector<std::thread> pool;
+    auto work = [&](unsigned w) {
+        // Contiguous slabs, like the engine's z-slabs.
+        const std::size_t b = count * w / threads, e = count * (w + 1) / threads;
+        partial[w] = sum_range(base + b * width, e - b, width);
+    };
+    for (unsigned w = 1; w < threads; ++w) pool.emplace_back(work, w);
+    work(0);
+    for (auto& t : pool) t.join();
+    const double t1 = now_s();
+    std::uint64_t s = 0;
+    for (auto v : partial) s += v;
+    g_sink = g_sink + s;
+    return t1 - t0;
+}
+
+}  // namespace
+
+double streaming_floor(const voxmesh::VolumeView& view, unsigned threads, int repeat, int warmup) {
+    threads = std::max(1u, threads);
+    for (int i = 0; i < warmup; ++i) floor_once(view, threads);
+    std::vector<double> t;
+    for (int i = 0; i < std::max(1, repeat); ++i) t.push_back(floor_once(view, threads));
+    return median(t);
+}
+
+// ---- memory --------------------------------------------------------------------------------
+
+namespace {
+
+// VmRSS / VmHWM from /proc/self/status, in MiB; 0 when unavailable.
+double status_mb(const char* key) {
+    std::ifstream in("/proc/self/status");
+    std::string line;
+    const std::size_t klen = std::strlen(key);
+    while (std::getline(in, line)) {
+        if (line.compare(0, klen, key) == 0 && line.size() > klen && line[klen] == ':') {
+            std::istringstream s(line.substr(klen + 1));
+            double kb = 0;
+            s >> kb;
+            return kb / 1024.0;
+        }
+    }
+    return 0;
+}
+
+bool reset_hwm() {
+    // Writing 5 to clear_refs resets the peak RSS (VmHWM) to the current RSS (Linux >= 4.0).
+    std::FILE* f = std::fopen("/proc/self/clear_refs", "w");
+    if (!f) return false;
+    const bool ok = std::fputs("5", f) >= 0;
+    return std::fclose(f) == 0 && ok;
+}
+
+}  // namespace
+
+bool rss_reset_works() {
+    static const bool works = [] {
+        if (!reset_hwm()) return false;
+        // Touch 32 MiB, release it, reset: the peak must come back down.
+        {
+            std::vector<char> big(32u << 20);
+            for (std::size_t i = 0; i < big.size(); i += 4096) big[i] = 1;
+            g_sink = g_sink + std::uint64_t(big[4096]);
+        }
+        const double high = status_mb("VmHWM");
+        if (!reset_hwm()) return false;
+        return status_mb("VmHWM") < high - 16;
+    }();
+    return works;
+}
+
+// ---- one combination -----------------------------------------------------------------------
+
+Result measure(const Input& input, const Combo& combo, const Settings& settings) {
+    Result r;
+    r.field = input.field;
+    r.type = input.type;
+    r.dims = input.dims;
+    r.iso = input.iso;
+    r.backend = voxmesh::backend_name(combo.backend);
+    r.backend_ran = r.backend;
+    r.device = combo.device;
+    r.threads = combo.threads;
+    r.normals = settings.normals;
+    r.repeat = settings.repeat;
+    r.warmup = settings.warmup;
+    r.volume_mb = double(input.volume.byte_size()) / (1024.0 * 1024.0);
+    const bool per_run_rss = rss_reset_works();
+    r.rss_scope = per_run_rss ? "run" : "process";
+
+    voxmesh::Options options;
+    options.iso = input.iso;
+    options.backend = combo.backend;
+    options.threads = combo.threads;
+    options.normals = settings.normals;
+    options.devices = combo.devices;
+    const voxmesh::VolumeView view = input.volume.view();
+
+    std::vector<double> classify, scan, generate, total, kernel, transfer;
+    auto record_stats = [&](const voxmesh::Stats& stats) {
+        classify.push_back(stats.times.classify);
+        scan.push_back(stats.times.scan);
+        generate.push_back(stats.times.generate);
+        total.push_back(stats.times.total);
+        double k = 0, t = 0;
+        std::string names;
+        for (const auto& d : stats.devices) {
+            k += d.kernel_s;
+            t += d.transfer_s;
+            if (!names.empty()) names += "+";
+            names += d.name;
+        }
+        kernel.push_back(k);
+        transfer.push_back(t);
+        r.device_names = names;
+        r.backend_ran = voxmesh::backend_name(stats.backend);
+        for (const auto& w : stats.warnings)
+            if (std::find(r.warnings.begin(), r.warnings.end(), w) == r.warnings.end()) r.warnings.push_back(w);
+    };
+
+    try {
+        for (int i = 0; i < settings.warmup && !g_interrupted; ++i) {
+            voxmesh::Stats stats;
+            voxmesh::Mesh m = voxmesh::extract(view, options, stats);
+            r.backend_ran = voxmesh::backend_name(stats.backend);
+        }
+        for (int i = 0; i < std::max(1, settings.repeat) && !g_interrupted; ++i) {
+            if (per_run_rss) reset_hwm();
+            const double rss_before = status_mb("VmRSS");
+            voxmesh::Stats stats;
+            const double t0 = now_s();
+            voxmesh::Mesh m = voxmesh::extract(view, options, stats);
+            const double t1 = now_s();
+            const double hwm = status_mb("VmHWM");
+            r.times.push_back(t1 - t0);
+            record_stats(stats);
+            r.triangles = m.triangle_count();
+            r.vertices = m.vertex_count();
+            r.mesh_mb = double((m.positions.size() + m.normals.size()) * sizeof(float) +
+                               m.indices.size() * sizeof(std::uint32_t)) / (1024.0 * 1024.0);
+            r.peak_rss_mb = std::max(r.peak_rss_mb, hwm);
+            r.extract_rss_mb = std::max(r.extract_rss_mb, hwm - rss_before);
+        }  // the mesh is freed here, outside the timed region
+    } catch (const voxmesh::Error& e) {
+        // An engine or device that cannot run here (no OpenCL device, engine not built, ...).
+        r.status = "unavailable";
+        r.error = e.what();
+        r.times.clear();
+        return r;
+    } catch (const std::exception& e) {
+        r.status = "error";
+        r.error = e.what();
+        r.times.clear();
+        return r;
+    }
+    if (r.times.empty()) {
+        r.status = "interrupted";
+        return r;
+    }
+    r.median_s = median(r.times);
+    r.min_s = *std::min_element(r.times.begin(), r.times.end());
+    r.max_s = *std::max_element(r.times.begin(), r.times.end());
+    r.classify_s = median(classify);
+    r.scan_s = median(scan);
+    r.generate_s = median(generate);
+    r.total_s = median(total);
+    r.kernel_s = median(kernel);
+    r.transfer_s = median(transfer);
+    r.mvox_s = r.median_s > 0 ? double(r.samples()) / r.median_s / 1e6 : 0;
+    return r;
+}
+
+std::string Result::size_label() const {
+    if (dims[0] == dims[1] && dims[1] == dims[2]) return std::to_string(dims[0]);
+    return std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]);
+}
+
+}  // namespace vmbench
