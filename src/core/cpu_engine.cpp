@@ -1,5 +1,6 @@
 #include "cpu_engine.hpp"
 
+#include "bit_rows.hpp"
 #include "case_tables.hpp"
 #include "edge_vertex.hpp"
 #include "parallel.hpp"
@@ -8,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -21,102 +23,114 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// ---------------------------------------------------------------- inside bits
-
-template <class T>
-bool compute_bits(const T* values, std::size_t n, T threshold, std::uint8_t* bits) {
-    if constexpr (std::is_floating_point_v<T>) {
-        unsigned nan = 0;
-        for (std::size_t i = 0; i < n; ++i) {
-            bits[i] = values[i] >= threshold;
-            nan |= values[i] != values[i];
-        }
-        return nan != 0;
-    } else {
-        for (std::size_t i = 0; i < n; ++i) bits[i] = values[i] >= threshold;
-        return false;
-    }
-}
-
 [[noreturn]] void throw_nan(std::size_t z) {
     throw Error("volume has NaN samples (first seen in z-plane " + std::to_string(z) +
                 "); replace them before meshing");
 }
 
+// A plane of packed inside bits (ny rows of words_per_row(nx) words) and the byte scratch
+// that packing needs.
+struct BitPlane {
+    std::vector<Word> words;
+    const Word* row(std::size_t j, std::size_t stride) const { return words.data() + j * stride; }
+};
+
+template <class T>
+class PlaneBits {
+public:
+    PlaneBits(const VolumeView& volume, T threshold)
+        : data_(static_cast<const T*>(volume.data)),
+          nx_(volume.dims[0]),
+          ny_(volume.dims[1]),
+          stride_(words_per_row(volume.dims[0])),
+          threshold_(threshold),
+          bytes_(64 * stride_) {}
+
+    std::size_t stride() const { return stride_; }
+    void resize(BitPlane& plane) const { plane.words.assign(ny_ * stride_, 0); }
+
+    // Packs plane z; with `rows` (classify results), rows without crossings are uniform and
+    // are filled without reading the volume. Returns true when a sample is NaN.
+    bool fill(BitPlane& plane, std::size_t z, const RowInfo* rows) {
+        bool nan = false;
+        for (std::size_t j = 0; j < ny_; ++j) {
+            Word* out = plane.words.data() + j * stride_;
+            if (rows && rows[j].first == kEmptyRow) {
+                const Word w = rows[j].uniform_bit ? kAllBits : kNoBits;
+                for (std::size_t q = 0; q < stride_; ++q) out[q] = w & bits_below(q, nx_);
+            } else {
+                nan |= pack_row_bits(data_ + (z * ny_ + j) * nx_, nx_, threshold_, bytes_.data(), out);
+            }
+        }
+        return nan;
+    }
+
+private:
+    const T* data_;
+    std::size_t nx_, ny_, stride_;
+    T threshold_;
+    std::vector<std::uint8_t> bytes_;
+};
+
 // ---------------------------------------------------------------- classify
 
-// Counts the crossed +x/+y/+z edges a row owns and finds the x-span where they lie.
-// next_y / next_z are the rows one step up in y / z, or null at the border.
-void classify_row(const std::uint8_t* row, const std::uint8_t* next_y, const std::uint8_t* next_z, std::size_t nx,
+// Counts the crossed edges a row owns and where the first and last lie.
+void classify_row(const Word* row, const Word* next_y, const Word* next_z, std::size_t words, std::size_t nx,
                   RowInfo& info) {
     std::uint32_t count = 0;
-    for (std::size_t i = 0; i + 1 < nx; ++i) count += row[i] ^ row[i + 1];
-    if (next_y)
-        for (std::size_t i = 0; i < nx; ++i) count += row[i] ^ next_y[i];
-    if (next_z)
-        for (std::size_t i = 0; i < nx; ++i) count += row[i] ^ next_z[i];
-    info.vertices = count;
-    if (count == 0) {
-        info.first = kEmptyRow;
-        info.uniform_bit = row[0];
-        return;
+    std::size_t first = kEmptyRow, last = 0;
+    for (std::size_t q = 0; q < words; ++q) {
+        const EdgeMasks m = edge_masks(row, next_y, next_z, q, words, nx);
+        count += popcount(m.x) + popcount(m.y) + popcount(m.z);
+        if (const Word any = m.any()) {
+            if (first == kEmptyRow) first = 64 * q + static_cast<std::size_t>(std::countr_zero(any));
+            last = 64 * q + 63 - static_cast<std::size_t>(std::countl_zero(any));
+        }
     }
-    auto crosses = [&](std::size_t i) {
-        return (i + 1 < nx && row[i] != row[i + 1]) || (next_y && row[i] != next_y[i]) ||
-               (next_z && row[i] != next_z[i]);
-    };
-    std::size_t first = 0, last = nx - 1;
-    while (!crosses(first)) ++first;
-    while (!crosses(last)) --last;
+    info.vertices = count;
     info.first = static_cast<std::uint32_t>(first);
     info.last = static_cast<std::uint32_t>(last);
+    info.uniform_bit = static_cast<std::uint8_t>(row[0] & 1);
 }
 
-// A cell whose corners differ has a crossed edge owned by sample x or x+1 of rows (y, z) or
-// (y+1, z) (those edges connect all 8 corners), so such cells lie in [first-1, last] of
-// the two rows. Returns false when the cell row has none.
-bool cell_span(const RowInfo& a, const RowInfo& b, std::size_t nx, std::size_t& begin, std::size_t& end) {
-    const std::uint32_t lo = std::min(a.first, b.first);
-    if (lo == kEmptyRow) return false;
-    const std::uint32_t hi = std::max(a.first == kEmptyRow ? 0u : a.last, b.first == kEmptyRow ? 0u : b.last);
-    begin = lo > 0 ? lo - 1 : 0;
-    end = std::min<std::size_t>(hi, nx - 2) + 1;
-    return true;
+// A non-uniform cell has a crossed edge owned by rows (y, z) or (y+1, z) (those edges join
+// all 8 corners), so a cell row whose two first rows have no crossing has no triangles.
+inline bool cell_row_active(const RowInfo& a, const RowInfo& b) {
+    return a.first != kEmptyRow || b.first != kEmptyRow;
 }
 
-inline unsigned column_code(const std::uint8_t* a, const std::uint8_t* b, const std::uint8_t* c, const std::uint8_t* d,
-                            std::size_t i) {
-    return a[i] | b[i] << 1 | c[i] << 2 | d[i] << 3;
-}
-
-inline std::uint64_t load8(const std::uint8_t* p) {
-    std::uint64_t w;
-    std::memcpy(&w, p, 8);
-    return w;
-}
-
-// Inside the surface and far outside it, long stretches of a row are one value. These
-// tests let the loops over a row's span step 8 samples at a time through such stretches.
-constexpr std::uint64_t kAllOnes = 0x0101010101010101ull;
-
-// Bytes [i, i+9) of rows a..d all equal row a's byte i: cells i..i+7 are trivial.
-inline bool eight_trivial_cells(const std::uint8_t* a, const std::uint8_t* b, const std::uint8_t* c,
-                                const std::uint8_t* d, std::size_t i) {
-    const std::uint64_t v = a[i] ? kAllOnes : 0;
-    return ((load8(a + i) ^ v) | (load8(a + i + 1) ^ v) | (load8(b + i) ^ v) | (load8(b + i + 1) ^ v) |
-            (load8(c + i) ^ v) | (load8(c + i + 1) ^ v) | (load8(d + i) ^ v) | (load8(d + i + 1) ^ v)) == 0;
-}
-
-// Bits of a plane: in the planes that have RowInfo, a row without crossings is uniform and
-// is filled without reading the volume.
 template <class T>
-void fill_plane_bits(const T* plane, const RowInfo* rows, std::size_t nx, std::size_t ny, T threshold,
-                     std::uint8_t* bits) {
-    for (std::size_t j = 0; j < ny; ++j) {
-        if (rows && rows[j].first == kEmptyRow)
-            std::memset(bits + j * nx, rows[j].uniform_bit, nx);
-        else
-            compute_bits(plane + j * nx, nx, threshold, bits + j * nx);
+void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T threshold, std::size_t a, std::size_t b,
+                     RowInfo* rows) {
+    const std::size_t nx = volume.dims[0], ny = volume.dims[1], nz = volume.dims[2];
+    PlaneBits<T> bits(volume, threshold);
+    const std::size_t words = bits.stride();
+    BitPlane here, up;
+    bits.resize(here);
+    bits.resize(up);
+    if (bits.fill(here, a, nullptr)) throw_nan(a);
+    for (std::size_t k = a; k < b; ++k) {
+        const bool has_up = k + 1 < nz;
+        if (has_up && bits.fill(up, k + 1, nullptr)) throw_nan(k + 1);
+        RowInfo* info = rows + (k - plan.range.begin) * ny;
+        for (std::size_t j = 0; j < ny; ++j)
+            classify_row(here.row(j, words), j + 1 < ny ? here.row(j + 1, words) : nullptr,
+                         has_up ? up.row(j, words) : nullptr, words, nx, info[j]);
+        if (has_up && k < plan.range.end) {
+            for (std::size_t j = 0; j + 1 < ny; ++j) {
+                if (!cell_row_active(info[j], info[j + 1])) continue;
+                const Word *ra = here.row(j, words), *rb = here.row(j + 1, words), *rc = up.row(j, words),
+                           *rd = up.row(j + 1, words);
+                std::uint32_t count = 0;
+                for (std::size_t q = 0; q < words; ++q)
+                    for (Word cells = nonuniform_cells(ra, rb, rc, rd, q, words, nx); cells; cells &= cells - 1) {
+                        const unsigned r = static_cast<unsigned>(std::countr_zero(cells));
+                        count += kCaseTable[cell_case(ra, rb, rc, rd, q, r, words)].count;
+                    }
+                info[j].triangles = count;
+            }
+        }
+        std::swap(here, up);
     }
 }
 
@@ -138,12 +152,10 @@ std::vector<std::size_t> balanced_split(const std::vector<double>& cost, unsigne
 
 // ---------------------------------------------------------------- generate
 
-struct EdgePlane {  // per sample of one plane: crossed-edge code and first local vertex id
+struct EdgePlane {  // per sample of one plane: crossed-edge code (x|y<<1|z<<2) and first local vertex id
     std::vector<std::uint8_t> code;
     std::vector<std::uint32_t> id;
 };
-
-constexpr std::uint8_t kCodeCount[8] = {0, 1, 1, 2, 1, 2, 2, 3};
 
 inline std::uint32_t edge_id(const EdgePlane& plane, std::size_t sample, unsigned axis) {
     const unsigned code = plane.code[sample];
@@ -159,17 +171,16 @@ public:
         : plan_(plan),
           options_(options),
           out_(out),
-          threshold_(threshold),
-          data_(static_cast<const T*>(volume.data)),
-          vertex_(volume, options.iso, options.inside_below) {
-        nx_ = volume.dims[0];
-        ny_ = volume.dims[1];
-        nz_ = volume.dims[2];
-        const std::size_t plane = nx_ * ny_;
-        for (auto& b : bits_) b.resize(plane);
+          bits_(volume, threshold),
+          vertex_(volume, options.iso, options.inside_below),
+          nx_(volume.dims[0]),
+          ny_(volume.dims[1]),
+          nz_(volume.dims[2]),
+          words_(bits_.stride()) {
+        for (auto& b : planes_) bits_.resize(b);
         for (auto& e : edges_) {
-            e.code.resize(plane);
-            e.id.resize(plane);
+            e.code.resize(nx_ * ny_);
+            e.id.resize(nx_ * ny_);
         }
     }
 
@@ -179,15 +190,14 @@ public:
         fill_bits(a, 0);
         if (a + 1 < nz_) fill_bits(a + 1, 1);
         if (a + 2 < nz_) fill_bits(a + 2, 2);
-        build_edges(a, bits_[0].data(), a + 1 < nz_ ? bits_[1].data() : nullptr, edges_[0], true);
+        build_edges(a, planes_[0], a + 1 < nz_ ? &planes_[1] : nullptr, edges_[0], true);
         for (std::size_t k = a; k < b; ++k) {
-            const bool has_next = k + 1 < nz_;
-            if (has_next) {
-                build_edges(k + 1, bits_[1].data(), k + 2 < nz_ ? bits_[2].data() : nullptr, edges_[1], k + 1 < b);
+            if (k + 1 < nz_) {
+                build_edges(k + 1, planes_[1], k + 2 < nz_ ? &planes_[2] : nullptr, edges_[1], k + 1 < b);
                 emit_triangles(k);
             }
             std::swap(edges_[0], edges_[1]);
-            std::rotate(bits_, bits_ + 1, bits_ + 3);
+            std::rotate(planes_, planes_ + 1, planes_ + 3);
             if (k + 3 < nz_ && k + 1 < b) fill_bits(k + 3, 2);
         }
     }
@@ -198,42 +208,32 @@ private:
         return p < plan_.meta_planes ? plan_.rows.data() + p * ny_ : nullptr;
     }
 
-    void fill_bits(std::size_t z, int slot) {
-        fill_plane_bits(data_ + z * nx_ * ny_, meta_rows(z), nx_, ny_, threshold_, bits_[slot].data());
-    }
+    void fill_bits(std::size_t z, int slot) { bits_.fill(planes_[slot], z, meta_rows(z)); }
 
-    void build_edges(std::size_t z, const std::uint8_t* bits, const std::uint8_t* bits_up, EdgePlane& edges,
-                     bool write_vertices) {
+    void build_edges(std::size_t z, const BitPlane& plane, const BitPlane* up, EdgePlane& edges, bool write_vertices) {
         const RowInfo* rows = meta_rows(z);
         const std::uint32_t* bases = plan_.vertex_base.data() + (z - plan_.range.begin) * ny_;
         for (std::size_t j = 0; j < ny_; ++j) {
-            const RowInfo& info = rows[j];
-            if (info.first == kEmptyRow) continue;
-            const std::uint8_t* row = bits + j * nx_;
-            const std::uint8_t* next_y = j + 1 < ny_ ? row + nx_ : nullptr;
-            const std::uint8_t* next_z = bits_up ? bits_up + j * nx_ : nullptr;
+            if (rows[j].first == kEmptyRow) continue;
+            const Word* row = plane.row(j, words_);
+            const Word* next_y = j + 1 < ny_ ? plane.row(j + 1, words_) : nullptr;
+            const Word* next_z = up ? up->row(j, words_) : nullptr;
             std::uint8_t* code = edges.code.data() + j * nx_;
             std::uint32_t* id = edges.id.data() + j * nx_;
             std::uint32_t next_id = bases[j];
-            for (std::size_t i = info.first; i <= info.last; ++i) {
-                if (i + 9 <= info.last && next_y && next_z && eight_trivial_cells(row, row, next_y, next_z, i)) {
-                    std::memset(code + i, 0, 8);  // ids of samples without crossings are never read
-                    i += 7;
-                    continue;
+            for (std::size_t q = 0; q < words_; ++q) {
+                const EdgeMasks m = edge_masks(row, next_y, next_z, q, words_, nx_);
+                for (Word any = m.any(); any; any &= any - 1) {
+                    const unsigned r = static_cast<unsigned>(std::countr_zero(any));
+                    const std::size_t i = 64 * q + r;
+                    const unsigned c = static_cast<unsigned>((m.x >> r & 1) | (m.y >> r & 1) << 1 | (m.z >> r & 1) << 2);
+                    code[i] = static_cast<std::uint8_t>(c);
+                    id[i] = next_id;
+                    if (write_vertices)
+                        for (unsigned axis = 0; axis < 3; ++axis)
+                            if (c >> axis & 1) write_vertex(i, j, z, axis, next_id++);
+                    if (!write_vertices) next_id += popcount(c);
                 }
-                unsigned c = i + 1 < nx_ ? row[i] ^ row[i + 1] : 0;
-                if (next_y) c |= (row[i] ^ next_y[i]) << 1;
-                if (next_z) c |= (row[i] ^ next_z[i]) << 2;
-                code[i] = static_cast<std::uint8_t>(c);
-                id[i] = next_id;
-                next_id += kCodeCount[c];
-            }
-            if (!write_vertices) continue;
-            for (std::size_t i = info.first; i <= info.last; ++i) {
-                const unsigned c = code[i];
-                if (c == 0) continue;
-                for (unsigned axis = 0; axis < 3; ++axis)
-                    if (c >> axis & 1) write_vertex(i, j, z, axis, edge_id(edges, j * nx_ + i, axis));
             }
         }
     }
@@ -246,32 +246,29 @@ private:
     void emit_triangles(std::size_t k) {
         const RowInfo* rows = meta_rows(k);
         const std::uint64_t* tri_base = plan_.triangle_base.data() + (k - plan_.range.begin) * ny_;
-        const std::uint8_t* plane0 = bits_[0].data();
-        const std::uint8_t* plane1 = bits_[1].data();
         const bool flip = options_.inside_below;
         for (std::size_t j = 0; j + 1 < ny_; ++j) {
-            std::size_t begin, end;
-            if (!cell_span(rows[j], rows[j + 1], nx_, begin, end)) continue;
-            const std::uint8_t *a = plane0 + j * nx_, *b = a + nx_, *c = plane1 + j * nx_, *d = c + nx_;
+            if (!cell_row_active(rows[j], rows[j + 1])) continue;
+            const Word *a = planes_[0].row(j, words_), *b = planes_[0].row(j + 1, words_),
+                       *c = planes_[1].row(j, words_), *d = planes_[1].row(j + 1, words_);
             std::uint32_t* out = out_.indices + 3 * tri_base[j];
-            for (std::size_t i = begin; i < end; ++i) {
-                if (i + 9 <= end && eight_trivial_cells(a, b, c, d, i)) {
-                    i += 7;
-                    continue;
-                }
-                const unsigned pair = column_code(a, b, c, d, i) | column_code(a, b, c, d, i + 1) << 4;
-                const CaseEntry& entry = kCaseTable[kColumnPairToCase[pair]];
-                for (unsigned t = 0; t < entry.count; ++t) {
-                    std::uint32_t v[3];
-                    for (unsigned e = 0; e < 3; ++e) {
-                        const CellEdge& edge = kCellEdge[entry.edges[3 * t + e]];
-                        const EdgePlane& plane = edge.dz ? edges_[1] : edges_[0];
-                        v[e] = out_.vertex_base + edge_id(plane, (j + edge.dy) * nx_ + i + edge.dx, edge.axis);
+            for (std::size_t q = 0; q < words_; ++q) {
+                for (Word cells = nonuniform_cells(a, b, c, d, q, words_, nx_); cells; cells &= cells - 1) {
+                    const unsigned r = static_cast<unsigned>(std::countr_zero(cells));
+                    const std::size_t i = 64 * q + r;
+                    const CaseEntry& entry = kCaseTable[cell_case(a, b, c, d, q, r, words_)];
+                    for (unsigned t = 0; t < entry.count; ++t) {
+                        std::uint32_t v[3];
+                        for (unsigned e = 0; e < 3; ++e) {
+                            const CellEdge& edge = kCellEdge[entry.edges[3 * t + e]];
+                            const EdgePlane& plane = edge.dz ? edges_[1] : edges_[0];
+                            v[e] = out_.vertex_base + edge_id(plane, (j + edge.dy) * nx_ + i + edge.dx, edge.axis);
+                        }
+                        out[0] = v[0];
+                        out[1] = flip ? v[2] : v[1];
+                        out[2] = flip ? v[1] : v[2];
+                        out += 3;
                     }
-                    out[0] = v[0];
-                    out[1] = flip ? v[2] : v[1];
-                    out[2] = flip ? v[1] : v[2];
-                    out += 3;
                 }
             }
         }
@@ -280,48 +277,12 @@ private:
     const CpuChunkPlan& plan_;
     const Options& options_;
     MeshOut out_;
-    T threshold_;
-    const T* data_;
+    PlaneBits<T> bits_;
     EdgeVertex<T> vertex_;
-    std::size_t nx_, ny_, nz_;
-    std::vector<std::uint8_t> bits_[3];
+    std::size_t nx_, ny_, nz_, words_;
+    BitPlane planes_[3];
     EdgePlane edges_[2];
 };
-
-template <class T>
-void classify_planes(const CpuChunkPlan& plan, RowInfo* rows, const VolumeView& volume, T threshold,
-                     std::size_t a, std::size_t b) {
-    const std::size_t nx = volume.dims[0], ny = volume.dims[1], nz = volume.dims[2], plane = nx * ny;
-    const T* data = static_cast<const T*>(volume.data);
-    std::vector<std::uint8_t> here(plane), up(plane);
-    if (compute_bits(data + a * plane, plane, threshold, here.data())) throw_nan(a);
-    for (std::size_t k = a; k < b; ++k) {
-        const bool has_up = k + 1 < nz;
-        if (has_up && compute_bits(data + (k + 1) * plane, plane, threshold, up.data())) throw_nan(k + 1);
-        RowInfo* row_info = rows + (k - plan.range.begin) * ny;
-        for (std::size_t j = 0; j < ny; ++j)
-            classify_row(here.data() + j * nx, j + 1 < ny ? here.data() + (j + 1) * nx : nullptr,
-                         has_up ? up.data() + j * nx : nullptr, nx, row_info[j]);
-        if (has_up && k < plan.range.end) {
-            for (std::size_t j = 0; j + 1 < ny; ++j) {
-                std::size_t begin, end;
-                if (!cell_span(row_info[j], row_info[j + 1], nx, begin, end)) continue;
-                const std::uint8_t *ra = here.data() + j * nx, *rb = ra + nx, *rc = up.data() + j * nx, *rd = rc + nx;
-                std::uint32_t count = 0;
-                for (std::size_t i = begin; i < end; ++i) {
-                    if (i + 9 <= end && eight_trivial_cells(ra, rb, rc, rd, i)) {
-                        i += 7;
-                        continue;
-                    }
-                    const unsigned pair = column_code(ra, rb, rc, rd, i) | column_code(ra, rb, rc, rd, i + 1) << 4;
-                    count += kCaseTable[kColumnPairToCase[pair]].count;
-                }
-                row_info[j].triangles = count;
-            }
-        }
-        std::swap(here, up);
-    }
-}
 
 std::vector<std::size_t> even_split(std::size_t n, unsigned parts) {
     std::vector<std::size_t> cuts(parts + 1);
@@ -360,8 +321,8 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
         const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(std::max(threads, 1u), plan.meta_planes));
         const auto cuts = even_split(plan.meta_planes, workers);
         run_workers(workers, [&](unsigned w) {
-            classify_planes<T>(plan, plan.rows.data(), volume, threshold.value, range.begin + cuts[w],
-                               range.begin + cuts[w + 1]);
+            classify_planes<T>(plan, volume, threshold.value, range.begin + cuts[w], range.begin + cuts[w + 1],
+                               plan.rows.data());
         });
     });
     if (plan.uniform) return plan;
@@ -402,7 +363,7 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
         double c = static_cast<double>(volume.dims[0] * ny) / 16;
         for (std::size_t j = 0; j < ny; ++j) {
             const RowInfo& r = plan.rows[p * ny + j];
-            c += 24.0 * r.vertices + 4.0 * r.triangles + (r.first == kEmptyRow ? 0 : volume.dims[0] / 8.0);
+            c += 24.0 * r.vertices + 4.0 * r.triangles + (r.first == kEmptyRow ? 0 : volume.dims[0] / 4.0);
         }
         cost[p] = c;
     }
