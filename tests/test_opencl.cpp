@@ -1,0 +1,373 @@
+// The OpenCL engine against the CPU engine (the canonical mesh), on PoCL in CI.
+// Every test returns with a visible WARN when no OpenCL device is present.
+#include <catch2/catch.hpp>
+#include <voxmesh/voxmesh.hpp>
+
+#include "core/case_tables.hpp"
+#include "core/opencl_hook.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <string>
+#include <vector>
+
+using namespace voxmesh;
+
+namespace {
+
+bool have_device() {
+    if (!list_devices().empty()) return true;
+    WARN("no OpenCL device found: this [opencl] test is SKIPPED");
+    return false;
+}
+
+struct Grid {
+    std::array<std::size_t, 3> dims;
+    std::array<double, 3> spacing{1, 1, 1};
+    std::array<double, 3> origin{0, 0, 0};
+    std::size_t size() const { return dims[0] * dims[1] * dims[2]; }
+};
+
+// A float field from f(x, y, z) in [0,1]^3 coordinates.
+template <class F>
+std::vector<float> sample(const Grid& g, F f) {
+    std::vector<float> v(g.size());
+    std::size_t i = 0;
+    for (std::size_t z = 0; z < g.dims[2]; ++z)
+        for (std::size_t y = 0; y < g.dims[1]; ++y)
+            for (std::size_t x = 0; x < g.dims[0]; ++x)
+                v[i++] = f(double(x) / double(g.dims[0] - 1), double(y) / double(g.dims[1] - 1),
+                           double(z) / double(g.dims[2] - 1));
+    return v;
+}
+
+std::vector<float> sphere(const Grid& g) {  // 0.35 - distance from the centre: inside >= 0
+    return sample(g, [](double x, double y, double z) {
+        return float(0.35 - std::sqrt((x - .5) * (x - .5) + (y - .52) * (y - .52) + (z - .49) * (z - .49)));
+    });
+}
+std::vector<float> torus(const Grid& g) {
+    return sample(g, [](double x, double y, double z) {
+        const double q = std::sqrt((x - .5) * (x - .5) + (y - .5) * (y - .5)) - 0.3;
+        return float(0.12 - std::sqrt(q * q + (z - .5) * (z - .5)));
+    });
+}
+std::vector<float> gyroid(const Grid& g) {
+    return sample(g, [](double x, double y, double z) {
+        const double s = 4 * M_PI;
+        return float(std::sin(s * x) * std::cos(s * y) + std::sin(s * y) * std::cos(s * z) +
+                     std::sin(s * z) * std::cos(s * x));
+    });
+}
+
+template <class T>
+std::vector<T> to_type(const std::vector<float>& f, double scale, double offset) {
+    std::vector<T> out(f.size());
+    for (std::size_t i = 0; i < f.size(); ++i) out[i] = static_cast<T>(std::lround(f[i] * scale + offset));
+    return out;
+}
+
+VolumeView view_of(const void* data, ScalarType type, const Grid& g) {
+    VolumeView v;
+    v.data = data;
+    v.type = type;
+    v.dims = g.dims;
+    v.spacing = g.spacing;
+    v.origin = g.origin;
+    return v;
+}
+
+double extent(const VolumeView& v) {
+    double e = 0;
+    for (int d = 0; d < 3; ++d) e = std::max(e, double(v.dims[d] - 1) * v.spacing[d]);
+    return e;
+}
+
+// The OpenCL mesh must be the CPU engine's: same index buffer, positions within 1e-5 of the
+// extent, normals within 1e-3.
+void require_same(const Mesh& cpu, const Mesh& cl, const VolumeView& v) {
+    REQUIRE(cl.indices.size() == cpu.indices.size());
+    REQUIRE(cl.positions.size() == cpu.positions.size());
+    REQUIRE(cl.normals.size() == cpu.normals.size());
+    const auto mismatch = std::mismatch(cpu.indices.begin(), cpu.indices.end(), cl.indices.begin());
+    INFO("first differing index at " << (mismatch.first - cpu.indices.begin()));
+    REQUIRE(mismatch.first == cpu.indices.end());
+    double pos = 0, nrm = 0;
+    for (std::size_t i = 0; i < cpu.positions.size(); ++i)
+        pos = std::max(pos, double(std::abs(cpu.positions[i] - cl.positions[i])));
+    for (std::size_t i = 0; i < cpu.normals.size(); ++i)
+        nrm = std::max(nrm, double(std::abs(cpu.normals[i] - cl.normals[i])));
+    CHECK(pos <= 1e-5 * extent(v));
+    CHECK(nrm <= 1e-3);
+}
+
+Mesh run(const VolumeView& v, Options o, Backend backend, Stats* stats = nullptr) {
+    o.backend = backend;
+    Stats s;
+    Mesh m = extract(v, o, s);
+    if (stats) *stats = s;
+    return m;
+}
+
+void compare(const VolumeView& v, const Options& o) {
+    const Mesh cpu = run(v, o, Backend::Cpu);
+    Stats stats;
+    const Mesh cl = run(v, o, Backend::OpenCL, &stats);
+    CHECK(stats.backend == Backend::OpenCL);
+    require_same(cpu, cl, v);
+}
+
+}  // namespace
+
+TEST_CASE("OpenCL matches the CPU engine on sphere, torus and gyroid", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{41, 37, 33}, {0.5, 0.75, 1.25}, {-3, 2, 7.5}};
+    const std::vector<float> fields[] = {sphere(g), torus(g), gyroid(g)};
+    for (const auto& f : fields) {
+        const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+        Options o;
+        o.iso = 0.0;
+        compare(v, o);
+        o.iso = 0.05;
+        o.inside_below = true;
+        compare(v, o);
+        o.normals = false;
+        compare(v, o);
+    }
+    const Mesh m = run(view_of(fields[0].data(), ScalarType::F32, g), Options{}, Backend::OpenCL);
+    const MeshTopology topo = analyze_topology(m);
+    CHECK(topo.closed());
+    CHECK(topo.euler == 2);
+}
+
+TEST_CASE("OpenCL matches the CPU engine for every scalar type", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{29, 31, 27}, {1, 0.5, 2}, {1, 2, 3}};
+    const std::vector<float> f = gyroid(g);  // in [-1.5, 1.5]
+    Options o;
+    auto check = [&](const void* data, ScalarType type, double iso) {
+        INFO("type " << scalar_name(type) << " iso " << iso);
+        o.iso = iso;
+        compare(view_of(data, type, g), o);
+    };
+    const auto u8 = to_type<std::uint8_t>(f, 80, 128);
+    const auto i8 = to_type<std::int8_t>(f, 80, 0);
+    const auto u16 = to_type<std::uint16_t>(f, 20000, 32768);
+    const auto i16 = to_type<std::int16_t>(f, 20000, 0);
+    const auto u32 = to_type<std::uint32_t>(f, 1.4e9, 2.1e9);  // large values: exact integer differences matter
+    const auto i32 = to_type<std::int32_t>(f, 1.4e9, 0);
+    std::vector<double> f64(f.begin(), f.end());
+    for (double& d : f64) d = d * 1e-3 + 1e-12 * d;  // not representable as floats
+    check(u8.data(), ScalarType::U8, 140.5);
+    check(u8.data(), ScalarType::U8, 128);
+    check(i8.data(), ScalarType::I8, -3.25);
+    check(u16.data(), ScalarType::U16, 33000.7);
+    check(i16.data(), ScalarType::I16, -1234.5);
+    check(u32.data(), ScalarType::U32, 2.3e9 + 0.5);
+    check(i32.data(), ScalarType::I32, -1.0e8 - 0.25);
+    check(f.data(), ScalarType::F32, 0.3);
+    check(f64.data(), ScalarType::F64, 2e-4);
+    // A threshold no sample reaches: an empty mesh, as the CPU engine.
+    o.iso = 300;
+    const Mesh empty = run(view_of(u8.data(), ScalarType::U8, g), o, Backend::OpenCL);
+    CHECK(empty.indices.empty());
+    CHECK(empty.positions.empty());
+}
+
+TEST_CASE("OpenCL matches the CPU engine on random odd-sized volumes", "[opencl]") {
+    if (!have_device()) return;
+    std::mt19937 rng(12345);
+    for (int round = 0; round < 12; ++round) {
+        Grid g{{2 + rng() % 22, 2 + rng() % 22, 2 + rng() % 22}};
+        INFO("dims " << g.dims[0] << "x" << g.dims[1] << "x" << g.dims[2]);
+        Options o;
+        o.chunk_planes = 1 + rng() % 5;
+        if (round % 2) {
+            std::vector<std::uint8_t> v(g.size());
+            for (auto& x : v) x = static_cast<std::uint8_t>(rng() % 4);
+            o.iso = 1.5;
+            compare(view_of(v.data(), ScalarType::U8, g), o);
+        } else {
+            std::vector<float> v(g.size());
+            std::uniform_real_distribution<float> u(-1, 1);
+            for (auto& x : v) x = u(rng);
+            compare(view_of(v.data(), ScalarType::F32, g), o);
+        }
+    }
+}
+
+TEST_CASE("OpenCL matches the CPU engine on all 256 cube cases", "[opencl]") {
+    if (!have_device()) return;
+    // Each case in a 4x3x3 volume: the cube at (1,1,1)..(2,2,2) set by the case bits, the
+    // rest outside, so every border rule is exercised too.
+    Grid g{{4, 4, 4}};
+    for (int c = 0; c < 256; ++c) {
+        INFO("case " << c);
+        std::vector<float> v(g.size(), 0.f);
+        for (int k = 0; k < 8; ++k) {
+            const auto* o = detail::kCornerOffset[k];
+            v[(1 + o[0]) + 4 * ((1 + o[1]) + 4 * (1 + o[2]))] = (c >> k & 1) ? 1.f + 0.1f * k : 0.f;
+        }
+        Options o;
+        o.iso = 0.5;
+        compare(view_of(v.data(), ScalarType::F32, g), o);
+    }
+}
+
+TEST_CASE("OpenCL tiny chunks and a small memory budget give the same mesh", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{33, 35, 31}, {1, 1, 1}, {0, 0, 0}};
+    const auto f = torus(g);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, Options{}, Backend::Cpu);
+    for (std::size_t planes : {2, 3, 7}) {
+        INFO("chunk_planes " << planes);
+        Options o;
+        o.chunk_planes = planes;
+        require_same(cpu, run(v, o, Backend::OpenCL), v);
+    }
+    // About 8 planes' worth of chunk memory: the engine must cut the volume to fit.
+    Options o;
+    o.memory_budget = 33 * 35 * 40 * 2;
+    Stats stats;
+    require_same(cpu, run(v, o, Backend::OpenCL, &stats), v);
+    REQUIRE(!stats.devices.empty());
+    CHECK(stats.devices[0].chunks > 2);
+    // Forced big chunks under that budget: cut smaller, with a warning.
+    o.chunk_planes = 31;
+    require_same(cpu, run(v, o, Backend::OpenCL, &stats), v);
+    CHECK(!stats.warnings.empty());
+    // A budget too small for a single plane: the CPU engine does those chunks.
+    o.chunk_planes = 0;
+    o.memory_budget = 100;
+    require_same(cpu, run(v, o, Backend::OpenCL, &stats), v);
+    CHECK(!stats.warnings.empty());
+}
+
+TEST_CASE("Hybrid runs the CPU engine and OpenCL on one queue", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{48, 48, 96}};
+    const auto f = gyroid(g);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, Options{}, Backend::Cpu);
+    Options o;
+    o.chunk_planes = 2;
+    Stats stats;
+    require_same(cpu, run(v, o, Backend::Hybrid, &stats), v);
+    CHECK(stats.backend == Backend::Hybrid);
+    REQUIRE(stats.devices.size() >= 2);
+    std::size_t voxels = 0;
+    for (const DeviceStats& d : stats.devices) {
+        INFO("device " << d.name);
+        CHECK(d.chunks > 0);
+        voxels += d.voxels;
+    }
+    CHECK(voxels == g.size());
+}
+
+TEST_CASE("Two OpenCL devices share the chunks", "[opencl]") {
+    if (!have_device()) return;
+    detail::opencl_split_devices(true);
+    const auto devices = list_devices();
+    if (devices.size() < 2) {
+        detail::opencl_split_devices(false);
+        WARN("fewer than two OpenCL devices even with device fission: two-device test SKIPPED");
+        return;
+    }
+    Grid g{{40, 44, 90}};
+    const auto f = sphere(g);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    Options o;
+    o.chunk_planes = 2;
+    Stats stats;
+    const Mesh cl = run(v, o, Backend::OpenCL, &stats);
+    detail::opencl_split_devices(false);
+    require_same(run(v, Options{}, Backend::Cpu), cl, v);
+    REQUIRE(stats.devices.size() == devices.size());
+    for (const DeviceStats& d : stats.devices) {
+        INFO("device " << d.name);
+        CHECK(d.chunks > 0);
+    }
+}
+
+TEST_CASE("OpenCL scan kernel matches std::exclusive_scan", "[opencl]") {
+    if (!have_device()) return;
+    std::mt19937 rng(7);
+    for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(255), std::size_t(256), std::size_t(257),
+                          std::size_t(2049), std::size_t(1000003)}) {
+        INFO("length " << n);
+        std::vector<std::uint32_t> values(n);
+        for (auto& x : values) x = rng() % 16;
+        std::vector<std::uint32_t> expected(n);
+        std::exclusive_scan(values.begin(), values.end(), expected.begin(), std::uint32_t(0));
+        const auto got = detail::opencl_exclusive_scan(values);
+        REQUIRE(got.size() == n + 1);
+        CHECK(std::equal(expected.begin(), expected.end(), got.begin()));
+        CHECK(got.back() == std::accumulate(values.begin(), values.end(), std::uint32_t(0)));
+    }
+}
+
+TEST_CASE("OpenCL errors are clear", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{5, 5, 5}};
+    std::vector<float> v(g.size(), 0.f);
+    v[62] = 1.f;
+    Options o;
+    o.backend = Backend::OpenCL;
+    o.iso = 0.5;
+    o.devices = {static_cast<int>(list_devices().size())};
+    CHECK_THROWS_WITH(extract(view_of(v.data(), ScalarType::F32, g), o), Catch::Contains("does not exist"));
+    o.devices.clear();
+    v[10] = std::numeric_limits<float>::quiet_NaN();
+    CHECK_THROWS_WITH(extract(view_of(v.data(), ScalarType::F32, g), o), Catch::Contains("NaN"));
+    o.devices.clear();
+    o.device_type = DeviceType::Accelerator;
+    v[10] = 0;
+    if (std::none_of(list_devices().begin(), list_devices().end(),
+                     [](const DeviceInfo& d) { return d.type == DeviceType::Accelerator; })) {
+        CHECK_THROWS_AS(extract(view_of(v.data(), ScalarType::F32, g), o), Error);
+    }
+}
+
+TEST_CASE("list_devices describes the OpenCL devices", "[opencl]") {
+    if (!have_device()) return;
+    for (const DeviceInfo& d : list_devices()) {
+        CHECK(!d.name.empty());
+        CHECK(!d.platform.empty());
+        CHECK(d.compute_units > 0);
+        CHECK(d.max_allocation > 0);
+        CHECK(d.global_memory >= d.max_allocation);
+    }
+    CHECK(opencl_available());
+}
+
+// Run by ctest with OCL_ICD_VENDORS pointing at an empty directory (tests/opencl.cmake).
+TEST_CASE("Without an OpenCL platform Auto and Hybrid fall back to the CPU engine", "[opencl][fallback]") {
+    if (!list_devices().empty()) {
+        WARN("an OpenCL device is present: the fallback test only runs with OCL_ICD_VENDORS=<empty dir> (ctest)");
+        return;
+    }
+    Grid g{{20, 21, 22}};
+    const auto f = sphere(g);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, Options{}, Backend::Cpu);
+    for (Backend b : {Backend::Auto, Backend::Hybrid}) {
+        std::vector<std::string> logged;
+        Options o;
+        o.log = [&](const std::string& m) { logged.push_back(m); };
+        Stats stats;
+        const Mesh m = run(v, o, b, &stats);
+        CHECK(m.indices == cpu.indices);
+        CHECK(stats.backend == Backend::Cpu);
+        REQUIRE(stats.warnings.size() == 1);
+        CHECK_THAT(stats.warnings[0], Catch::Contains("OpenCL"));
+        CHECK(logged == stats.warnings);
+    }
+    Options o;
+    CHECK_FALSE(opencl_available());
+    CHECK_THROWS_WITH(run(v, o, Backend::OpenCL), Catch::Contains("no OpenCL platform"));
+}
