@@ -5,6 +5,7 @@
 
 #include <array>
 #include <csignal>
+#include <cstdio>
 #include <cstddef>
 #include <map>
 #include <string>
@@ -89,7 +90,7 @@ unsigned hardware_threads();
 void compute_speedups(std::vector<Result>& results);
 void print_table(const std::vector<Result>& results);
 void print_csv(const std::vector<Result>& results);
-void print_json(const std::vector<Result>& results);
+void print_json(const std::vector<Result>& results, std::FILE* out = stdout);
 // Table 1 of the paper beside ours: threads down, resolution across.
 void print_paper(const std::vector<Result>& results, const std::string& field, const std::string& type);
 

@@ -101,6 +101,8 @@ int main(int argc, char** argv) {
     app.add_flag("--paper", paper, "the paper's Table 1 grid: sizes 64..512 x threads 1,2,4,6,16 on the CPU");
     app.add_flag("--csv", csv, "CSV output");
     app.add_flag("--json", json, "one JSON object per line");
+    std::string save_path;
+    app.add_option("--save", save_path, "also write the JSON lines to this file (for bench/plot.py)");
     app.add_flag("--no-floor", no_floor, "skip the streaming-floor measurement");
     app.add_flag("--quiet,-q", settings.quiet, "no progress on stderr");
     app.add_flag("--list-devices", list, "list OpenCL devices and exit");
@@ -270,6 +272,12 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "\ninterrupted: printing the %zu finished result(s)\n", results.size());
 
         compute_speedups(results);
+        if (!save_path.empty()) {
+            std::FILE* f = std::fopen(save_path.c_str(), "w");
+            if (!f) throw voxmesh::Error("cannot write '" + save_path + "'");
+            print_json(results, f);
+            std::fclose(f);
+        }
         if (json) print_json(results);
         else if (csv) print_csv(results);
         else {

@@ -145,7 +145,7 @@ void print_csv(const std::vector<Result>& results) {
     }
 }
 
-void print_json(const std::vector<Result>& results) {
+void print_json(const std::vector<Result>& results, std::FILE* out) {
     for (const auto& r : results) {
         std::ostringstream o;
         const bool ok = r.status == "ok";
@@ -172,7 +172,7 @@ void print_json(const std::vector<Result>& results) {
           << "\",\"volume_mb\":" << num(r.volume_mb) << ",\"mesh_mb\":" << opt(r.mesh_mb) << ",\"warnings\":[";
         for (std::size_t i = 0; i < r.warnings.size(); ++i) o << (i ? "," : "") << '"' << json_escape(r.warnings[i]) << '"';
         o << "]}";
-        std::printf("%s\n", o.str().c_str());
+        std::fprintf(out, "%s\n", o.str().c_str());
     }
 }
 
