@@ -371,3 +371,24 @@ TEST_CASE("Without an OpenCL platform Auto and Hybrid fall back to the CPU engin
     CHECK_FALSE(opencl_available());
     CHECK_THROWS_WITH(run(v, o, Backend::OpenCL), Catch::Contains("no OpenCL platform"));
 }
+
+TEST_CASE("A 256^3 volume meshes identically through OpenCL, Hybrid and CPU", "[opencl][large]") {
+    if (!have_device()) return;
+    Grid g{{256, 256, 256}, {1, 1, 1}, {0, 0, 0}};
+    const auto f = sample(g, [](double x, double y, double z) {  // a torus with gyroid ripples
+        const double q = std::sqrt((x - .5) * (x - .5) + (y - .5) * (y - .5)) - 0.3;
+        return float(0.12 - std::sqrt(q * q + (z - .5) * (z - .5)) +
+                     0.02 * std::sin(40 * x) * std::cos(40 * y) * std::sin(40 * z));
+    });
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    Stats cpu_stats, cl_stats, hybrid_stats;
+    const Mesh cpu = run(v, Options{}, Backend::Cpu, &cpu_stats);
+    const Mesh cl = run(v, Options{}, Backend::OpenCL, &cl_stats);
+    const Mesh hybrid = run(v, Options{}, Backend::Hybrid, &hybrid_stats);
+    REQUIRE(cpu.triangle_count() > 100000);
+    require_same(cpu, cl, v);
+    require_same(cpu, hybrid, v);
+    WARN("256^3: " << cpu.triangle_count() << " triangles; cpu " << cpu_stats.times.total << " s, opencl "
+                   << cl_stats.times.total << " s (kernels " << cl_stats.devices[0].kernel_s << " s, transfers "
+                   << cl_stats.devices[0].transfer_s << " s), hybrid " << hybrid_stats.times.total << " s");
+}
