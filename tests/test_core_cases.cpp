@@ -1,0 +1,279 @@
+// The engine against the naive oracle: the case table itself, all 256 cube cases, and
+// random small volumes of odd dimensions, down to the exact canonical vertex/triangle order.
+#include <catch2/catch.hpp>
+
+#include "core/case_tables.hpp"
+#include "support/mesh_checks.hpp"
+#include "support/reference_mc.hpp"
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+using vmtest::Dims;
+
+namespace {
+
+voxmesh::Options cpu_options(double iso, unsigned threads, bool inside_below = false) {
+    voxmesh::Options o;
+    o.iso = iso;
+    o.backend = voxmesh::Backend::Cpu;
+    o.threads = threads;
+    o.inside_below = inside_below;
+    return o;
+}
+
+// All the ways the engine must agree with the oracle.
+void require_matches(const voxmesh::Mesh& mesh, const vmtest::RefMesh& ref) {
+    const vmtest::Comparison c = vmtest::compare_with_reference(mesh, ref);
+    INFO(c.first_problem);
+    CHECK(c.same_counts);
+    CHECK(c.same_triangle_set);
+    CHECK(c.same_indices);
+    CHECK(c.max_position_error <= 1e-6);
+    CHECK(c.max_normal_error <= 1e-5);
+}
+
+// A 2x2x2 volume whose inside corners are exactly the bits of `code`, with distinct values
+// so that every crossed edge gets its own interpolation parameter.
+std::vector<double> cube_case_values(unsigned code) {
+    std::vector<double> v(8);
+    for (int c = 0; c < 8; ++c) {
+        const int* o = vmtest::kRefCorner[c];
+        const std::size_t idx = static_cast<std::size_t>(o[0] + 2 * (o[1] + 2 * o[2]));
+        v[idx] = (code >> c & 1) ? 1.0 + 0.13 * c : -(0.5 + 0.21 * c);
+    }
+    return v;
+}
+
+}  // namespace
+
+TEST_CASE("case table: corner and edge numbering agree with the oracle's", "[core]") {
+    for (int c = 0; c < 8; ++c)
+        for (int d = 0; d < 3; ++d) CHECK(int(voxmesh::detail::kCornerOffset[c][d]) == vmtest::kRefCorner[c][d]);
+    for (int e = 0; e < 12; ++e) {
+        const int* a = vmtest::kRefCorner[vmtest::kRefEdge[e][0]];
+        const int* b = vmtest::kRefCorner[vmtest::kRefEdge[e][1]];
+        const auto& edge = voxmesh::detail::kCellEdge[e];
+        INFO("edge " << e);
+        CHECK(int(edge.dx) == std::min(a[0], b[0]));
+        CHECK(int(edge.dy) == std::min(a[1], b[1]));
+        CHECK(int(edge.dz) == std::min(a[2], b[2]));
+        CHECK(a[edge.axis] != b[edge.axis]);
+    }
+}
+
+TEST_CASE("case table: each case uses exactly its crossed edges, wound outward", "[core]") {
+    for (unsigned code = 0; code < 256; ++code) {
+        INFO("case " << code);
+        const auto& entry = voxmesh::detail::kCaseTable[code];
+        REQUIRE(entry.count <= 5);
+        std::set<int> used, crossed;
+        for (int e = 0; e < 12; ++e)
+            if ((code >> vmtest::kRefEdge[e][0] & 1) != (code >> vmtest::kRefEdge[e][1] & 1)) crossed.insert(e);
+        for (unsigned i = 0; i < 15; ++i) {
+            if (i >= 3u * entry.count) {
+                CHECK(int(entry.edges[i]) == -1);
+                continue;
+            }
+            REQUIRE(entry.edges[i] >= 0);
+            REQUIRE(entry.edges[i] < 12);
+            used.insert(entry.edges[i]);
+        }
+        CHECK(used == crossed);
+        // With vertices at edge midpoints, a triangle's normal must lean from the inside
+        // corners of its edges toward their outside corners.
+        for (unsigned t = 0; t < entry.count; ++t) {
+            double p[3][3], dir[3][3];
+            for (int k = 0; k < 3; ++k) {
+                const int e = entry.edges[3 * t + k];
+                const int ca = vmtest::kRefEdge[e][0], cb = vmtest::kRefEdge[e][1];
+                const bool a_inside = code >> ca & 1;
+                for (int d = 0; d < 3; ++d) {
+                    p[k][d] = 0.5 * (vmtest::kRefCorner[ca][d] + vmtest::kRefCorner[cb][d]);
+                    dir[k][d] = (a_inside ? 1 : -1) * (vmtest::kRefCorner[cb][d] - vmtest::kRefCorner[ca][d]);
+                }
+            }
+            const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+            const double w[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+            const double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+            double lean = 0;
+            for (int k = 0; k < 3; ++k) lean += n[0] * dir[k][0] + n[1] * dir[k][1] + n[2] * dir[k][2];
+            INFO("triangle " << t);
+            CHECK(lean > 0);
+        }
+    }
+}
+
+TEST_CASE("all 256 cube cases match the oracle", "[core]") {
+    const Dims dims{2, 2, 2};
+    for (bool inside_below : {false, true}) {
+        for (unsigned code = 0; code < 256; ++code) {
+            INFO("case " << code << (inside_below ? " inside_below" : ""));
+            const std::vector<double> values = cube_case_values(code);
+            REQUIRE(vmtest::reference_case(values, dims, 0, 0, 0, 0.0) == code);
+            vmtest::RefOptions ro;
+            ro.inside_below = inside_below;
+            const vmtest::RefMesh ref = vmtest::reference_mc(values, dims, ro);
+            CHECK(ref.triangle_count() == voxmesh::detail::kCaseTable[code].count);
+            for (unsigned threads : {1u, 2u}) {
+                INFO("threads " << threads);
+                require_matches(voxmesh::extract(vmtest::view_of(values, dims), cpu_options(0.0, threads, inside_below)), ref);
+            }
+            // The same case as f32 and as u8 (inside 200 + c, outside 10 + c, iso 100.5).
+            const std::vector<float> as_float(values.begin(), values.end());
+            require_matches(voxmesh::extract(vmtest::view_of(as_float, dims), cpu_options(0.0, 1, inside_below)),
+                            vmtest::reference_mc(vmtest::to_doubles(as_float), dims, ro));
+            std::vector<std::uint8_t> as_u8(8);
+            for (std::size_t i = 0; i < 8; ++i) as_u8[i] = static_cast<std::uint8_t>(values[i] > 0 ? 200 + i : 10 + 3 * i);
+            vmtest::RefOptions ro8 = ro;
+            ro8.iso = 100.5;
+            require_matches(voxmesh::extract(vmtest::view_of(as_u8, dims), cpu_options(100.5, 1, inside_below)),
+                            vmtest::reference_mc(vmtest::to_doubles(as_u8), dims, ro8));
+        }
+    }
+}
+
+TEST_CASE("random small volumes of odd dimensions match the oracle", "[core]") {
+    const std::vector<Dims> shapes = {{3, 3, 3}, {5, 3, 7}, {7, 9, 5}, {11, 7, 9}, {13, 15, 11}, {3, 17, 5}};
+    // Samples are integers in [0, 9]: iso 4 and 9 equal samples exactly, 0 makes every
+    // sample inside, 9.5 none.
+    const double isos[] = {4.5, 4.0, 9.0, 0.0, 2.25, 9.5, -1.0};
+    for (const Dims& dims : shapes) {
+        for (std::uint32_t seed = 1; seed <= 4; ++seed) {
+            const std::vector<double> values = vmtest::random_doubles(dims, seed, 0, 9);
+            const std::vector<float> f32(values.begin(), values.end());
+            const std::vector<std::int16_t> i16 = vmtest::random_field<std::int16_t>(dims, seed, 0, 9);
+            for (double iso : isos) {
+                INFO("dims " << dims[0] << "x" << dims[1] << "x" << dims[2] << " seed " << seed << " iso " << iso);
+                vmtest::RefOptions ro;
+                ro.iso = iso;
+                const vmtest::RefMesh ref = vmtest::reference_mc(values, dims, ro);
+                if (iso <= 0 || iso > 9) CHECK(ref.triangle_count() == 0);
+                for (unsigned threads : {1u, 3u}) {
+                    INFO("threads " << threads);
+                    require_matches(voxmesh::extract(vmtest::view_of(values, dims), cpu_options(iso, threads)), ref);
+                    require_matches(voxmesh::extract(vmtest::view_of(f32, dims), cpu_options(iso, threads)), ref);
+                    require_matches(voxmesh::extract(vmtest::view_of(i16, dims), cpu_options(iso, threads)), ref);
+                }
+                ro.inside_below = true;
+                require_matches(voxmesh::extract(vmtest::view_of(values, dims), cpu_options(iso, 2, true)),
+                                vmtest::reference_mc(values, dims, ro));
+            }
+        }
+    }
+}
+
+TEST_CASE("random non-integer fields match the oracle", "[core]") {
+    const Dims dims{15, 13, 11};
+    const vmtest::FieldFn wavy = vmtest::wavy(0.9);
+    const std::vector<double> base = vmtest::sample_field<double>(dims, wavy);
+    for (std::uint32_t seed : {7u, 8u, 9u}) {
+        // Add seeded noise so that cells take many different cases.
+        const std::vector<double> noise = vmtest::random_doubles(dims, seed, -50, 50);
+        std::vector<double> values(base.size());
+        for (std::size_t i = 0; i < base.size(); ++i) values[i] = base[i] + noise[i] / 40.0;
+        for (double iso : {0.1, -0.7, 1.3}) {
+            INFO("seed " << seed << " iso " << iso);
+            vmtest::RefOptions ro;
+            ro.iso = iso;
+            const vmtest::RefMesh ref = vmtest::reference_mc(values, dims, ro);
+            CHECK(ref.triangle_count() > 50);
+            for (unsigned threads : {1u, 2u, 5u}) require_matches(voxmesh::extract(vmtest::view_of(values, dims), cpu_options(iso, threads)), ref);
+        }
+    }
+}
+
+TEST_CASE("random volumes inside an outside border give closed, outward-oriented meshes", "[core]") {
+    // The table's ambiguous faces must be decided the same way from both cells that share
+    // them; otherwise random fields show holes or flipped patches.
+    const Dims dims{19, 17, 21};
+    for (std::uint32_t seed = 11; seed <= 16; ++seed) {
+        std::vector<float> values = vmtest::random_field<float>(dims, seed, 0, 9);
+        for (std::size_t z = 0; z < dims[2]; ++z)
+            for (std::size_t y = 0; y < dims[1]; ++y)
+                for (std::size_t x = 0; x < dims[0]; ++x)
+                    if (x == 0 || y == 0 || z == 0 || x + 1 == dims[0] || y + 1 == dims[1] || z + 1 == dims[2])
+                        values[x + dims[0] * (y + dims[1] * z)] = 0;
+        for (double iso : {4.5, 2.5, 7.5}) {
+            INFO("seed " << seed << " iso " << iso);
+            const voxmesh::Mesh mesh = voxmesh::extract(vmtest::view_of(values, dims), cpu_options(iso, 2));
+            REQUIRE(vmtest::structural_problem(mesh).empty());
+            REQUIRE(mesh.triangle_count() > 0);
+            const vmtest::Topology topo = vmtest::topology(mesh);
+            CHECK(topo.boundary_edges == 0);
+            CHECK(topo.nonmanifold_edges == 0);
+            CHECK(topo.consistently_oriented());
+            CHECK(topo.degenerate_triangles == 0);
+            CHECK(vmtest::signed_volume(mesh) > 0);
+            // The library's own topology summary agrees with this one.
+            const voxmesh::MeshTopology lib = voxmesh::analyze_topology(mesh);
+            CHECK(lib.closed());
+            CHECK(lib.euler == topo.euler);
+        }
+    }
+}
+
+TEST_CASE("the test harness itself notices broken meshes", "[core]") {
+    const Dims dims{15, 15, 15};
+    const std::vector<double> values = vmtest::sample_field<double>(dims, vmtest::sphere({7.2, 6.9, 7.1}, 5));
+    vmtest::RefOptions ro;
+    const vmtest::RefMesh ref = vmtest::reference_mc(values, dims, ro);
+    const voxmesh::Mesh good = voxmesh::extract(vmtest::view_of(values, dims), cpu_options(0.0, 1));
+    REQUIRE(vmtest::compare_with_reference(good, ref).first_problem.empty());
+    REQUIRE(vmtest::topology(good).closed());
+    REQUIRE(vmtest::topology(good).euler == 2);
+
+    SECTION("a missing triangle opens the surface") {
+        voxmesh::Mesh m = good;
+        m.indices.resize(m.indices.size() - 3);
+        CHECK(vmtest::topology(m).boundary_edges == 3);
+        CHECK_FALSE(vmtest::compare_with_reference(m, ref).same_triangle_set);
+    }
+    SECTION("one flipped triangle breaks the orientation") {
+        voxmesh::Mesh m = good;
+        std::swap(m.indices[4], m.indices[5]);
+        CHECK_FALSE(vmtest::topology(m).consistently_oriented());
+        const vmtest::Comparison c = vmtest::compare_with_reference(m, ref);
+        CHECK_FALSE(c.same_triangle_set);
+        CHECK_FALSE(c.same_indices);
+    }
+    SECTION("reordered triangles: same set, different buffer") {
+        voxmesh::Mesh m = good;
+        for (int k = 0; k < 3; ++k) std::swap(m.indices[k], m.indices[3 + k]);
+        const vmtest::Comparison c = vmtest::compare_with_reference(m, ref);
+        CHECK(c.same_triangle_set);
+        CHECK_FALSE(c.same_indices);
+    }
+    SECTION("a rotated triangle is the same oriented triangle") {
+        voxmesh::Mesh m = good;
+        std::rotate(m.indices.begin(), m.indices.begin() + 1, m.indices.begin() + 3);
+        CHECK(vmtest::compare_with_reference(m, ref).same_triangle_set);
+    }
+    SECTION("a moved vertex and a wrong normal are measured") {
+        voxmesh::Mesh m = good;
+        m.positions[7] += 0.01f;
+        m.normals[4] = -m.normals[4];
+        const vmtest::Comparison c = vmtest::compare_with_reference(m, ref);
+        CHECK(c.max_position_error > 1e-4);
+        CHECK(c.max_normal_error > 1e-3);
+    }
+    SECTION("an out-of-range index is a structural problem") {
+        voxmesh::Mesh m = good;
+        m.indices[0] = static_cast<std::uint32_t>(m.vertex_count());
+        CHECK_FALSE(vmtest::structural_problem(m).empty());
+    }
+    SECTION("two copies of a sphere have Euler 4") {
+        CHECK(vmtest::signed_volume(good) > 0);
+        voxmesh::Mesh twice = good;
+        const auto n = static_cast<std::uint32_t>(good.vertex_count());
+        twice.positions.insert(twice.positions.end(), good.positions.begin(), good.positions.end());
+        for (std::uint32_t i : good.indices) twice.indices.push_back(i + n);
+        CHECK(vmtest::topology(twice).euler == 4);
+    }
+}

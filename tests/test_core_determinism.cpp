@@ -1,0 +1,149 @@
+// The canonical mesh does not depend on the thread count or the scalar type.
+#include <catch2/catch.hpp>
+
+#include "support/mesh_checks.hpp"
+#include "support/reference_mc.hpp"
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+using vmtest::Dims;
+
+namespace {
+
+voxmesh::Options cpu_options(double iso, unsigned threads) {
+    voxmesh::Options o;
+    o.iso = iso;
+    o.backend = voxmesh::Backend::Cpu;
+    o.threads = threads;
+    return o;
+}
+
+bool bitwise_equal(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
+}
+
+void require_identical(const voxmesh::Mesh& a, const voxmesh::Mesh& b) {
+    REQUIRE(a.vertex_count() == b.vertex_count());
+    REQUIRE(a.triangle_count() == b.triangle_count());
+    CHECK(a.indices == b.indices);
+    CHECK(bitwise_equal(a.positions, b.positions));
+    CHECK(bitwise_equal(a.normals, b.normals));
+}
+
+template <class T>
+voxmesh::Mesh extract_as(const std::vector<double>& field, const Dims& dims, double iso) {
+    std::vector<T> typed(field.size());
+    for (std::size_t i = 0; i < field.size(); ++i) typed[i] = vmtest::to_scalar<T>(field[i]);
+    for (std::size_t i = 0; i < field.size(); ++i) REQUIRE(static_cast<double>(typed[i]) == field[i]);
+    return voxmesh::extract(vmtest::view_of(typed, dims), cpu_options(iso, 3));
+}
+
+}  // namespace
+
+TEST_CASE("identical meshes for threads 1, 2, 3, 4, 7, 16 on odd dims", "[core]") {
+    const Dims dims{37, 23, 51};
+    SECTION("smooth float field") {
+        const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));
+        const voxmesh::Mesh one = voxmesh::extract(vmtest::view_of(values, dims), cpu_options(0.15, 1));
+        REQUIRE(one.triangle_count() > 1000);
+        for (unsigned threads : {2u, 3u, 4u, 7u, 16u, 0u}) {
+            INFO("threads " << threads);
+            require_identical(one, voxmesh::extract(vmtest::view_of(values, dims), cpu_options(0.15, threads)));
+        }
+        vmtest::RefOptions ro;
+        ro.iso = 0.15;
+        const vmtest::Comparison cmp = vmtest::compare_with_reference(one, vmtest::reference_mc(vmtest::to_doubles(values), dims, ro));
+        INFO(cmp.first_problem);
+        CHECK(cmp.same_indices);
+    }
+    SECTION("random u16 field, surface everywhere") {
+        const std::vector<std::uint16_t> values = vmtest::random_field<std::uint16_t>(dims, 5, 0, 1000);
+        const voxmesh::Mesh one = voxmesh::extract(vmtest::view_of(values, dims), cpu_options(500, 1));
+        REQUIRE(one.triangle_count() > 10000);
+        for (unsigned threads : {2u, 3u, 4u, 7u, 16u}) {
+            INFO("threads " << threads);
+            require_identical(one, voxmesh::extract(vmtest::view_of(values, dims), cpu_options(500, threads)));
+        }
+    }
+    SECTION("more threads than planes") {
+        const Dims thin{9, 7, 3};
+        const std::vector<double> values = vmtest::random_doubles(thin, 21, -5, 5);
+        const voxmesh::Mesh one = voxmesh::extract(vmtest::view_of(values, thin), cpu_options(0.5, 1));
+        REQUIRE(one.triangle_count() > 0);
+        for (unsigned threads : {2u, 3u, 16u, 64u}) {
+            INFO("threads " << threads);
+            require_identical(one, voxmesh::extract(vmtest::view_of(values, thin), cpu_options(0.5, threads)));
+        }
+        const Dims flat{6, 5, 2};
+        const std::vector<double> two = vmtest::random_doubles(flat, 22, -5, 5);
+        const voxmesh::Mesh ref = voxmesh::extract(vmtest::view_of(two, flat), cpu_options(0.5, 1));
+        for (unsigned threads : {2u, 5u}) require_identical(ref, voxmesh::extract(vmtest::view_of(two, flat), cpu_options(0.5, threads)));
+    }
+}
+
+TEST_CASE("identical meshes for every scalar type holding the same integer field", "[core]") {
+    const Dims dims{29, 31, 27};
+    const vmtest::FieldFn wavy = vmtest::wavy(0.35);
+    SECTION("values in [0, 120], non-integer and integer iso") {
+        // 60 + 20 * wavy, rounded: fits every type, u8 and i8 included.
+        const std::vector<double> field = vmtest::sample_field<double>(
+            dims, [&](double x, double y, double z) { return std::nearbyint(60 + 20 * wavy(x, y, z)); });
+        for (double iso : {60.5, 60.0, 47.25}) {
+            INFO("iso " << iso);
+            const voxmesh::Mesh base = extract_as<double>(field, dims, iso);
+            REQUIRE(base.triangle_count() > 500);
+            vmtest::RefOptions ro;
+            ro.iso = iso;
+            const vmtest::Comparison cmp = vmtest::compare_with_reference(base, vmtest::reference_mc(field, dims, ro));
+            INFO(cmp.first_problem);
+            CHECK(cmp.same_indices);
+            CHECK(cmp.max_position_error <= 1e-6);
+            {
+                INFO("u8");
+                require_identical(base, extract_as<std::uint8_t>(field, dims, iso));
+            }
+            {
+                INFO("i8");
+                require_identical(base, extract_as<std::int8_t>(field, dims, iso));
+            }
+            {
+                INFO("u16");
+                require_identical(base, extract_as<std::uint16_t>(field, dims, iso));
+            }
+            {
+                INFO("i16");
+                require_identical(base, extract_as<std::int16_t>(field, dims, iso));
+            }
+            {
+                INFO("u32");
+                require_identical(base, extract_as<std::uint32_t>(field, dims, iso));
+            }
+            {
+                INFO("i32");
+                require_identical(base, extract_as<std::int32_t>(field, dims, iso));
+            }
+            {
+                INFO("f32");
+                require_identical(base, extract_as<float>(field, dims, iso));
+            }
+        }
+    }
+    SECTION("negative values in the signed types") {
+        const std::vector<double> field = vmtest::sample_field<double>(
+            dims, [&](double x, double y, double z) { return std::nearbyint(40 * wavy(x, y, z)); });
+        for (double iso : {-0.5, -7.0, 3.75}) {
+            INFO("iso " << iso);
+            const voxmesh::Mesh base = extract_as<double>(field, dims, iso);
+            REQUIRE(base.triangle_count() > 500);
+            require_identical(base, extract_as<std::int8_t>(field, dims, iso));
+            require_identical(base, extract_as<std::int16_t>(field, dims, iso));
+            require_identical(base, extract_as<std::int32_t>(field, dims, iso));
+            require_identical(base, extract_as<float>(field, dims, iso));
+        }
+    }
+}

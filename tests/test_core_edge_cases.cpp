@@ -1,0 +1,209 @@
+// Bad input and boundary conditions of extract().
+#include <catch2/catch.hpp>
+
+#include "support/mesh_checks.hpp"
+#include "support/reference_mc.hpp"
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+using vmtest::Dims;
+using Catch::Matchers::Contains;
+
+namespace {
+
+voxmesh::Options cpu_options(double iso, unsigned threads = 1) {
+    voxmesh::Options o;
+    o.iso = iso;
+    o.backend = voxmesh::Backend::Cpu;
+    o.threads = threads;
+    return o;
+}
+
+void require_empty(const voxmesh::Mesh& mesh) {
+    CHECK(mesh.positions.empty());
+    CHECK(mesh.normals.empty());
+    CHECK(mesh.indices.empty());
+    CHECK(mesh.vertex_count() == 0);
+    CHECK(mesh.triangle_count() == 0);
+}
+
+}  // namespace
+
+TEST_CASE("a dimension below 2 is an Error", "[core]") {
+    const std::vector<float> data(64, 1.0f);
+    const Dims bad[] = {{1, 4, 4}, {4, 1, 4}, {4, 4, 1}, {0, 4, 4}, {4, 0, 4}, {4, 4, 0}, {1, 1, 1}};
+    for (const Dims& dims : bad) {
+        INFO(dims[0] << "x" << dims[1] << "x" << dims[2]);
+        CHECK_THROWS_AS(voxmesh::extract(vmtest::view_of(data, dims), cpu_options(0.5)), voxmesh::Error);
+    }
+    // Exactly 2 is fine.
+    CHECK_NOTHROW(voxmesh::extract(vmtest::view_of(data, {2, 2, 2}), cpu_options(0.5)));
+}
+
+TEST_CASE("invalid views are Errors", "[core]") {
+    const std::vector<float> data(27, 1.0f);
+    voxmesh::VolumeView v = vmtest::view_of(data, {3, 3, 3});
+    SECTION("no data") {
+        v.data = nullptr;
+        CHECK_THROWS_AS(voxmesh::extract(v, cpu_options(0.5)), voxmesh::Error);
+    }
+    SECTION("spacing not positive") {
+        v.spacing = {1, 0, 1};
+        CHECK_THROWS_AS(voxmesh::extract(v, cpu_options(0.5)), voxmesh::Error);
+        v.spacing = {1, 1, -2};
+        CHECK_THROWS_AS(voxmesh::extract(v, cpu_options(0.5)), voxmesh::Error);
+    }
+    SECTION("Error is a std::runtime_error") {
+        v.data = nullptr;
+        CHECK_THROWS_AS(voxmesh::extract(v, cpu_options(0.5)), std::runtime_error);
+    }
+}
+
+TEST_CASE("a constant volume gives an empty mesh", "[core]") {
+    const Dims dims{7, 5, 9};
+    const std::vector<float> f(dims[0] * dims[1] * dims[2], 3.0f);
+    const std::vector<std::uint8_t> u(dims[0] * dims[1] * dims[2], 200);
+    for (unsigned threads : {1u, 3u}) {
+        require_empty(voxmesh::extract(vmtest::view_of(f, dims), cpu_options(3.0, threads)));   // all inside (== iso)
+        require_empty(voxmesh::extract(vmtest::view_of(f, dims), cpu_options(-1.0, threads)));  // all inside
+        require_empty(voxmesh::extract(vmtest::view_of(f, dims), cpu_options(3.5, threads)));   // all outside
+        require_empty(voxmesh::extract(vmtest::view_of(u, dims), cpu_options(200, threads)));
+        require_empty(voxmesh::extract(vmtest::view_of(u, dims), cpu_options(1e9, threads)));   // beyond the type
+        require_empty(voxmesh::extract(vmtest::view_of(u, dims), cpu_options(-1e9, threads)));
+    }
+    // A field with a surface, at an iso beyond the type's range, also gives nothing.
+    std::vector<std::uint8_t> ramp(dims[0] * dims[1] * dims[2]);
+    for (std::size_t i = 0; i < ramp.size(); ++i) ramp[i] = static_cast<std::uint8_t>(i % 256);
+    require_empty(voxmesh::extract(vmtest::view_of(ramp, dims), cpu_options(255.5)));
+    require_empty(voxmesh::extract(vmtest::view_of(ramp, dims), cpu_options(0.0)));
+    CHECK(voxmesh::extract(vmtest::view_of(ramp, dims), cpu_options(255.0)).triangle_count() > 0);
+}
+
+TEST_CASE("samples exactly equal to iso are inside", "[core]") {
+    const Dims dims{2, 2, 2};
+    SECTION("f32 corner at iso") {
+        std::vector<float> v(8, 0.0f);
+        v[0] = 1.0f;
+        const voxmesh::Mesh at = voxmesh::extract(vmtest::view_of(v, dims), cpu_options(1.0));
+        REQUIRE(at.triangle_count() == 1);
+        REQUIRE(at.vertex_count() == 3);
+        for (float p : at.positions) CHECK(p == 0.0f);  // t = 0: every vertex on the corner
+        // A hair above the sample: nothing is inside.
+        require_empty(voxmesh::extract(vmtest::view_of(v, dims), cpu_options(std::nextafter(1.0, 2.0))));
+        // A hair below: the corner is inside, vertices just off it.
+        const voxmesh::Mesh below = voxmesh::extract(vmtest::view_of(v, dims), cpu_options(0.999));
+        CHECK(below.triangle_count() == 1);
+    }
+    SECTION("f32 iso between two floats rounds the right way") {
+        // iso lies strictly between 1.0f and the next float: 1.0f is outside.
+        std::vector<float> v(8, 0.0f);
+        v[0] = 1.0f;
+        v[7] = std::nextafter(1.0f, 2.0f);
+        const double iso = 1.0 + std::numeric_limits<float>::epsilon() / 4;
+        const voxmesh::Mesh mesh = voxmesh::extract(vmtest::view_of(v, dims), cpu_options(iso));
+        vmtest::RefOptions ro;
+        ro.iso = iso;
+        const vmtest::RefMesh ref = vmtest::reference_mc(vmtest::to_doubles(v), dims, ro);
+        CHECK(ref.triangle_count() == 1);
+        CHECK(mesh.indices == ref.indices);
+        CHECK(mesh.vertex_count() == ref.vertex_count());
+    }
+    SECTION("integers: iso 100 vs 100.5 vs 99.5") {
+        std::vector<std::uint8_t> v(8, 10);
+        v[3] = 100;
+        v[5] = 101;
+        CHECK(voxmesh::extract(vmtest::view_of(v, dims), cpu_options(100)).triangle_count() == 2);
+        CHECK(voxmesh::extract(vmtest::view_of(v, dims), cpu_options(100.5)).triangle_count() == 1);
+        CHECK(voxmesh::extract(vmtest::view_of(v, dims), cpu_options(101)).triangle_count() == 1);
+        CHECK(voxmesh::extract(vmtest::view_of(v, dims), cpu_options(101.001)).triangle_count() == 0);
+        std::vector<std::int32_t> w(8, -10);
+        w[6] = -3;
+        CHECK(voxmesh::extract(vmtest::view_of(w, dims), cpu_options(-3)).triangle_count() == 1);
+        CHECK(voxmesh::extract(vmtest::view_of(w, dims), cpu_options(-2.999)).triangle_count() == 0);
+    }
+    SECTION("every sample at iso: all inside, no surface") {
+        const std::vector<double> v(27, 0.25);
+        require_empty(voxmesh::extract(vmtest::view_of(v, {3, 3, 3}), cpu_options(0.25)));
+    }
+}
+
+TEST_CASE("NaN samples are an Error that says NaN", "[core]") {
+    const Dims dims{9, 8, 7};
+    const std::size_t n = dims[0] * dims[1] * dims[2];
+    const std::size_t where[] = {0, n / 2, n - 1, dims[0] * dims[1] * (dims[2] - 1), dims[0] - 1};
+    for (std::size_t at : where) {
+        for (unsigned threads : {1u, 3u}) {
+            INFO("NaN at " << at << ", threads " << threads);
+            std::vector<float> f = vmtest::sample_field<float>(dims, vmtest::sphere({4, 4, 3}, 2.5));
+            f[at] = std::numeric_limits<float>::quiet_NaN();
+            CHECK_THROWS_WITH(voxmesh::extract(vmtest::view_of(f, dims), cpu_options(0.0, threads)), Contains("NaN"));
+            CHECK_THROWS_AS(voxmesh::extract(vmtest::view_of(f, dims), cpu_options(0.0, threads)), voxmesh::Error);
+            // Far from any surface: a constant volume with one NaN.
+            std::vector<double> d(n, -1.0);
+            d[at] = std::numeric_limits<double>::quiet_NaN();
+            CHECK_THROWS_WITH(voxmesh::extract(vmtest::view_of(d, dims), cpu_options(0.0, threads)), Contains("NaN"));
+        }
+    }
+}
+
+TEST_CASE("iso NaN is an Error", "[core]") {
+    const std::vector<float> f(27, 1.0f);
+    const std::vector<std::uint8_t> u(27, 1);
+    const std::vector<double> d(27, 1.0);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    CHECK_THROWS_AS(voxmesh::extract(vmtest::view_of(f, {3, 3, 3}), cpu_options(nan)), voxmesh::Error);
+    CHECK_THROWS_AS(voxmesh::extract(vmtest::view_of(u, {3, 3, 3}), cpu_options(nan)), voxmesh::Error);
+    CHECK_THROWS_AS(voxmesh::extract(vmtest::view_of(d, {3, 3, 3}), cpu_options(nan, 2)), voxmesh::Error);
+}
+
+TEST_CASE("checked_volume_bytes detects overflow", "[core]") {
+    CHECK(voxmesh::checked_volume_bytes({3, 5, 7}, voxmesh::ScalarType::F64) == 3u * 5u * 7u * 8u);
+    CHECK(voxmesh::checked_volume_bytes({512, 512, 512}, voxmesh::ScalarType::U16) == std::size_t(512) * 512 * 512 * 2);
+    const std::size_t big = std::size_t(1) << 22;
+    CHECK_THROWS_AS(voxmesh::checked_volume_bytes({big, big, big}, voxmesh::ScalarType::U8), voxmesh::Error);
+    CHECK_THROWS_AS(voxmesh::checked_volume_bytes({big, big, std::size_t(1) << 20}, voxmesh::ScalarType::F64),
+                    voxmesh::Error);
+    const std::size_t max = std::numeric_limits<std::size_t>::max();
+    CHECK_THROWS_AS(voxmesh::checked_volume_bytes({max, 2, 2}, voxmesh::ScalarType::U8), voxmesh::Error);
+    CHECK_THROWS_AS(voxmesh::checked_volume_bytes({max / 2 + 1, 1, 1}, voxmesh::ScalarType::U16), voxmesh::Error);
+    // extract() rejects such a view before touching its (tiny) data.
+    const std::vector<float> tiny(8, 0.0f);
+    voxmesh::VolumeView v = vmtest::view_of(tiny, {big, big, big});
+    CHECK_THROWS_AS(voxmesh::extract(v, cpu_options(0.5)), voxmesh::Error);
+    // And Volume::allocate as well.
+    CHECK_THROWS_AS(voxmesh::Volume::allocate(voxmesh::ScalarType::F32, {big, big, big}), voxmesh::Error);
+}
+
+TEST_CASE("normals off: same positions and indices, no normals", "[core]") {
+    const Dims dims{17, 19, 15};
+    const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.6));
+    voxmesh::Options with = cpu_options(0.3, 2), without = with;
+    without.normals = false;
+    const voxmesh::Mesh a = voxmesh::extract(vmtest::view_of(values, dims), with);
+    const voxmesh::Mesh b = voxmesh::extract(vmtest::view_of(values, dims), without);
+    REQUIRE(a.triangle_count() > 0);
+    CHECK(b.normals.empty());
+    CHECK(a.indices == b.indices);
+    CHECK(a.positions == b.positions);
+}
+
+TEST_CASE("an owning Volume meshes like the view of the same samples", "[core]") {
+    voxmesh::Volume vol = voxmesh::Volume::allocate(voxmesh::ScalarType::I16, {11, 9, 13});
+    CHECK(vol.sample_count() == 11u * 9u * 13u);
+    CHECK(vol.byte_size() == 11u * 9u * 13u * 2u);
+    const std::vector<std::int16_t> values = vmtest::random_field<std::int16_t>(vol.dims, 3, -20, 20);
+    std::copy(values.begin(), values.end(), static_cast<std::int16_t*>(vol.data));
+    vol.spacing = {0.5, 2, 1};
+    vol.origin = {1, 2, 3};
+    const voxmesh::Mesh a = voxmesh::extract(vol.view(), cpu_options(0.5, 2));
+    const voxmesh::Mesh b = voxmesh::extract(vmtest::view_of(values, vol.dims, vol.spacing, vol.origin), cpu_options(0.5, 1));
+    CHECK(a.indices == b.indices);
+    CHECK(a.positions == b.positions);
+    CHECK(a.normals == b.normals);
+}

@@ -1,0 +1,386 @@
+// write_mesh: STL, PLY and OBJ re-read by tiny parsers here; failures leave nothing behind.
+#include <catch2/catch.hpp>
+
+#include "support/mesh_checks.hpp"
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <csignal>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+using vmtest::Dims;
+
+namespace {
+
+voxmesh::Mesh test_mesh(bool normals) {
+    const Dims dims{21, 19, 17};
+    const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::sphere({10.2, 9.1, 8.3}, 6.5));
+    voxmesh::VolumeView view = vmtest::view_of(values, dims, {0.5, 0.75, 1.0}, {-2.5, 1.0, 100.0});
+    voxmesh::Options o;
+    o.backend = voxmesh::Backend::Cpu;
+    o.threads = 2;
+    o.normals = normals;
+    return voxmesh::extract(view, o);
+}
+
+std::string read_all(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::ostringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+template <class T>
+T load(const std::string& bytes, std::size_t at) {
+    T v;
+    REQUIRE(at + sizeof(T) <= bytes.size());
+    std::memcpy(&v, bytes.data() + at, sizeof(T));
+    return v;
+}
+
+bool no_temp_files(const vmtest::TempDir& dir) {
+    for (const std::string& name : dir.entries())
+        if (name.find(".tmp") != std::string::npos) return false;
+    return true;
+}
+
+// ---------------------------------------------------------------- parsers
+
+struct Parsed {
+    std::vector<float> positions, normals;  // per vertex (STL: per triangle corner)
+    std::vector<std::uint32_t> indices;
+};
+
+// Binary STL: 80-byte header, uint32 count, 50-byte records (normal, 3 vertices, attribute).
+Parsed parse_stl(const std::string& bytes, std::vector<float>& facet_normals) {
+    Parsed p;
+    REQUIRE(bytes.size() >= 84);
+    const auto count = load<std::uint32_t>(bytes, 80);
+    REQUIRE(bytes.size() == 84 + 50 * static_cast<std::size_t>(count));
+    for (std::uint32_t t = 0; t < count; ++t) {
+        const std::size_t rec = 84 + 50 * static_cast<std::size_t>(t);
+        for (int k = 0; k < 3; ++k) facet_normals.push_back(load<float>(bytes, rec + 4 * k));
+        for (int k = 0; k < 9; ++k) p.positions.push_back(load<float>(bytes, rec + 12 + 4 * k));
+        CHECK(load<std::uint16_t>(bytes, rec + 48) == 0);
+    }
+    return p;
+}
+
+// Binary little-endian PLY with float vertex properties and uchar/uint (or int) face lists.
+Parsed parse_ply(const std::string& bytes, bool& has_normals) {
+    Parsed p;
+    std::size_t pos = 0;
+    auto next_line = [&]() {
+        const std::size_t end = bytes.find('\n', pos);
+        REQUIRE(end != std::string::npos);
+        std::string line = bytes.substr(pos, end - pos);
+        pos = end + 1;
+        return line;
+    };
+    REQUIRE(next_line() == "ply");
+    REQUIRE(next_line() == "format binary_little_endian 1.0");
+    std::size_t vertices = 0, faces = 0;
+    std::vector<std::string> vertex_props;
+    std::string element, line;
+    while ((line = next_line()) != "end_header") {
+        std::istringstream in(line);
+        std::string word;
+        in >> word;
+        if (word == "comment") continue;
+        if (word == "element") {
+            std::size_t n = 0;
+            in >> element >> n;
+            if (element == "vertex") vertices = n;
+            else if (element == "face") faces = n;
+            else FAIL("unexpected element " << element);
+        } else if (word == "property") {
+            std::string type, name;
+            in >> type;
+            if (element == "vertex") {
+                in >> name;
+                CHECK(type == "float");
+                vertex_props.push_back(name);
+            } else {
+                std::string count_type, index_type;
+                in >> count_type >> index_type >> name;
+                CHECK(type == "list");
+                CHECK(count_type == "uchar");
+                CHECK((index_type == "uint" || index_type == "int" || index_type == "uint32"));
+                CHECK(name == "vertex_indices");
+            }
+        } else {
+            FAIL("unexpected header line: " << line);
+        }
+    }
+    has_normals = vertex_props.size() == 6;
+    if (has_normals) CHECK(vertex_props == std::vector<std::string>{"x", "y", "z", "nx", "ny", "nz"});
+    else CHECK(vertex_props == std::vector<std::string>{"x", "y", "z"});
+    const std::size_t stride = vertex_props.size();
+    REQUIRE(bytes.size() == pos + vertices * stride * 4 + faces * 13);
+    for (std::size_t v = 0; v < vertices; ++v)
+        for (std::size_t k = 0; k < stride; ++k) {
+            const float f = load<float>(bytes, pos + 4 * (v * stride + k));
+            (k < 3 ? p.positions : p.normals).push_back(f);
+        }
+    pos += vertices * stride * 4;
+    for (std::size_t t = 0; t < faces; ++t) {
+        REQUIRE(static_cast<unsigned char>(bytes[pos]) == 3);
+        for (int k = 0; k < 3; ++k) p.indices.push_back(load<std::uint32_t>(bytes, pos + 1 + 4 * k));
+        pos += 13;
+    }
+    return p;
+}
+
+// OBJ: "v x y z", "vn x y z", "f a b c" or "f a//a b//b c//c" (1-based).
+Parsed parse_obj(const std::string& text) {
+    Parsed p;
+    std::istringstream in(text);
+    std::string line;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == '#') continue;
+        std::istringstream ls(line);
+        std::string tag;
+        ls >> tag;
+        if (tag == "v" || tag == "vn") {
+            for (int k = 0; k < 3; ++k) {
+                std::string word;
+                ls >> word;
+                REQUIRE(!word.empty());
+                (tag == "v" ? p.positions : p.normals).push_back(std::strtof(word.c_str(), nullptr));
+            }
+        } else if (tag == "f") {
+            for (int k = 0; k < 3; ++k) {
+                std::string word;
+                ls >> word;
+                REQUIRE(!word.empty());
+                const std::size_t slash = word.find('/');
+                const unsigned long v = std::stoul(word.substr(0, slash));
+                REQUIRE(v >= 1);
+                if (slash != std::string::npos) {
+                    REQUIRE(word.substr(slash, 2) == "//");
+                    CHECK(std::stoul(word.substr(slash + 2)) == v);
+                }
+                p.indices.push_back(static_cast<std::uint32_t>(v - 1));
+            }
+            std::string extra;
+            CHECK_FALSE(ls >> extra);  // triangles only
+        } else {
+            FAIL("unexpected OBJ line: " << line);
+        }
+    }
+    return p;
+}
+
+// Runs write_mesh with the file size limit set to `limit` bytes (SIGXFSZ ignored), so that
+// the write fails partway through; restores both afterwards. Returns the error message, or
+// "" when nothing was thrown.
+std::string write_with_size_limit(const std::string& path, const voxmesh::Mesh& mesh, rlim_t limit) {
+    rlimit old{};
+    REQUIRE(getrlimit(RLIMIT_FSIZE, &old) == 0);
+    if (old.rlim_max != RLIM_INFINITY && old.rlim_max < limit) return "skip";
+    auto old_handler = std::signal(SIGXFSZ, SIG_IGN);
+    rlimit small = old;
+    small.rlim_cur = limit;
+    REQUIRE(setrlimit(RLIMIT_FSIZE, &small) == 0);
+    std::string message;
+    try {
+        voxmesh::write_mesh(path, mesh);
+    } catch (const voxmesh::Error& e) {
+        message = e.what();
+        if (message.empty()) message = "(empty message)";
+    } catch (...) {
+        message = "(not a voxmesh::Error)";
+    }
+    setrlimit(RLIMIT_FSIZE, &old);
+    std::signal(SIGXFSZ, old_handler);
+    return message;
+}
+
+}  // namespace
+
+TEST_CASE("write_mesh: STL, PLY and OBJ re-read with the same counts and coordinates", "[core]") {
+    vmtest::TempDir dir;
+    for (bool normals : {true, false}) {
+        INFO((normals ? "with normals" : "without normals"));
+        const voxmesh::Mesh mesh = test_mesh(normals);
+        REQUIRE(mesh.triangle_count() > 100);
+
+        SECTION(std::string("stl") + (normals ? "+n" : "")) {
+            const std::string path = dir.file("sphere.stl");
+            voxmesh::write_mesh(path, mesh);
+            std::vector<float> facet_normals;
+            const Parsed p = parse_stl(read_all(path), facet_normals);
+            REQUIRE(p.positions.size() == 9 * mesh.triangle_count());
+            bool same = true;
+            for (std::size_t t = 0; t < mesh.triangle_count(); ++t)
+                for (int k = 0; k < 3; ++k)
+                    for (int d = 0; d < 3; ++d)
+                        same &= p.positions[9 * t + 3 * k + d] == mesh.positions[3 * mesh.indices[3 * t + k] + d];
+            CHECK(same);
+            // Facet normals: unit, on the side of the vertex normals (outward).
+            std::size_t outward = 0;
+            for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+                const float* n = &facet_normals[3 * t];
+                const double len = std::sqrt(double(n[0]) * n[0] + double(n[1]) * n[1] + double(n[2]) * n[2]);
+                CHECK(std::fabs(len - 1) < 1e-4);
+                const float* c = &p.positions[9 * t];
+                const double centroid_dir[3] = {(c[0] + c[3] + c[6]) / 3 - 2.6, (c[1] + c[4] + c[7]) / 3 - 7.825,
+                                                (c[2] + c[5] + c[8]) / 3 - 108.3};
+                outward += n[0] * centroid_dir[0] + n[1] * centroid_dir[1] + n[2] * centroid_dir[2] > 0;
+            }
+            CHECK(outward == mesh.triangle_count());
+        }
+        SECTION(std::string("ply") + (normals ? "+n" : "")) {
+            const std::string path = dir.file("sphere.ply");
+            voxmesh::write_mesh(path, mesh);
+            bool has_normals = false;
+            const Parsed p = parse_ply(read_all(path), has_normals);
+            CHECK(has_normals == normals);
+            CHECK(p.positions == mesh.positions);
+            CHECK(p.normals == mesh.normals);
+            CHECK(p.indices == mesh.indices);
+        }
+        SECTION(std::string("obj") + (normals ? "+n" : "")) {
+            const std::string path = dir.file("sphere.obj");
+            voxmesh::write_mesh(path, mesh);
+            const Parsed p = parse_obj(read_all(path));
+            CHECK(p.positions == mesh.positions);  // %.9g-style text round-trips floats exactly
+            CHECK(p.normals == mesh.normals);
+            CHECK(p.indices == mesh.indices);
+        }
+        SECTION(std::string("upper-case extension") + (normals ? "+n" : "")) {
+            const std::string path = dir.file("SPHERE.PLY");
+            voxmesh::write_mesh(path, mesh);
+            bool has_normals = false;
+            CHECK(parse_ply(read_all(path), has_normals).indices == mesh.indices);
+        }
+    }
+    CHECK(no_temp_files(dir));
+}
+
+TEST_CASE("write_mesh: an empty mesh writes valid empty files", "[core]") {
+    vmtest::TempDir dir;
+    const voxmesh::Mesh empty;
+    voxmesh::write_mesh(dir.file("e.stl"), empty);
+    voxmesh::write_mesh(dir.file("e.ply"), empty);
+    voxmesh::write_mesh(dir.file("e.obj"), empty);
+    std::vector<float> fn;
+    CHECK(parse_stl(read_all(dir.file("e.stl")), fn).positions.empty());
+    bool has_normals = true;
+    CHECK(parse_ply(read_all(dir.file("e.ply")), has_normals).indices.empty());
+    CHECK(parse_obj(read_all(dir.file("e.obj"))).positions.empty());
+    CHECK(dir.entries() == std::vector<std::string>{"e.obj", "e.ply", "e.stl"});
+}
+
+TEST_CASE("write_mesh: overwriting an existing file replaces it", "[core]") {
+    vmtest::TempDir dir;
+    const std::string path = dir.file("m.ply");
+    { std::ofstream(path) << "old contents"; }
+    const voxmesh::Mesh mesh = test_mesh(true);
+    voxmesh::write_mesh(path, mesh);
+    bool has_normals = false;
+    CHECK(parse_ply(read_all(path), has_normals).indices == mesh.indices);
+    CHECK(dir.entries() == std::vector<std::string>{"m.ply"});
+}
+
+TEST_CASE("write_mesh: unknown extension throws and writes nothing", "[core]") {
+    vmtest::TempDir dir;
+    const voxmesh::Mesh mesh = test_mesh(false);
+    for (const char* name : {"mesh.xyz", "mesh", "mesh.stl.bak", "mesh.", "mesh.off"}) {
+        INFO(name);
+        CHECK_THROWS_AS(voxmesh::write_mesh(dir.file(name), mesh), voxmesh::Error);
+    }
+    CHECK(dir.entries().empty());
+}
+
+TEST_CASE("write_mesh: a malformed mesh throws and writes nothing", "[core]") {
+    vmtest::TempDir dir;
+    voxmesh::Mesh mesh = test_mesh(true);
+    mesh.indices[5] = static_cast<std::uint32_t>(mesh.vertex_count());
+    CHECK_THROWS_AS(voxmesh::write_mesh(dir.file("bad.stl"), mesh), voxmesh::Error);
+    CHECK(dir.entries().empty());
+}
+
+TEST_CASE("write_mesh: a missing directory throws and leaves no file", "[core]") {
+    vmtest::TempDir dir;
+    const voxmesh::Mesh mesh = test_mesh(true);
+    for (const char* ext : {".stl", ".ply", ".obj"}) {
+        const std::string path = dir.file("missing/sub/out") + ext;
+        CHECK_THROWS_AS(voxmesh::write_mesh(path, mesh), voxmesh::Error);
+        CHECK_FALSE(fs::exists(path));
+    }
+    CHECK_FALSE(fs::exists(dir.file("missing")));
+    CHECK(dir.entries().empty());
+}
+
+TEST_CASE("write_mesh: an unwritable target throws and leaves nothing behind", "[core]") {
+    vmtest::TempDir dir;
+    const voxmesh::Mesh mesh = test_mesh(true);
+
+    SECTION("read-only directory (only meaningful when not root)") {
+        if (geteuid() == 0) {
+            WARN("running as root: permissions do not stop writes; the other sections cover failures");
+        } else {
+            const std::string ro = dir.file("ro");
+            REQUIRE(fs::create_directory(ro));
+            fs::permissions(ro, fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                    fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+            for (const char* ext : {".stl", ".ply", ".obj"}) CHECK_THROWS_AS(voxmesh::write_mesh(ro + "/out" + ext, mesh), voxmesh::Error);
+            fs::permissions(ro, fs::perms::owner_all, fs::perm_options::add);
+            CHECK(fs::is_empty(ro));
+        }
+    }
+    SECTION("the path is an existing directory") {
+        for (const char* name : {"d.stl", "d.ply", "d.obj"}) {
+            INFO(name);
+            REQUIRE(fs::create_directory(dir.file(name)));
+            CHECK_THROWS_AS(voxmesh::write_mesh(dir.file(name), mesh), voxmesh::Error);
+            CHECK(fs::is_directory(dir.file(name)));
+            CHECK(fs::is_empty(dir.file(name)));
+        }
+        CHECK(dir.entries() == std::vector<std::string>{"d.obj", "d.ply", "d.stl"});
+    }
+    SECTION("the path is an existing non-empty directory") {
+        REQUIRE(fs::create_directory(dir.file("full.stl")));
+        { std::ofstream(dir.file("full.stl/keep")) << "x"; }
+        CHECK_THROWS_AS(voxmesh::write_mesh(dir.file("full.stl"), mesh), voxmesh::Error);
+        CHECK(read_all(dir.file("full.stl/keep")) == "x");
+        CHECK(dir.entries() == std::vector<std::string>{"full.stl"});
+    }
+    SECTION("a write that fails midway (file size limit) leaves no partial file") {
+        // Works as root too: RLIMIT_FSIZE stops the write after `limit` bytes.
+        for (const char* name : {"big.stl", "big.ply", "big.obj"}) {
+            INFO(name);
+            const std::string message = write_with_size_limit(dir.file(name), mesh, 1000);
+            if (message == "skip") {
+                WARN("cannot lower RLIMIT_FSIZE here");
+                continue;
+            }
+            CHECK_FALSE(message.empty());
+            CHECK_FALSE(fs::exists(dir.file(name)));
+        }
+        CHECK(dir.entries().empty());
+    }
+    SECTION("a failed overwrite keeps the old file intact") {
+        const std::string path = dir.file("keep.ply");
+        { std::ofstream(path) << "previous mesh"; }
+        const std::string message = write_with_size_limit(path, mesh, 1000);
+        if (message != "skip") {
+            CHECK_FALSE(message.empty());
+            CHECK(read_all(path) == "previous mesh");
+            CHECK(dir.entries() == std::vector<std::string>{"keep.ply"});
+        }
+    }
+    CHECK(no_temp_files(dir));
+}
