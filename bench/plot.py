@@ -120,6 +120,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("json", nargs="+", help="voxmesh-bench --json output files ('-' for stdin)")
     ap.add_argument("--out", default=".", help="output folder")
+    ap.add_argument("--prefix", default="", help="prefix of the PNG names")
     ap.add_argument("--cores", type=int, default=os.cpu_count(), help="cores for the ideal speedup line")
     args = ap.parse_args()
     rows = load(args.json)
@@ -130,7 +131,7 @@ def main():
     for r in rows:
         groups[(os.path.basename(r["field"]), r["type"])].append(r)
     for (field, typ), g in sorted(groups.items()):
-        stem = os.path.join(args.out, f"{field}_{typ}".replace(".", "_"))
+        stem = os.path.join(args.out, args.prefix + f"{field}_{typ}".replace(".", "_"))
         plot_time(g, f"voxmesh CPU engine: {field} {typ}", stem + "_time.png")
         plot_speedup(g, f"voxmesh speedup: {field} {typ}", stem + "_speedup.png", args.cores)
         made = plot_backends(g, f"CPU vs OpenCL vs hybrid: {field} {typ}", stem + "_backends.png")

@@ -1,0 +1,39 @@
+#!/bin/sh
+# Reruns every measurement in bench/RESULTS.md and writes the raw outputs and plots to OUT.
+#   cmake -S . -B build-bench -DVOXMESH_WERROR=ON && cmake --build build-bench -j2
+#   bench/reproduce.sh [BUILD_DIR] [OUT]        (defaults: build-bench, bench-out)
+# Takes ~10 minutes on 2 cores and ~2 GB of /tmp for the 512^3 volume files.
+set -eu
+BUILD=${1:-build-bench}
+OUT=${2:-bench-out}
+REPEAT=${REPEAT:-5}
+THREADS=${THREADS:-2}
+BENCH="$BUILD/bench/voxmesh-bench"
+HERE=$(dirname "$0")
+TMP=${TMPDIR:-/tmp}/voxmesh-peers.$$
+mkdir -p "$OUT" "$TMP"
+trap 'rm -rf "$TMP"' EXIT
+
+# 1. Table 1 of the paper (sphere f32, 64..512 x 1,2,4,6,16 threads).
+"$BENCH" --paper --repeat "$REPEAT" --save "$OUT/paper.jsonl" > "$OUT/paper.txt"
+
+# 2. CPU vs OpenCL (PoCL on this CPU) vs hybrid.
+"$BENCH" --field sphere,gyroid --sizes 128,256 --threads 1,"$THREADS" --backends cpu,opencl,hybrid \
+    --repeat "$REPEAT" --save "$OUT/backends.jsonl" > "$OUT/backends.txt"
+
+# 3. Peers on the very same samples: vtkFlyingEdges3D, vtkMarchingCubes, scikit-image.
+: > "$OUT/peers.txt"
+for spec in sphere:f32:256 sphere:f32:512 gyroid:f32:256 gyroid:f32:512 sphere:u8:256 sphere:u8:512 \
+            gyroid:u8:256 gyroid:u8:512 ct:i16:256 ct:i16:512; do
+    field=${spec%%:*}; rest=${spec#*:}; type=${rest%%:*}; size=${rest#*:}
+    file="$TMP/${field}_${type}_${size}.nrrd"
+    "$BENCH" --field "$field" --type "$type" --sizes "$size" --write-volume "$file"
+    /usr/bin/python3 "$HERE/peers/peers.py" "$file" --threads "$THREADS" --repeat "$REPEAT" --bench "$BENCH" \
+        --fe-scaling >> "$OUT/peers.txt" || echo "(peers reported a mismatch for $spec)" >> "$OUT/peers.txt"
+    echo >> "$OUT/peers.txt"
+    rm -f "$file"
+done
+
+# 4. Plots.
+/usr/bin/python3 "$HERE/plot.py" "$OUT/paper.jsonl" --out "$OUT/plots" --prefix paper_
+/usr/bin/python3 "$HERE/plot.py" "$OUT/backends.jsonl" --out "$OUT/plots" --prefix backends_
