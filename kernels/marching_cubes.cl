@@ -5,6 +5,7 @@
 //   -DVOXEL_T=<uchar|char|ushort|short|uint|int|float|double>  the sample type, read in place
 //   -DVOXEL_INTEGER   integer samples (differences taken exactly in long)
 //   -DUSE_FP64        the device has cl_khr_fp64: interpolate in double like the CPU engine
+//   -DGROUP=n         meta samples per classify / compact work-item
 //
 // Index spaces (all chunk-local, uint; the host keeps them below 2^29):
 //   meta sample l = x + nx*(y + ny*(z - begin)) for z in [begin, meta_end): the chunk's own
@@ -16,7 +17,10 @@
 // so every case index is identical. The case tables come from the host's single copy
 // (src/core/case_tables.cpp) as __constant buffers:
 //   case_table: 16 bytes per case, triangle count then 15 signed edge numbers;
-//   cell_edge:  4 bytes per edge (dx, dy, dz, axis); corner_offset: 3 bytes per corner.
+//   cell_edge:  4 bytes per edge (dx, dy, dz, axis);
+//   pair_to_case: case index from the column codes at x and x+1 (kColumnPairToCase).
+// Samples are classified in groups of GROUP (-DGROUP=n) consecutive meta samples; the scans
+// run over per-group counts.
 
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -45,60 +49,85 @@ typedef VOXEL_T voxel;
 #define ISO_MINUS(v) ((float)(iso_int - (long)(v)) + iso_frac)
 #endif
 
+// Inside bits of rows (y, z), (y+1, z), (y, z+1), (y+1, z+1) at one x, in bits 0..3 (the
+// CPU engine's column code); bits of rows outside the volume are 0.
+inline uint column(__global const voxel* data, uint idx, uint y, uint z, uint nx, uint ny, uint nz, uint plane,
+                   voxel thr) {
+    uint c = (uint)(data[idx] >= thr);
+    if (y + 1 < ny) c |= (uint)(data[idx + nx] >= thr) << 1;
+    if (z + 1 < nz) {
+        c |= (uint)(data[idx + plane] >= thr) << 2;
+        if (y + 1 < ny) c |= (uint)(data[idx + plane + nx] >= thr) << 3;
+    }
+    return c;
+}
+
+// One work-item per GROUP consecutive meta samples: their edge codes and cell cases, and the
+// group's vertex and triangle counts (what the scans sum).
 __kernel void classify(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint nz,
-                       const uint begin, const uint cell_end, const uint zlo, const uint count,
-                       __constant uchar* corner_offset, __constant uchar* case_table, __global uchar* codes,
+                       const uint begin, const uint cell_end, const uint zlo, const uint count, const uint groups,
+                       __constant uchar* pair_to_case, __constant uchar* case_table, __global uchar* codes,
                        __global uchar* cases, __global uint* vcount, __global uint* tcount,
                        __global int* nan_plane) {
-    const uint l = (uint)get_global_id(0);
-    if (l >= count) return;
+    const uint g = (uint)get_global_id(0);
+    if (g >= groups) return;
     const uint plane = nx * ny;
-    const uint zl = l / plane;
-    const uint rest = l - zl * plane;
-    const uint y = rest / nx;
-    const uint x = rest - y * nx;
-    const uint z = begin + zl;
-    const uint idx = l + (begin - zlo) * plane;
-
-    const voxel v = data[idx];
-    if (IS_NAN(v)) atomic_min(nan_plane, (int)z);
-    const int in = v >= thr;
-    uint code = 0;
-    if (x + 1 < nx) code |= (uint)(in != (data[idx + 1] >= thr));
-    if (y + 1 < ny) code |= (uint)(in != (data[idx + nx] >= thr)) << 1;
-    if (z + 1 < nz) code |= (uint)(in != (data[idx + plane] >= thr)) << 2;
-    codes[l] = (uchar)code;
-    vcount[l] = popcount(code);
-
-    uint c = 0;
-    if (x + 1 < nx && y + 1 < ny && z < cell_end) {
-        for (uint k = 0; k < 8; ++k) {
-            const uint at = idx + corner_offset[3 * k] + nx * corner_offset[3 * k + 1] +
-                            plane * corner_offset[3 * k + 2];
-            c |= (uint)(data[at] >= thr) << k;
+    const uint l0 = g * GROUP;
+    const uint zl = l0 / plane;
+    const uint rest = l0 - zl * plane;
+    uint y = rest / nx;
+    uint x = rest - y * nx;
+    uint z = begin + zl;
+    uint idx = l0 + (begin - zlo) * plane;
+    uint vsum = 0, tsum = 0, col = 0, next = 0;
+    for (uint k = 0; k < GROUP; ++k) {
+        const uint l = l0 + k;
+        if (l >= count) break;
+        const voxel v = data[idx];
+        if (IS_NAN(v)) atomic_min(nan_plane, (int)z);
+        col = (k == 0 || x == 0) ? column(data, idx, y, z, nx, ny, nz, plane, thr) : next;
+        next = x + 1 < nx ? column(data, idx + 1, y, z, nx, ny, nz, plane, thr) : 0u;
+        uint code = 0;
+        if (x + 1 < nx) code |= (col ^ next) & 1;
+        if (y + 1 < ny) code |= ((col ^ (col >> 1)) & 1) << 1;
+        if (z + 1 < nz) code |= ((col ^ (col >> 2)) & 1) << 2;
+        codes[l] = (uchar)code;
+        vsum += popcount(code);
+        uint c = 0;
+        if (x + 1 < nx && y + 1 < ny && z < cell_end) c = pair_to_case[col | next << 4];
+        cases[l] = (uchar)c;
+        tsum += case_table[16 * c];
+        ++idx;
+        if (++x == nx) {
+            x = 0;
+            if (++y == ny) {
+                y = 0;
+                ++z;
+            }
         }
     }
-    cases[l] = (uchar)c;
-    tcount[l] = case_table[16 * c];
+    vcount[g] = vsum;
+    tcount[g] = tsum;
 }
 
 // Compaction: after the scans, every crossed edge and every triangle learns its slot, and
 // each slot records its owner (sample << 2 | axis, cell << 3 | triangle), so the generate
 // kernels run over exactly the vertices and triangles there are.
 __kernel void compact(__global const uchar* codes, __global const uchar* cases, __global const uint* vbase,
-                      __global const uint* tbase, const uint count, const uint owned,
+                      __global const uint* tbase, const uint count, const uint owned, const uint groups,
                       __constant uchar* case_table, __global uint* vowner, __global uint* towner) {
-    const uint l = (uint)get_global_id(0);
-    if (l >= count) return;
-    if (l < owned) {
-        const uint code = codes[l];
-        uint slot = vbase[l];
-        for (uint axis = 0; axis < 3; ++axis)
-            if (code >> axis & 1) vowner[slot++] = l << 2 | axis;
+    const uint g = (uint)get_global_id(0);
+    if (g >= groups) return;
+    uint vslot = vbase[g], tslot = tbase[g];
+    for (uint l = g * GROUP; l < (g + 1) * GROUP && l < count; ++l) {
+        if (l < owned) {
+            const uint code = codes[l];
+            for (uint axis = 0; axis < 3; ++axis)
+                if (code >> axis & 1) vowner[vslot++] = l << 2 | axis;
+        }
+        const uint n = case_table[16 * cases[l]];
+        for (uint q = 0; q < n; ++q) towner[tslot++] = l << 3 | q;
     }
-    const uint n = case_table[16 * cases[l]];
-    const uint first = tbase[l];
-    for (uint q = 0; q < n; ++q) towner[first + q] = l << 3 | q;
 }
 
 // Central differences, one-sided at the volume border, divided by spacing (as the CPU).
@@ -180,8 +209,9 @@ __kernel void triangles(__global const uchar* codes, __global const uchar* cases
         const uint s = l + ce[0] + nx * ce[1] + plane * ce[2];
         const uint code = codes[s];
         const uint axis = ce[3];
-        const uint offset = axis == 0 ? 0u : axis == 1 ? (code & 1) : (code & 1) + (code >> 1 & 1);
-        id[e] = vbase[s] + offset;
+        uint vid = vbase[s / GROUP];  // the group's first vertex, then the samples before s
+        for (uint p = s - s % GROUP; p < s; ++p) vid += popcount((uint)codes[p]);
+        id[e] = vid + (axis == 0 ? 0u : axis == 1 ? (code & 1) : (code & 1) + (code >> 1 & 1));
     }
     indices[3 * t + 0] = id[0];
     indices[3 * t + 1] = inside_below ? id[2] : id[1];

@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cfloat>
 #include <cstring>
 #include <chrono>
@@ -155,7 +156,7 @@ void Engine::prepare(DeviceJob& job) {
     job.stats.name = info.name;
     job.convert = volume_.type == ScalarType::F64 && !info.fp64;
     job.device_type = job.convert ? ScalarType::F32 : volume_.type;
-    job.options = std::string("-cl-std=CL1.2 -DVOXEL_T=") + cl_type_name(job.device_type);
+    job.options = "-cl-std=CL1.2 -DGROUP=" + std::to_string(kGroup) + " -DVOXEL_T=" + cl_type_name(job.device_type);
     if (is_integer(job.device_type)) job.options += " -DVOXEL_INTEGER";
     if (info.fp64) job.options += " -DUSE_FP64";
     dispatch_scalar(job.device_type, [&](auto tag) {
@@ -181,7 +182,7 @@ void Engine::prepare(DeviceJob& job) {
 std::size_t Engine::fixed_bytes(const DeviceJob& job, std::size_t planes) const {
     const std::size_t data = std::min(planes + 3, nz_) * plane_ * scalar_size(job.device_type);
     const std::size_t meta = std::min(planes + 1, nz_) * plane_;
-    return data + meta * (1 + 1 + 4 + 4) + meta / 256 + 64;
+    return data + meta * 2 + (meta / kGroup + 1) * 8 + meta / 256 + 64;
 }
 
 // Whether a chunk of `planes` planes can fit the device before its outputs are known: the
@@ -249,6 +250,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
     const std::size_t count = (meta_end - range.begin) * plane_;
     const std::size_t owned = planes * plane_;
     const std::size_t data_samples = (zhi - zlo) * plane_;
+    const std::size_t groups = (count + kGroup - 1) / kGroup;
     const std::size_t sample_bytes = scalar_size(job.device_type);
     const DeviceInfo& info = d.info;
     if (count > kMaxChunkSamples || data_samples * sample_bytes > info.max_allocation ||
@@ -282,8 +284,8 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
                                    &log.add(Pass::Transfer));
         cl::Buffer& codes = d.buffer(kCodes, count);
         cl::Buffer& cases = d.buffer(kCases, count);
-        cl::Buffer& vbase = d.buffer(kVBase, count * 4);
-        cl::Buffer& tbase = d.buffer(kTBase, count * 4);
+        cl::Buffer& vbase = d.buffer(kVBase, groups * 4);  // per group: counts, then their prefix sums
+        cl::Buffer& tbase = d.buffer(kTBase, groups * 4);
         cl::Buffer& nan = d.buffer(kNan, sizeof(cl_int));
         const cl_int no_nan = INT_MAX;
         d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
@@ -299,28 +301,35 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         classify.setArg(6, u(cell_end));
         classify.setArg(7, u(zlo));
         classify.setArg(8, u(count));
-        classify.setArg(9, d.corner_offset);
-        classify.setArg(10, d.case_table);
-        classify.setArg(11, codes);
-        classify.setArg(12, cases);
-        classify.setArg(13, vbase);
-        classify.setArg(14, tbase);
-        classify.setArg(15, nan);
-        d.queue.enqueueNDRangeKernel(classify, cl::NullRange, cl::NDRange(round_up(count, 64)), cl::NullRange,
+        classify.setArg(9, u(groups));
+        classify.setArg(10, d.pair_to_case);
+        classify.setArg(11, d.case_table);
+        classify.setArg(12, codes);
+        classify.setArg(13, cases);
+        classify.setArg(14, vbase);
+        classify.setArg(15, tbase);
+        classify.setArg(16, nan);
+        d.queue.enqueueNDRangeKernel(classify, cl::NullRange, cl::NDRange(round_up(groups, 64)), cl::NullRange,
                                      nullptr, &log.add(Pass::Classify));
 
-        const std::uint64_t all_vertices = scan(d, vbase, count, log);
-        const std::uint64_t triangles = scan(d, tbase, count, log);
+        const std::uint64_t all_vertices = scan(d, vbase, groups, log);
+        const std::uint64_t triangles = scan(d, tbase, groups, log);
         cl_int nan_plane = INT_MAX;
         d.queue.enqueueReadBuffer(nan, CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr, &log.add(Pass::Transfer));
         if (nan_plane != INT_MAX)
             throw Error("volume has NaN samples (first seen in z-plane " + std::to_string(nan_plane) +
                         "); replace them before meshing");
         std::uint64_t vertices = all_vertices;
-        if (owned < count) {
+        if (owned < count) {  // the first vertex id of plane `end`: its group's base + the samples before
+            const std::size_t g = owned / kGroup;
             cl_uint v = 0;
-            d.queue.enqueueReadBuffer(vbase, CL_TRUE, owned * 4, sizeof(v), &v, nullptr, &log.add(Pass::Transfer));
+            d.queue.enqueueReadBuffer(vbase, CL_TRUE, g * 4, sizeof(v), &v, nullptr, &log.add(Pass::Transfer));
+            unsigned char before[kGroup] = {};
+            if (owned > g * kGroup)
+                d.queue.enqueueReadBuffer(codes, CL_TRUE, g * kGroup, owned - g * kGroup, before, nullptr,
+                                          &log.add(Pass::Transfer));
             vertices = v;
+            for (std::size_t i = 0; i < owned - g * kGroup; ++i) vertices += std::popcount(unsigned(before[i]));
         }
         if (all_vertices > std::numeric_limits<std::uint32_t>::max() ||
             triangles > std::numeric_limits<std::uint32_t>::max())
@@ -345,10 +354,11 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             compact.setArg(3, tbase);
             compact.setArg(4, u(count));
             compact.setArg(5, u(owned));
-            compact.setArg(6, d.case_table);
-            compact.setArg(7, vowner);
-            compact.setArg(8, towner);
-            d.queue.enqueueNDRangeKernel(compact, cl::NullRange, cl::NDRange(round_up(count, 64)), cl::NullRange,
+            compact.setArg(6, u(groups));
+            compact.setArg(7, d.case_table);
+            compact.setArg(8, vowner);
+            compact.setArg(9, towner);
+            d.queue.enqueueNDRangeKernel(compact, cl::NullRange, cl::NDRange(round_up(groups, 64)), cl::NullRange,
                                          nullptr, &log.add(Pass::Generate));
             if (vertices > 0) {
                 cl::Buffer& positions = d.buffer(kPositions, vertices * 12);

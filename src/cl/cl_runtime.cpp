@@ -9,7 +9,7 @@ namespace voxmesh::detail::cl_engine {
 
 static_assert(sizeof(CaseEntry) == 16, "kernels read the case table as 16 bytes per case");
 static_assert(sizeof(CellEdge) == 4, "kernels read cell edges as 4 bytes each");
-static_assert(sizeof(kCornerOffset) == 24, "kernels read corner offsets as 3 bytes each");
+static_assert(sizeof(kColumnPairToCase) == 256, "kernels read the column-pair table as 256 bytes");
 
 namespace {
 
@@ -112,7 +112,7 @@ Device::Device(const cl::Device& dev, DeviceInfo description)
     : info(std::move(description)), device(dev), context(dev), queue(context, dev, CL_QUEUE_PROFILING_ENABLE) {
     case_table = constant_buffer(context, kCaseTable, sizeof(kCaseTable));
     cell_edge = constant_buffer(context, kCellEdge, sizeof(kCellEdge));
-    corner_offset = constant_buffer(context, kCornerOffset, sizeof(kCornerOffset));
+    pair_to_case = constant_buffer(context, kColumnPairToCase.data(), kColumnPairToCase.size());
 }
 
 cl::Kernel& Device::kernel(const unsigned char* source, const std::string& options, const char* name) {

@@ -22,6 +22,7 @@ extern const unsigned char kKernel_scan[];
 namespace cl_engine {
 
 constexpr unsigned kScanItems = 8;  // elements per work-item in scan.cl (passed as -DSCAN_ITEMS)
+constexpr unsigned kGroup = 8;      // samples per classify work-item in marching_cubes.cl (-DGROUP)
 
 enum class Pass { Classify, Scan, Generate, Transfer };
 
@@ -43,7 +44,7 @@ public:
     cl::Device device;
     cl::Context context;
     cl::CommandQueue queue;
-    cl::Buffer case_table, cell_edge, corner_offset;  // from src/core/case_tables.cpp
+    cl::Buffer case_table, cell_edge, pair_to_case;  // from src/core/case_tables.cpp
     std::mutex mutex;  // whoever uses queue, kernels or buffers holds it
 
     // Kernels of marching_cubes.cl built with `options`, and of scan.cl. Build failures
