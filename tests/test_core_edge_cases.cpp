@@ -207,3 +207,80 @@ TEST_CASE("an owning Volume meshes like the view of the same samples", "[core]")
     CHECK(a.positions == b.positions);
     CHECK(a.normals == b.normals);
 }
+
+TEST_CASE("NaN samples are an Error at any iso, even one beyond the float range", "[core]") {
+    // The same volume must not be rejected at iso 0.5 and silently meshed (empty) at 1e39.
+    std::vector<float> f(27, 0.0f);
+    f[5] = std::numeric_limits<float>::quiet_NaN();
+    for (double iso : {0.5, 1e39, -1e39}) {
+        INFO("iso " << iso);
+        CHECK_THROWS_WITH(voxmesh::extract(vmtest::view_of(f, {3, 3, 3}), cpu_options(iso)), Contains("NaN"));
+    }
+}
+
+TEST_CASE("infinite samples give an Error or finite positions, never NaN", "[core]") {
+    for (float inf : {std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity()}) {
+        std::vector<float> f(27, 0.0f);
+        f[13] = inf;  // the centre sample: it owns crossed edges toward +x, +y, +z
+        INFO("centre sample " << inf);
+        const double iso = inf > 0 ? 0.5 : -0.5;
+        bool threw = false;
+        voxmesh::Mesh mesh;
+        try {
+            mesh = voxmesh::extract(vmtest::view_of(f, {3, 3, 3}), cpu_options(iso));
+        } catch (const voxmesh::Error&) {
+            threw = true;
+        }
+        if (!threw) {
+            REQUIRE(mesh.vertex_count() == 6);
+            CHECK(vmtest::structural_problem(mesh).empty());  // no NaN/inf position or normal
+        }
+    }
+}
+
+TEST_CASE("a vanishing gradient still gives a unit normal pointing outward along the edge", "[core]") {
+    // Along x: -1, 0, -1 (constant in y and z), iso 0. The middle sample is inside and the
+    // central difference there is 0, so both vertices (t = 1 and t = 0) sit on it with a
+    // zero interpolated gradient.
+    const Dims dims{3, 2, 2};
+    std::vector<double> v(12);
+    for (std::size_t i = 0; i < v.size(); ++i) v[i] = (i % 3 == 1) ? 0.0 : -1.0;
+    for (bool inside_below : {false, true}) {
+        INFO((inside_below ? "inside_below" : "inside above"));
+        voxmesh::Options o = cpu_options(0.0);
+        o.inside_below = inside_below;
+        const voxmesh::Mesh mesh = voxmesh::extract(vmtest::view_of(v, dims), o);
+        REQUIRE(vmtest::structural_problem(mesh).empty());
+        REQUIRE(mesh.vertex_count() == 8);  // 4 rows (y, z) x 2 crossed x-edges
+        CHECK(vmtest::max_normal_length_error(mesh) < 1e-6);
+        const float sign = inside_below ? -1.f : 1.f;
+        for (std::size_t k = 0; k < mesh.vertex_count(); ++k) {
+            // Canonical order: per row, the edge owned by x = 0 (outward is -x) then x = 1 (+x).
+            INFO("vertex " << k);
+            CHECK(mesh.normals[3 * k] == sign * (k % 2 == 0 ? -1.f : 1.f));
+            CHECK(mesh.positions[3 * k] == 1.0f);
+        }
+    }
+}
+
+TEST_CASE("an invalid scalar type is an Error", "[core]") {
+    const std::vector<float> data(8, 0.0f);
+    voxmesh::VolumeView v = vmtest::view_of(data, {2, 2, 2});
+    v.type = static_cast<voxmesh::ScalarType>(99);
+    CHECK_THROWS_AS(voxmesh::extract(v, cpu_options(0.5)), voxmesh::Error);
+}
+
+TEST_CASE("Backend::Auto gives the canonical mesh", "[core]") {
+    const Dims dims{23, 19, 21};
+    const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.5));
+    const voxmesh::Mesh cpu = voxmesh::extract(vmtest::view_of(values, dims), cpu_options(0.1, 2));
+    voxmesh::Options o = cpu_options(0.1, 2);
+    o.backend = voxmesh::Backend::Auto;
+    std::vector<std::string> log;
+    o.log = [&log](const std::string& s) { log.push_back(s); };
+    voxmesh::Stats stats;
+    const voxmesh::Mesh a = voxmesh::extract(vmtest::view_of(values, dims), o, stats);
+    CHECK(a.indices == cpu.indices);
+    CHECK(a.vertex_count() == cpu.vertex_count());
+    CHECK(stats.warnings == log);  // warnings are both returned and logged
+}

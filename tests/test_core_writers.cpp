@@ -322,6 +322,27 @@ TEST_CASE("write_mesh: a missing directory throws and leaves no file", "[core]")
     }
     CHECK_FALSE(fs::exists(dir.file("missing")));
     CHECK(dir.entries().empty());
+    // A parent that is a file, not a directory.
+    { std::ofstream(dir.file("plain")) << "x"; }
+    CHECK_THROWS_AS(voxmesh::write_mesh(dir.file("plain/out.stl"), mesh), voxmesh::Error);
+    CHECK(dir.entries() == std::vector<std::string>{"plain"});
+}
+
+TEST_CASE("write_mesh: a bare file name writes into the current directory", "[core]") {
+    vmtest::TempDir dir;
+    const voxmesh::Mesh mesh = test_mesh(false);
+    const fs::path old = fs::current_path();
+    fs::current_path(dir.path());
+    std::string error;
+    try {
+        voxmesh::write_mesh("bare.obj", mesh);
+    } catch (const std::exception& e) {
+        error = e.what();
+    }
+    fs::current_path(old);
+    CHECK(error.empty());
+    CHECK(dir.entries() == std::vector<std::string>{"bare.obj"});
+    CHECK(parse_obj(read_all(dir.file("bare.obj"))).indices == mesh.indices);
 }
 
 TEST_CASE("write_mesh: an unwritable target throws and leaves nothing behind", "[core]") {
