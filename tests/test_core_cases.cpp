@@ -140,7 +140,8 @@ TEST_CASE("all 256 cube cases match the oracle", "[core]") {
 }
 
 TEST_CASE("random small volumes of odd dimensions match the oracle", "[core]") {
-    const std::vector<Dims> shapes = {{3, 3, 3}, {5, 3, 7}, {7, 9, 5}, {11, 7, 9}, {13, 15, 11}, {3, 17, 5}};
+    const std::vector<Dims> shapes = {{3, 3, 3}, {5, 3, 7}, {7, 9, 5}, {11, 7, 9}, {13, 15, 11}, {3, 17, 5},
+                                     {2, 9, 7}, {9, 2, 5}, {7, 5, 2}, {2, 2, 9}};
     // Samples are integers in [0, 9]: iso 4 and 9 equal samples exactly, 0 makes every
     // sample inside, 9.5 none.
     const double isos[] = {4.5, 4.0, 9.0, 0.0, 2.25, 9.5, -1.0};
@@ -276,4 +277,34 @@ TEST_CASE("the test harness itself notices broken meshes", "[core]") {
         for (std::uint32_t i : good.indices) twice.indices.push_back(i + n);
         CHECK(vmtest::topology(twice).euler == 4);
     }
+}
+
+TEST_CASE("extreme integer values match the oracle", "[core]") {
+    const Dims dims{7, 5, 9};
+    const std::vector<double> pattern = vmtest::random_doubles(dims, 31, 0, 1);  // 0 or 1 per sample
+    auto check = [&](auto tag, double lo, double hi, double iso) {
+        using T = decltype(tag);
+        std::vector<T> typed(pattern.size());
+        std::vector<double> as_double(pattern.size());
+        for (std::size_t i = 0; i < pattern.size(); ++i) {
+            typed[i] = static_cast<T>(pattern[i] > 0 ? hi : lo);
+            as_double[i] = static_cast<double>(typed[i]);
+        }
+        vmtest::RefOptions ro;
+        ro.iso = iso;
+        const vmtest::RefMesh ref = vmtest::reference_mc(as_double, dims, ro);
+        REQUIRE(ref.triangle_count() > 0);
+        INFO("type " << voxmesh::scalar_name(vmtest::scalar_type_of<T>()) << " iso " << iso);
+        require_matches(voxmesh::extract(vmtest::view_of(typed, dims), cpu_options(iso, 2)), ref);
+    };
+    check(std::uint8_t{}, 0, 255, 254.5);
+    check(std::int8_t{}, -128, 127, -127.5);
+    check(std::uint16_t{}, 0, 65535, 0.5);
+    check(std::int16_t{}, -32768, 32767, 0.0);
+    check(std::uint32_t{}, 0, 4294967295.0, 2147483647.5);
+    check(std::uint32_t{}, 0, 4294967295.0, 4294967295.0);  // iso equal to the maximum
+    check(std::int32_t{}, -2147483648.0, 2147483647.0, -2147483647.5);
+    check(std::int32_t{}, -2147483648.0, 2147483647.0, 2147483647.0);
+    check(float{}, -3.0e38, 3.0e38, 1e30);
+    check(double{}, -1e300, 1e300, -5e299);
 }

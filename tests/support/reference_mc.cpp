@@ -131,9 +131,8 @@ namespace vmtest {
 namespace {
 
 // Matches each engine vertex to the oracle vertex nearest in position (within a tolerance)
-// and returns, per engine vertex, a cluster id: the smallest oracle index at exactly that
-// oracle position (oracle vertices can coincide when samples equal iso). UINT64_MAX when
-// nothing is near.
+// and returns, per engine vertex, a cluster id: the smallest oracle index at that oracle
+// position rounded to float. UINT64_MAX when nothing is near.
 std::vector<std::uint64_t> match_by_position(const voxmesh::Mesh& mesh, const RefMesh& ref,
                                              std::vector<std::uint64_t>& ref_cluster) {
     using Key = std::array<long long, 3>;
@@ -143,12 +142,16 @@ std::vector<std::uint64_t> match_by_position(const voxmesh::Mesh& mesh, const Re
                    static_cast<long long>(std::floor(p[2] / cell))};
     };
     std::map<Key, std::vector<std::uint32_t>> grid;
-    std::map<std::array<double, 3>, std::uint64_t> exact;
+    // Vertices that coincide once stored as float (samples equal to iso, or t within a
+    // float ulp of 0 or 1) form one cluster: the engine stores floats, so they are the same
+    // point there.
+    std::map<std::array<float, 3>, std::uint64_t> exact;
     ref_cluster.resize(ref.vertex_count());
     for (std::uint32_t i = 0; i < ref.vertex_count(); ++i) {
         const double* p = &ref.positions[3 * static_cast<std::size_t>(i)];
         grid[bucket(p)].push_back(i);
-        ref_cluster[i] = exact.emplace(std::array<double, 3>{p[0], p[1], p[2]}, i).first->second;
+        const std::array<float, 3> key{static_cast<float>(p[0]), static_cast<float>(p[1]), static_cast<float>(p[2])};
+        ref_cluster[i] = exact.emplace(key, i).first->second;
     }
     std::vector<std::uint64_t> out(mesh.vertex_count(), std::numeric_limits<std::uint64_t>::max());
     for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
