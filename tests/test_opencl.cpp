@@ -178,6 +178,30 @@ TEST_CASE("OpenCL matches the CPU engine for every scalar type", "[opencl]") {
     CHECK(empty.positions.empty());
 }
 
+TEST_CASE("OpenCL without fp64 (float interpolation, f64 converted per chunk) matches the CPU engine", "[opencl]") {
+    if (!have_device()) return;
+    struct Restore {
+        ~Restore() { detail::opencl_pretend_no_fp64(false); }
+    } restore;
+    detail::opencl_pretend_no_fp64(true);
+    Grid g{{27, 23, 25}, {0.5, 1, 1.5}, {-10, 5, 2}};
+    const std::vector<float> f = gyroid(g);
+    Options o;
+    o.iso = 0.2;
+    compare(view_of(f.data(), ScalarType::F32, g), o);
+    const auto u32 = to_type<std::uint32_t>(f, 1.4e9, 2.1e9);
+    o.iso = 2.3e9 + 0.5;
+    compare(view_of(u32.data(), ScalarType::U32, g), o);
+    const auto i16 = to_type<std::int16_t>(f, 20000, 0);
+    o.iso = -1234.5;
+    compare(view_of(i16.data(), ScalarType::I16, g), o);
+    // f64 samples a hair either side of iso: the conversion to float must keep every inside bit.
+    std::vector<double> f64(f.size());
+    for (std::size_t i = 0; i < f.size(); ++i) f64[i] = 0.25 + (f[i] > 0.2f ? 1e-12 : -1e-12) * (1 + f[i]) + 1e-3 * f[i];
+    o.iso = 0.25;
+    compare(view_of(f64.data(), ScalarType::F64, g), o);
+}
+
 TEST_CASE("OpenCL matches the CPU engine on random odd-sized volumes", "[opencl]") {
     if (!have_device()) return;
     std::mt19937 rng(12345);

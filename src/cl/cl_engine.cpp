@@ -40,6 +40,8 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // Buffer slots of a device.
 enum : unsigned { kData, kCodes, kCases, kVBase, kTBase, kVOwner, kTOwner, kPositions, kNormals, kIndices, kNan };
 
+std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
+
 constexpr std::size_t kMaxChunkSamples = std::size_t(1) << 29;  // owner ids pack l << 3 in a uint
 
 // Thrown inside a worker when a chunk does not fit the device: cut it smaller.
@@ -75,6 +77,7 @@ std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m;
 struct DeviceJob {
     std::shared_ptr<Device> device;
     ScalarType device_type = ScalarType::F32;  // the type the kernels read
+    bool fp64 = false;                         // kernels interpolate in double
     bool convert = false;                      // f64 without cl_khr_fp64: converted to f32 per chunk
     bool cpu_only = false;                     // converted, but iso is out of float range
     std::string options;
@@ -154,11 +157,12 @@ std::vector<std::shared_ptr<Device>> Engine::select_devices() const {
 void Engine::prepare(DeviceJob& job) {
     const DeviceInfo& info = job.device->info;
     job.stats.name = info.name;
-    job.convert = volume_.type == ScalarType::F64 && !info.fp64;
+    job.fp64 = info.fp64 && !g_pretend_no_fp64;
+    job.convert = volume_.type == ScalarType::F64 && !job.fp64;
     job.device_type = job.convert ? ScalarType::F32 : volume_.type;
     job.options = "-cl-std=CL1.2 -DGROUP=" + std::to_string(kGroup) + " -DVOXEL_T=" + cl_type_name(job.device_type);
     if (is_integer(job.device_type)) job.options += " -DVOXEL_INTEGER";
-    if (info.fp64) job.options += " -DUSE_FP64";
+    if (job.fp64) job.options += " -DUSE_FP64";
     dispatch_scalar(job.device_type, [&](auto tag) {
         using T = decltype(tag);
         const Threshold<T> t = make_threshold<T>(options_.iso);
@@ -371,7 +375,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
                     is_integer(job.device_type) ? static_cast<cl_long>(fl) : 0;  // in range: the threshold is mixed
                 const cl_float iso_frac = is_integer(job.device_type) ? static_cast<float>(options_.iso - fl) : 0.f;
                 auto real = [&](unsigned index, double value) {
-                    if (info.fp64) {
+                    if (job.fp64) {
                         k.setArg(index, value);
                     } else {
                         k.setArg(index, static_cast<cl_float>(value));
@@ -639,5 +643,7 @@ std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t
 }
 
 void opencl_split_devices(bool split) { cl_engine::split_devices(split); }
+
+void opencl_pretend_no_fp64(bool pretend) { g_pretend_no_fp64 = pretend; }
 
 }  // namespace voxmesh::detail

@@ -26,6 +26,9 @@ std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t
 // Presents each partitionable OpenCL device as (at most two) sub-devices of one compute
 // unit each, or undoes that; list_devices() indices change. Not for use while meshing.
 void opencl_split_devices(bool split);
+// Treats every device as lacking cl_khr_fp64 (float interpolation, f64 volumes converted per
+// chunk), so that the code path of most GPUs runs on PoCL too.
+void opencl_pretend_no_fp64(bool pretend);
 #endif
 
 }  // namespace voxmesh::detail
