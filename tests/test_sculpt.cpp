@@ -433,3 +433,34 @@ TEST_CASE("sculpt: block meshes cost at most the full mesh + 10 %", "[sculpt]") 
     s.update();
     check();
 }
+
+TEST_CASE("sculpt: brush values (falloff, smoothing reads old values only)", "[sculpt]") {
+    const Dims d{12, 12, 12};
+    SculptOptions o;
+    o.block_size = 4;
+    o.iso = 0.5;
+    Sculpt s = Sculpt::from_function(d, ScalarType::F32, [](double, double, double) { return 0.0; }, o);
+    const float* v = static_cast<const float*>(s.view().data);
+    auto at = [&](std::size_t x, std::size_t y, std::size_t z) { return double(v[x + 12 * (y + 12 * z)]); };
+    s.add({5, 5, 5}, 2, 3);
+    CHECK(at(5, 5, 5) == Approx(3));
+    CHECK(at(6, 5, 5) == Approx(3 * std::pow(1 - 0.25, 3)));
+    CHECK(at(7, 5, 5) == 0);  // on the radius: falloff 0
+    s.subtract({5, 5, 5}, 2, 3);
+    CHECK(at(5, 5, 5) == Approx(0).margin(1e-6));
+
+    s.set_region({5, 5, 5}, {5, 5, 5}, 12);
+    s.smooth({5, 5, 5}, 3, 1);
+    const double w1 = std::pow(1 - 1.0 / 9, 3);
+    CHECK(at(5, 5, 5) == Approx(0).margin(1e-6));  // all six neighbours were 0
+    for (const auto& p : {std::array<std::size_t, 3>{4, 5, 5}, {6, 5, 5}, {5, 4, 5}, {5, 6, 5}, {5, 5, 4}, {5, 5, 6}})
+        CHECK(at(p[0], p[1], p[2]) == Approx(w1 * 2));  // one neighbour (the old spike) was 12
+    CHECK(at(5, 5, 8) == 0);
+
+    // Smoothing at the volume's corner: neighbours beyond the border are the sample itself.
+    s.set_region({0, 0, 0}, {0, 0, 0}, 6);
+    s.smooth({0, 0, 0}, 2, 1);
+    CHECK(at(0, 0, 0) == Approx(6 + (3 * 6.0 / 6 - 6)));  // mean of (6, 6, 6, 0, 0, 0)
+    s.update();
+    require_equals_extract(s);
+}

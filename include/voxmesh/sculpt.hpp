@@ -17,6 +17,8 @@
 // block whose range contains a sample whose value changed (an edit at a block corner marks
 // up to 8 blocks). Edits are clipped to the volume; a brush entirely outside does nothing.
 //
+// Threads: a Sculpt is used from one thread at a time (update() runs its own workers).
+//
 // Coordinates: brushes work in sample (index) coordinates unless Units::World is given,
 // where a point p maps to (p - origin) / spacing and a radius r to r / spacing per axis.
 #pragma once

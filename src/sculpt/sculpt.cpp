@@ -141,7 +141,7 @@ struct Sculpt::Impl {
     std::vector<std::uint32_t> dirty_list;
     std::vector<std::uint8_t> was_nonempty;  // per dirty-list entry, during update()
     std::vector<Scratch> scratch;            // per worker
-    std::vector<double> edit_scratch;        // smoothing snapshot
+    std::vector<double> plane_prev, plane_cur;  // smoothing: old values of planes z-1 and z
 
     std::size_t block_index(std::size_t bx, std::size_t by, std::size_t bz) const { return bx + nb[0] * (by + nb[1] * bz); }
     std::array<std::size_t, 3> block_coord(std::size_t index) const {
@@ -218,31 +218,42 @@ struct Sculpt::Impl {
         };
         const double inv[3] = {1 / r[0], 1 / r[1], 1 / r[2]};
 
-        // Smoothing reads a snapshot of the box grown by one sample (clipped), so the result
-        // does not depend on the order samples are visited in.
-        std::array<Span, 3> snap;
-        std::array<std::size_t, 3> snap_n{};
+        // Smoothing reads the old values only (Jacobi), so the result does not depend on the
+        // visiting order. Planes are done in increasing z: plane z+1 is still untouched in the
+        // volume, and the old planes z-1 and z are kept in two plane buffers (the box's x-y
+        // extent grown by one sample), so memory stays O(plane) for any brush size.
+        Span px, py;
+        std::size_t pnx = 0;
         if (op == BrushOp::Smooth) {
             strength = std::clamp(strength, 0.0, 1.0);
-            for (int d = 0; d < 3; ++d) {
-                snap[d].lo = box[d].lo > 0 ? box[d].lo - 1 : 0;
-                snap[d].hi = std::min(box[d].hi + 1, n[d] - 1);
-                snap_n[d] = snap[d].hi - snap[d].lo + 1;
-            }
-            edit_scratch.resize(snap_n[0] * snap_n[1] * snap_n[2]);
-            std::size_t i = 0;
-            for (std::size_t z = snap[2].lo; z <= snap[2].hi; ++z)
-                for (std::size_t y = snap[1].lo; y <= snap[1].hi; ++y)
-                    for (std::size_t x = snap[0].lo; x <= snap[0].hi; ++x)
-                        edit_scratch[i++] = static_cast<double>(data[x + y * sy + z * sz]);
+            px = {box[0].lo > 0 ? box[0].lo - 1 : 0, std::min(box[0].hi + 1, n[0] - 1)};
+            py = {box[1].lo > 0 ? box[1].lo - 1 : 0, std::min(box[1].hi + 1, n[1] - 1)};
+            pnx = px.hi - px.lo + 1;
+            const std::size_t size = pnx * (py.hi - py.lo + 1);
+            plane_prev.resize(size);
+            plane_cur.resize(size);
         }
-        auto snap_at = [&](std::size_t x, std::size_t y, std::size_t z) {
-            return edit_scratch[(x - snap[0].lo) + snap_n[0] * ((y - snap[1].lo) + snap_n[1] * (z - snap[2].lo))];
+        auto load_plane = [&](std::vector<double>& plane, std::size_t z) {
+            std::size_t i = 0;
+            for (std::size_t y = py.lo; y <= py.hi; ++y)
+                for (std::size_t x = px.lo; x <= px.hi; ++x) plane[i++] = static_cast<double>(data[x + y * sy + z * sz]);
+        };
+        auto old_at = [&](const std::vector<double>& plane, std::size_t x, std::size_t y) {
+            return plane[(x - px.lo) + pnx * (y - py.lo)];
         };
 
         const double amount = op == BrushOp::Subtract ? -strength * options.strength_scale
                                                       : strength * options.strength_scale;
         for (std::size_t z = box[2].lo; z <= box[2].hi; ++z) {
+            const bool has_below = z > 0, has_above = z + 1 < n[2];
+            if (op == BrushOp::Smooth) {
+                if (z == box[2].lo) {
+                    if (has_below) load_plane(plane_prev, z - 1);
+                } else {
+                    std::swap(plane_prev, plane_cur);  // old plane z-1
+                }
+                load_plane(plane_cur, z);
+            }
             const double dz = (static_cast<double>(z) - c[2]) * inv[2];
             for (std::size_t y = box[1].lo; y <= box[1].hi; ++y) {
                 const double dy = (static_cast<double>(y) - c[1]) * inv[1];
@@ -257,11 +268,13 @@ struct Sculpt::Impl {
                     const double old = static_cast<double>(v);
                     double next;
                     if (op == BrushOp::Smooth) {
+                        // Neighbours beyond the volume's border are the sample itself.
                         const std::size_t xm = x > 0 ? x - 1 : x, xp = x + 1 < n[0] ? x + 1 : x;
                         const std::size_t ym = y > 0 ? y - 1 : y, yp = y + 1 < n[1] ? y + 1 : y;
-                        const std::size_t zm = z > 0 ? z - 1 : z, zp = z + 1 < n[2] ? z + 1 : z;
-                        const double mean = (snap_at(xm, y, z) + snap_at(xp, y, z) + snap_at(x, ym, z) +
-                                             snap_at(x, yp, z) + snap_at(x, y, zm) + snap_at(x, y, zp)) /
+                        const double below = has_below ? old_at(plane_prev, x, y) : old;
+                        const double above = has_above ? static_cast<double>(data[x + y * sy + (z + 1) * sz]) : old;
+                        const double mean = (old_at(plane_cur, xm, y) + old_at(plane_cur, xp, y) +
+                                             old_at(plane_cur, x, ym) + old_at(plane_cur, x, yp) + below + above) /
                                             6;
                         next = old + strength * w * (mean - old);
                     } else {
@@ -438,7 +451,8 @@ struct Sculpt::Impl {
                     const auto bc = block_coord(b);
                     const std::uint32_t vertices = m.classify(box, s);
                     if (vertices * std::size_t{3} != blocks[b].positions.size())
-                        throw Error("sculpt: internal error: block mesh out of date with the volume");
+                        throw Error("sculpt: a block mesh is out of date with the volume (after writing through data(), "
+                                    "call invalidate_all())");
                     // Owned samples: local [0, samples-1) per axis, plus the last one in the last block.
                     std::array<std::size_t, 3> owned{};
                     for (int d = 0; d < 3; ++d)
@@ -467,7 +481,8 @@ struct Sculpt::Impl {
                     s.tris.clear();
                     m.triangles(box, s, a.tri_row_count.data());
                     if (s.tris.size() != blocks[b].indices.size())
-                        throw Error("sculpt: internal error: block triangles out of date with the volume");
+                        throw Error("sculpt: a block mesh is out of date with the volume (after writing through data(), "
+                                    "call invalidate_all())");
                     a.owned_gid.resize(a.owned_keys.size());
                 }
             });
@@ -722,7 +737,7 @@ SculptMemory Sculpt::memory() const {
     m.block_table = im.blocks.capacity() * sizeof(BlockStore) + im.dirty_flag.capacity() +
                     4 * im.dirty_list.capacity() + im.was_nonempty.capacity();
     for (const Scratch& s : im.scratch) m.scratch += s.capacity_bytes();
-    m.scratch += 8 * im.edit_scratch.capacity();
+    m.scratch += 8 * (im.plane_prev.capacity() + im.plane_cur.capacity());
     m.volume = im.volume.byte_size();
     return m;
 }
