@@ -357,6 +357,20 @@ TEST_CASE("OpenCL errors are clear", "[opencl]") {
     }
 }
 
+TEST_CASE("An OpenCL build failure names the device and carries the build log", "[opencl]") {
+    if (!have_device()) return;
+    const std::string name = list_devices()[0].name;
+    CHECK_NOTHROW(detail::opencl_build_program("__kernel void ok(__global int* a) { a[0] = 1; }", ""));
+    try {
+        detail::opencl_build_program("__kernel void broken(__global int* a) { a[0] = undeclared_thing; }", "");
+        FAIL("a broken program built");
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        CHECK_THAT(what, Catch::Contains(name));
+        CHECK_THAT(what, Catch::Contains("undeclared_thing"));
+    }
+}
+
 TEST_CASE("list_devices describes the OpenCL devices", "[opencl]") {
     if (!have_device()) return;
     for (const DeviceInfo& d : list_devices()) {

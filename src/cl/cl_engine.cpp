@@ -644,6 +644,14 @@ std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t
 
 void opencl_split_devices(bool split) { cl_engine::split_devices(split); }
 
+void opencl_build_program(const std::string& source, const std::string& options, int device) {
+    const auto all = cl_engine::devices();
+    if (device < 0 || static_cast<std::size_t>(device) >= all.size())
+        throw Error("OpenCL device index " + std::to_string(device) + " does not exist");
+    std::lock_guard<std::mutex> lock(all[static_cast<std::size_t>(device)]->mutex);
+    all[static_cast<std::size_t>(device)]->build(source, options);
+}
+
 void opencl_pretend_no_fp64(bool pretend) { g_pretend_no_fp64 = pretend; }
 
 }  // namespace voxmesh::detail

@@ -115,25 +115,28 @@ Device::Device(const cl::Device& dev, DeviceInfo description)
     pair_to_case = constant_buffer(context, kColumnPairToCase.data(), kColumnPairToCase.size());
 }
 
+cl::Program Device::build(const std::string& source, const std::string& options) {
+    cl::Program program(context, source);
+    try {
+        program.build(std::vector<cl::Device>{device}, options.c_str());
+    } catch (const cl::Error& e) {
+        std::string log;
+        try {
+            log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device);
+        } catch (const cl::Error&) {
+            log = "(no build log)";
+        }
+        throw Error("OpenCL program build failed on device '" + info.name + "' (options \"" + options + "\", " +
+                    error_name(e.err()) + "); build log:\n" + log);
+    }
+    return program;
+}
+
 cl::Kernel& Device::kernel(const unsigned char* source, const std::string& options, const char* name) {
     const std::string key = (source == kKernel_scan ? "scan " : "mc ") + options;
     auto it = programs_.find(key);
-    if (it == programs_.end()) {
-        cl::Program program(context, std::string(reinterpret_cast<const char*>(source)));
-        try {
-            program.build(std::vector<cl::Device>{device}, options.c_str());
-        } catch (const cl::Error& e) {
-            std::string log;
-            try {
-                log = program.getBuildInfo<CL_PROGRAM_BUILD_LOG>(device);
-            } catch (const cl::Error&) {
-                log = "(no build log)";
-            }
-            throw Error("OpenCL program build failed on device '" + info.name + "' (options \"" + options +
-                        "\", " + error_name(e.err()) + "); build log:\n" + log);
-        }
-        it = programs_.emplace(key, Program{program, {}}).first;
-    }
+    if (it == programs_.end())
+        it = programs_.emplace(key, Program{build(reinterpret_cast<const char*>(source), options), {}}).first;
     auto& kernels = it->second.kernels;
     auto k = kernels.find(name);
     if (k == kernels.end()) k = kernels.emplace(name, cl::Kernel(it->second.program, name)).first;

@@ -57,6 +57,9 @@ public:
     cl::Buffer& buffer(unsigned id, std::size_t bytes);
     void drop_buffers();
 
+    // Builds `source` with `options`; on failure throws Error naming the device, with the log.
+    cl::Program build(const std::string& source, const std::string& options);
+
 private:
     struct Program {
         cl::Program program;
