@@ -1,5 +1,28 @@
 // Reading and writing volumes and meshes. Every reader checks its header against the file
-// before allocating and throws voxmesh::Error naming the file and the problem.
+// before allocating and throws voxmesh::Error whose message starts with the file's path
+// ('path': problem). Nothing is allocated from an unchecked header field: the sample
+// count is overflow-checked, compared with the file size (or, for gzip, the decompressed
+// stream must be exactly as long as the header says), and refused when larger than the
+// memory available.
+//
+// Samples: uncompressed data in host byte order at a suitably aligned offset is
+// memory-mapped (Volume::storage owns the mapping; MAP_PRIVATE, so writes through
+// Volume::data never reach the file). Data in the other byte order, misaligned, or
+// compressed is copied into a heap block.
+//
+// Geometry: a Volume has spacing and origin but no orientation. NRRD `space directions`
+// give the spacing as each axis vector's length and the rotation is dropped; MetaImage
+// TransformMatrix and NIfTI qform/sform rotations are likewise dropped. Origins are taken
+// as written, in the file's own world frame (NIfTI: RAS+, not converted to LPS).
+//
+// NIfTI scl_slope / scl_inter are NOT applied: the samples keep their stored type and
+// values (so they can be mapped, and an iso value means the same as in other tools that
+// read stored values). VolumeInfo::value_scale / value_offset report them; a physical
+// value is stored * value_scale + value_offset, so the stored iso for a physical one is
+// (physical - value_offset) / value_scale.
+//
+// Dimensions: volumes are 3-D. A 4-D (or higher) NRRD/MetaImage/NIfTI whose extra axes all
+// have size 1 is accepted as 3-D; anything else is an error.
 #pragma once
 
 #include <voxmesh/voxmesh.hpp>
@@ -10,7 +33,8 @@
 
 namespace voxmesh {
 
-// Headerless samples: the caller says what they are.
+// Headerless samples: the caller says what they are. The file must hold exactly
+// offset + nx*ny*nz*scalar_size bytes.
 struct RawLayout {
     std::array<std::size_t, 3> dims{0, 0, 0};
     ScalarType type = ScalarType::U8;
@@ -28,19 +52,31 @@ struct VolumeInfo {
     std::array<std::size_t, 3> dims{0, 0, 0};
     std::array<double, 3> spacing{1, 1, 1};
     std::array<double, 3> origin{0, 0, 0};
-    std::string encoding;     // "raw", "gzip"
-    std::size_t file_bytes = 0;
+    std::string encoding;     // "raw", "gzip" (zlib streams, as in MetaImage, count as "gzip")
+    bool big_endian = false;  // byte order of the stored samples
+    std::size_t file_bytes = 0;  // size of the file named (the header for .nhdr / .mhd)
+    std::string data_file;       // the file holding the samples (== path when attached)
+    // Stored-to-physical value mapping (NIfTI scl_slope/scl_inter); 1 and 0 elsewhere.
+    double value_scale = 1;
+    double value_offset = 0;
 };
 
-// NRRD (.nrrd, .nhdr), MetaImage (.mhd, .mha), NIfTI-1 (.nii, .nii.gz), chosen by extension.
+// NRRD (.nrrd, .nhdr), MetaImage (.mhd, .mha), NIfTI-1 (.nii, .nii.gz), chosen by extension
+// (case-insensitive). A .nii that is gzip-compressed is detected by content.
 Volume read_volume(const std::string& path);
 VolumeInfo read_volume_info(const std::string& path);
+// The same checks as read_raw, without loading the samples.
+VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout);
 
-// NRRD with raw encoding, through a temporary file renamed into place.
+// NRRD with raw encoding in host byte order (spacing and origin written as `space
+// directions` / `space origin` with `space dimension: 3`), through a temporary file renamed
+// into place.
 void write_nrrd(const std::string& path, const VolumeView& volume);
 
-// STL, binary or ASCII (detected by size, not by the "solid" prefix), welded by exact
-// position: positions and indices filled, normals empty.
+// STL, binary or ASCII (binary when 84 + 50*n == file size, whatever the header says),
+// welded by exact float position (-0 and +0 are one position): positions and indices
+// filled, normals empty. Triangles keep the file's order and winding; non-finite
+// coordinates are an error.
 Mesh read_stl(const std::string& path);
 
 }  // namespace voxmesh

@@ -1,0 +1,100 @@
+#include "header_text.hpp"
+
+#include "input_file.hpp"
+
+#include <charconv>
+#include <cmath>
+
+namespace voxmesh::io {
+
+namespace {
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; }
+
+std::string shown(std::string_view token) {
+    // Keep messages readable when the token is binary garbage or huge.
+    std::string out;
+    for (char c : token.substr(0, 40)) out += (static_cast<unsigned char>(c) < 32 || static_cast<unsigned char>(c) > 126) ? '?' : c;
+    if (token.size() > 40) out += "...";
+    return out;
+}
+}  // namespace
+
+std::string_view trim(std::string_view text) {
+    while (!text.empty() && is_space(text.front())) text.remove_prefix(1);
+    while (!text.empty() && is_space(text.back())) text.remove_suffix(1);
+    return text;
+}
+
+std::string lower(std::string_view text) {
+    std::string out(text);
+    for (char& c : out)
+        if (c >= 'A' && c <= 'Z') c = static_cast<char>(c - 'A' + 'a');
+    return out;
+}
+
+std::vector<std::string_view> split_words(std::string_view text) {
+    std::vector<std::string_view> words;
+    std::size_t i = 0;
+    while (i < text.size()) {
+        while (i < text.size() && is_space(text[i])) ++i;
+        const std::size_t start = i;
+        while (i < text.size() && !is_space(text[i])) ++i;
+        if (i > start) words.push_back(text.substr(start, i - start));
+    }
+    return words;
+}
+
+bool next_line(std::string_view text, std::size_t& pos, std::string_view& line) {
+    if (pos >= text.size()) return false;
+    const std::size_t end = text.find('\n', pos);
+    const std::size_t stop = end == std::string_view::npos ? text.size() : end;
+    line = text.substr(pos, stop - pos);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    pos = end == std::string_view::npos ? text.size() : end + 1;
+    return true;
+}
+
+long long parse_integer(const std::string& path, std::string_view field, std::string_view token) {
+    long long value = 0;
+    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+    if (ec != std::errc() || end != token.data() + token.size() || token.empty())
+        fail(path, "field '" + std::string(field) + "': '" + shown(token) + "' is not an integer");
+    return value;
+}
+
+std::size_t parse_size(const std::string& path, std::string_view field, std::string_view token) {
+    std::size_t value = 0;
+    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+    if (ec == std::errc::result_out_of_range)
+        fail(path, "field '" + std::string(field) + "': '" + shown(token) + "' is too large");
+    if (ec != std::errc() || end != token.data() + token.size() || token.empty())
+        fail(path, "field '" + std::string(field) + "': '" + shown(token) + "' is not a non-negative integer");
+    return value;
+}
+
+double parse_double(const std::string& path, std::string_view field, std::string_view token) {
+    if (!token.empty() && token.front() == '+') token.remove_prefix(1);  // from_chars rejects '+'
+    double value = 0;
+    const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+    if (ec != std::errc() || end != token.data() + token.size() || token.empty())
+        fail(path, "field '" + std::string(field) + "': '" + shown(token) + "' is not a number");
+    return value;
+}
+
+std::vector<double> parse_doubles(const std::string& path, std::string_view field, std::string_view value,
+                                  std::size_t expected) {
+    std::vector<double> out;
+    for (std::string_view word : split_words(value)) out.push_back(parse_double(path, field, word));
+    if (expected != 0 && out.size() != expected)
+        fail(path, "field '" + std::string(field) + "' has " + std::to_string(out.size()) + " values, expected " +
+                       std::to_string(expected));
+    return out;
+}
+
+std::vector<std::size_t> parse_sizes(const std::string& path, std::string_view field, std::string_view value) {
+    std::vector<std::size_t> out;
+    for (std::string_view word : split_words(value)) out.push_back(parse_size(path, field, word));
+    return out;
+}
+
+}  // namespace voxmesh::io

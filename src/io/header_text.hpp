@@ -1,0 +1,27 @@
+// Small strict parsers shared by the text headers (NRRD, MetaImage): a number must be the
+// whole token, or it is an error naming the file and the field.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace voxmesh::io {
+
+std::string_view trim(std::string_view text);
+std::string lower(std::string_view text);
+std::vector<std::string_view> split_words(std::string_view text);
+
+// The next line of `text` from `pos` (without "\n" or "\r\n"); false at the end.
+bool next_line(std::string_view text, std::size_t& pos, std::string_view& line);
+
+std::size_t parse_size(const std::string& path, std::string_view field, std::string_view token);
+long long parse_integer(const std::string& path, std::string_view field, std::string_view token);
+double parse_double(const std::string& path, std::string_view field, std::string_view token);
+// Whitespace-separated numbers; the count must be `expected` (when non-zero).
+std::vector<double> parse_doubles(const std::string& path, std::string_view field, std::string_view value,
+                                  std::size_t expected);
+std::vector<std::size_t> parse_sizes(const std::string& path, std::string_view field, std::string_view value);
+
+}  // namespace voxmesh::io

@@ -1,0 +1,108 @@
+#include "input_file.hpp"
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstring>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+namespace voxmesh::io {
+
+void fail(const std::string& path, const std::string& what) { throw Error("'" + path + "': " + what); }
+
+InputFile::InputFile(const std::string& path) : path_(path) {
+    // O_NONBLOCK so that a FIFO given by mistake cannot hang the open.
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK);
+    if (fd_ < 0) {
+        const int err = errno;
+        if (err == ENOENT) fail(path, "file does not exist");
+        fail(path, std::string("cannot open: ") + std::strerror(err));
+    }
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0) {
+        const int err = errno;
+        ::close(fd_);
+        fail(path, std::string("cannot stat: ") + std::strerror(err));
+    }
+    if (!S_ISREG(st.st_mode)) {
+        ::close(fd_);
+        fail(path, S_ISDIR(st.st_mode) ? "is a directory, not a file" : "is not a regular file");
+    }
+    size_ = static_cast<std::size_t>(st.st_size);
+}
+
+InputFile::~InputFile() {
+    if (fd_ >= 0) ::close(fd_);
+}
+
+std::string InputFile::read(std::size_t offset, std::size_t max_bytes) const {
+    if (offset >= size_) return {};
+    std::string out(std::min(max_bytes, size_ - offset), '\0');
+    read_exact(offset, out.data(), out.size());
+    return out;
+}
+
+void InputFile::read_exact(std::size_t offset, void* out, std::size_t bytes) const {
+    auto* dst = static_cast<char*>(out);
+    while (bytes > 0) {
+        const ssize_t got = ::pread(fd_, dst, std::min<std::size_t>(bytes, 1 << 30), static_cast<off_t>(offset));
+        if (got < 0 && errno == EINTR) continue;
+        if (got < 0) fail(path_, std::string("read failed: ") + std::strerror(errno));
+        if (got == 0) fail(path_, "file ended early (was it truncated while being read?)");
+        dst += got;
+        offset += static_cast<std::size_t>(got);
+        bytes -= static_cast<std::size_t>(got);
+    }
+}
+
+std::shared_ptr<unsigned char> InputFile::map() const {
+    if (size_ == 0) fail(path_, "file is empty");
+    // NORESERVE: the private mapping is only copied where someone writes to it.
+    void* base = ::mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_NORESERVE, fd_, 0);
+    if (base == MAP_FAILED) fail(path_, std::string("cannot memory-map: ") + std::strerror(errno));
+    const std::size_t length = size_;
+    return std::shared_ptr<unsigned char>(static_cast<unsigned char*>(base),
+                                          [length](unsigned char* p) { ::munmap(p, length); });
+}
+
+std::size_t available_memory() {
+    std::ifstream meminfo("/proc/meminfo");
+    std::string key;
+    std::size_t kb = 0;
+    std::string unit;
+    while (meminfo >> key >> kb >> unit) {
+        if (key == "MemAvailable:") return kb * 1024;
+    }
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+    if (pages > 0 && page > 0) return static_cast<std::size_t>(pages) * static_cast<std::size_t>(page);
+    return static_cast<std::size_t>(-1);
+}
+
+void check_memory(const std::string& path, std::size_t bytes) {
+    const std::size_t available = available_memory();
+    if (bytes > available)
+        fail(path, "the volume needs " + std::to_string(bytes) + " bytes but only " + std::to_string(available) +
+                       " bytes of memory are available");
+}
+
+bool ends_with_nocase(const std::string& path, const std::string& suffix) {
+    if (path.size() < suffix.size()) return false;
+    return std::equal(suffix.begin(), suffix.end(), path.end() - static_cast<std::ptrdiff_t>(suffix.size()),
+                      [](char a, char b) { return std::tolower(static_cast<unsigned char>(a)) ==
+                                                  std::tolower(static_cast<unsigned char>(b)); });
+}
+
+std::string sibling_path(const std::string& header_path, const std::string& name) {
+    const std::filesystem::path p(name);
+    if (p.is_absolute()) return name;
+    return (std::filesystem::path(header_path).parent_path() / p).string();
+}
+
+}  // namespace voxmesh::io

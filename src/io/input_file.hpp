@@ -1,0 +1,48 @@
+// Opening input files safely: regular files only (a directory, FIFO or device is refused
+// before anything blocks on it), with errors that name the path.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+namespace voxmesh::io {
+
+// Throws Error("'path': what").
+[[noreturn]] void fail(const std::string& path, const std::string& what);
+
+class InputFile {
+public:
+    explicit InputFile(const std::string& path);
+    ~InputFile();
+    InputFile(const InputFile&) = delete;
+    InputFile& operator=(const InputFile&) = delete;
+
+    const std::string& path() const { return path_; }
+    std::size_t size() const { return size_; }
+
+    // Up to `max_bytes` bytes from `offset` (fewer at the end of the file).
+    std::string read(std::size_t offset, std::size_t max_bytes) const;
+    // Exactly `bytes` bytes into `out`; throws on a short read.
+    void read_exact(std::size_t offset, void* out, std::size_t bytes) const;
+    // The whole file, mapped private and writable (copy-on-write); the pointer owns the
+    // mapping. Throws for an empty file.
+    std::shared_ptr<unsigned char> map() const;
+
+private:
+    std::string path_;
+    int fd_ = -1;
+    std::size_t size_ = 0;
+};
+
+// Bytes of memory the system can give us now (MemAvailable, else physical memory).
+std::size_t available_memory();
+// Throws when `bytes` exceed available_memory(), before anything is allocated.
+void check_memory(const std::string& path, std::size_t bytes);
+
+// True when `path` ends with `suffix`, ignoring ASCII case.
+bool ends_with_nocase(const std::string& path, const std::string& suffix);
+// `name` resolved against the directory holding `header_path` (unless absolute).
+std::string sibling_path(const std::string& header_path, const std::string& name);
+
+}  // namespace voxmesh::io

@@ -1,0 +1,154 @@
+// NIfTI-1 single files (.nii, and .nii.gz detected by the gzip magic): the 348-byte binary
+// header, in either byte order (sizeof_hdr tells which), then samples at vox_offset.
+// scl_slope/scl_inter are reported, not applied (see io.hpp).
+#include "inflate.hpp"
+#include "input_file.hpp"
+#include "readers.hpp"
+
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+namespace voxmesh::io {
+
+namespace {
+
+constexpr std::size_t kHeaderBytes = 348;
+
+class HeaderBytes {
+public:
+    HeaderBytes(const unsigned char* bytes, bool swap) : bytes_(bytes), swap_(swap) {}
+    template <class T>
+    T get(std::size_t offset) const {
+        unsigned char b[sizeof(T)];
+        std::memcpy(b, bytes_ + offset, sizeof(T));
+        if (swap_) swap_bytes(b, 1, sizeof(T));
+        T value;
+        std::memcpy(&value, b, sizeof(T));
+        return value;
+    }
+    std::int16_t i16(std::size_t offset) const { return get<std::int16_t>(offset); }
+    float f32(std::size_t offset) const { return get<float>(offset); }
+
+private:
+    const unsigned char* bytes_;
+    bool swap_;
+};
+
+ScalarType nifti_type(const std::string& path, int datatype) {
+    switch (datatype) {
+        case 2: return ScalarType::U8;
+        case 4: return ScalarType::I16;
+        case 8: return ScalarType::I32;
+        case 16: return ScalarType::F32;
+        case 64: return ScalarType::F64;
+        case 256: return ScalarType::I8;
+        case 512: return ScalarType::U16;
+        case 768: return ScalarType::U32;
+        default: break;
+    }
+    fail(path, "unsupported NIfTI datatype " + std::to_string(datatype) +
+                   " (supported: scalar 8/16/32-bit integers, float32, float64; not complex, RGB or 64-bit integers)");
+}
+
+}  // namespace
+
+VolumeHeader read_nifti_header(const std::string& path) {
+    const InputFile file(path);
+    if (file.size() == 0) fail(path, "file is empty");
+    const std::string magic = file.read(0, 2);
+    const bool gzip = magic.size() == 2 && static_cast<unsigned char>(magic[0]) == 0x1f &&
+                      static_cast<unsigned char>(magic[1]) == 0x8b;
+    unsigned char raw[kHeaderBytes];
+    if (gzip) {
+        const std::shared_ptr<unsigned char> mapping = file.map();
+        Inflater inflater(path, mapping.get(), file.size());
+        const std::size_t got = inflater.read(raw, kHeaderBytes);
+        if (got < kHeaderBytes)
+            fail(path, "decompresses to " + std::to_string(got) + " bytes, too short for the 348-byte NIfTI-1 header");
+    } else {
+        if (file.size() < kHeaderBytes)
+            fail(path, "is " + std::to_string(file.size()) + " bytes, too short for the 348-byte NIfTI-1 header");
+        file.read_exact(0, raw, kHeaderBytes);
+    }
+
+    std::int32_t sizeof_hdr = 0;
+    std::memcpy(&sizeof_hdr, raw, 4);
+    std::int32_t swapped = sizeof_hdr;
+    swap_bytes(&swapped, 1, 4);
+    bool swap = false;
+    if (sizeof_hdr == 348) {
+        swap = false;
+    } else if (swapped == 348) {
+        swap = true;
+    } else if (sizeof_hdr == 540 || swapped == 540) {
+        fail(path, "is NIfTI-2 (sizeof_hdr 540); only NIfTI-1 is supported");
+    } else {
+        fail(path, "sizeof_hdr is " + std::to_string(sizeof_hdr) + ", not 348: not a NIfTI-1 file");
+    }
+    const HeaderBytes hdr(raw, swap);
+    const bool host_big = std::endian::native == std::endian::big;
+
+    if (std::memcmp(raw + 344, "ni1\0", 4) == 0)
+        fail(path, "is the header of a .hdr/.img pair; only single-file NIfTI-1 (.nii, magic n+1) is supported");
+    if (std::memcmp(raw + 344, "n+1\0", 4) != 0) fail(path, "NIfTI magic is not 'n+1' (ANALYZE 7.5 or not NIfTI)");
+
+    VolumeHeader h;
+    VolumeInfo& info = h.info;
+    SampleLayout& layout = h.layout;
+    info.format = "nifti";
+    info.file_bytes = file.size();
+    info.encoding = gzip ? "gzip" : "raw";
+    info.big_endian = host_big != swap;
+
+    const int ndim = hdr.i16(40);
+    if (ndim < 3 || ndim > 7)
+        fail(path, "dim[0] is " + std::to_string(ndim) + "; a volume needs 3 dimensions (4-7 only with extra sizes of 1)");
+    std::vector<std::size_t> sizes;
+    for (int a = 1; a <= ndim; ++a) {
+        const int n = hdr.i16(40 + 2 * static_cast<std::size_t>(a));
+        if (n < 1) fail(path, "dim[" + std::to_string(a) + "] is " + std::to_string(n) + "; sizes must be at least 1");
+        sizes.push_back(static_cast<std::size_t>(n));
+    }
+    info.dims = volume_dims(path, sizes);
+
+    const int datatype = hdr.i16(70), bitpix = hdr.i16(72);
+    info.type = nifti_type(path, datatype);
+    if (static_cast<std::size_t>(bitpix) != 8 * scalar_size(info.type))
+        fail(path, "bitpix " + std::to_string(bitpix) + " contradicts datatype " + std::to_string(datatype) + " (" +
+                       scalar_name(info.type) + ")");
+
+    for (std::size_t a = 0; a < 3; ++a) info.spacing[a] = checked_spacing(path, "pixdim", hdr.f32(80 + 4 * a));
+
+    const float vox_offset = hdr.f32(108);
+    if (!std::isfinite(vox_offset) || vox_offset < 348 || vox_offset > 1e12f || vox_offset != std::floor(vox_offset))
+        fail(path, "vox_offset " + std::to_string(vox_offset) + " is not a whole byte offset past the header");
+
+    const float slope = hdr.f32(112), inter = hdr.f32(116);
+    if (std::isfinite(slope) && slope != 0) {
+        info.value_scale = slope;
+        info.value_offset = std::isfinite(inter) ? inter : 0.0;
+    }
+
+    // sform (code > 0) wins over qform, as in most readers; with neither the origin is 0.
+    const int qform_code = hdr.i16(252), sform_code = hdr.i16(254);
+    if (sform_code > 0) {
+        for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "srow", hdr.f32(280 + 16 * a + 12));
+    } else if (qform_code > 0) {
+        for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "qoffset", hdr.f32(268 + 4 * a));
+    }
+
+    layout.type = info.type;
+    layout.dims = info.dims;
+    layout.big_endian = info.big_endian;
+    layout.data_path = path;
+    layout.compressed = gzip;
+    if (gzip) layout.skip = static_cast<std::size_t>(vox_offset);
+    else layout.offset = static_cast<std::size_t>(vox_offset);
+    info.data_file = path;
+    return h;
+}
+
+}  // namespace voxmesh::io

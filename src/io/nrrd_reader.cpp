@@ -1,0 +1,266 @@
+// NRRD (teem's format, http://teem.sourceforge.net/nrrd/format.html): a text header of
+// "field: value" lines ended by a blank line (attached data) or by the end of a .nhdr
+// (detached, "data file"). Raw and gzip encodings, 3-D scalar volumes.
+#include "header_text.hpp"
+#include "input_file.hpp"
+#include "readers.hpp"
+
+#include <cmath>
+#include <map>
+
+namespace voxmesh::io {
+
+namespace {
+
+constexpr std::size_t kMaxHeader = 1 << 20;
+
+struct TypeName {
+    const char* name;
+    ScalarType type;
+};
+constexpr TypeName kTypes[] = {
+    {"uchar", ScalarType::U8},         {"unsigned char", ScalarType::U8},   {"uint8", ScalarType::U8},
+    {"uint8_t", ScalarType::U8},       {"signed char", ScalarType::I8},     {"int8", ScalarType::I8},
+    {"int8_t", ScalarType::I8},        {"short", ScalarType::I16},          {"short int", ScalarType::I16},
+    {"signed short", ScalarType::I16}, {"signed short int", ScalarType::I16}, {"int16", ScalarType::I16},
+    {"int16_t", ScalarType::I16},      {"ushort", ScalarType::U16},         {"unsigned short", ScalarType::U16},
+    {"unsigned short int", ScalarType::U16}, {"uint16", ScalarType::U16},   {"uint16_t", ScalarType::U16},
+    {"int", ScalarType::I32},          {"signed int", ScalarType::I32},     {"int32", ScalarType::I32},
+    {"int32_t", ScalarType::I32},      {"uint", ScalarType::U32},           {"unsigned int", ScalarType::U32},
+    {"uint32", ScalarType::U32},       {"uint32_t", ScalarType::U32},       {"float", ScalarType::F32},
+    {"double", ScalarType::F64},
+};
+
+ScalarType parse_type(const std::string& path, const std::string& value) {
+    for (const TypeName& t : kTypes)
+        if (value == t.name) return t.type;
+    fail(path, "unsupported NRRD type '" + value +
+                   "' (supported: 8/16/32-bit signed and unsigned integers, float, double)");
+}
+
+// "(1,0,0)" as numbers; "none" as an empty vector.
+std::vector<std::vector<double>> parse_vectors(const std::string& path, const char* field, std::string_view value) {
+    std::vector<std::vector<double>> out;
+    std::size_t i = 0;
+    while (true) {
+        while (i < value.size() && (value[i] == ' ' || value[i] == '\t')) ++i;
+        if (i >= value.size()) break;
+        if (value.substr(i, 4) == "none") {
+            out.emplace_back();
+            i += 4;
+            continue;
+        }
+        if (value[i] != '(') fail(path, std::string("field '") + field + "': expected '(' or 'none'");
+        const std::size_t close = value.find(')', i);
+        if (close == std::string_view::npos) fail(path, std::string("field '") + field + "': missing ')'");
+        std::vector<double> v;
+        std::string_view inner = value.substr(i + 1, close - i - 1);
+        while (true) {
+            const std::size_t comma = inner.find(',');
+            v.push_back(parse_double(path, field, trim(inner.substr(0, comma))));
+            if (comma == std::string_view::npos) break;
+            inner.remove_prefix(comma + 1);
+        }
+        out.push_back(std::move(v));
+        i = close + 1;
+    }
+    return out;
+}
+
+std::size_t space_dimension_of(const std::string& path, const std::string& space) {
+    static const std::map<std::string, std::size_t> kSpaces = {
+        {"right-anterior-superior", 3}, {"ras", 3}, {"left-anterior-superior", 3}, {"las", 3},
+        {"left-posterior-superior", 3}, {"lps", 3}, {"scanner-xyz", 3}, {"3d-right-handed", 3},
+        {"3d-left-handed", 3}, {"right-anterior-superior-time", 4}, {"rast", 4},
+        {"left-anterior-superior-time", 4}, {"last", 4}, {"left-posterior-superior-time", 4}, {"lpst", 4},
+        {"scanner-xyz-time", 4}, {"3d-right-handed-time", 4}, {"3d-left-handed-time", 4}};
+    const auto it = kSpaces.find(lower(space));
+    if (it == kSpaces.end()) fail(path, "unknown NRRD space '" + space + "'");
+    return it->second;
+}
+
+// Offset just past `lines` newlines at the start of the file.
+std::size_t skip_lines(const InputFile& file, std::size_t lines) {
+    std::size_t offset = 0;
+    while (lines > 0) {
+        const std::string chunk = file.read(offset, 1 << 16);
+        if (chunk.empty()) fail(file.path(), "file ends before the " + std::to_string(lines) + " lines to skip");
+        std::size_t i = 0;
+        for (; i < chunk.size() && lines > 0; ++i)
+            if (chunk[i] == '\n') --lines;
+        offset += i;
+    }
+    return offset;
+}
+
+}  // namespace
+
+VolumeHeader read_nrrd_header(const std::string& path) {
+    const InputFile file(path);
+    if (file.size() == 0) fail(path, "file is empty");
+    const std::string text = file.read(0, kMaxHeader);
+    std::size_t pos = 0;
+    std::string_view line;
+    next_line(text, pos, line);
+    if (line.size() < 8 || line.substr(0, 7) != "NRRD000" || line[7] < '1' || line[7] > '5')
+        fail(path, "not a NRRD file (the first line is not NRRD0001..NRRD0005)");
+
+    std::map<std::string, std::string> fields;
+    bool blank_line = false;
+    std::size_t line_number = 1;
+    while (next_line(text, pos, line)) {
+        ++line_number;
+        if (line.empty()) {
+            blank_line = true;
+            break;
+        }
+        if (line.front() == '#') continue;
+        const std::size_t sep = line.find(": ");
+        const std::size_t kv = line.find(":=");
+        if (kv != std::string_view::npos && (sep == std::string_view::npos || kv < sep)) continue;  // key/value pair
+        if (sep == std::string_view::npos)
+            fail(path, "header line " + std::to_string(line_number) + " is not 'field: value'");
+        std::string name = lower(trim(line.substr(0, sep)));
+        for (const char* joined : {"data file", "line skip", "byte skip"})  // both spellings are legal
+            if (name == std::string(joined).erase(std::string(joined).find(' '), 1)) name = joined;
+        if (!fields.emplace(name, std::string(trim(line.substr(sep + 2)))).second)
+            fail(path, "header field '" + name + "' appears twice");
+        if (name == "data file" && fields[name] == "LIST")
+            fail(path, "'data file: LIST' (several data files) is not supported");
+    }
+    if (!blank_line && text.size() < file.size())
+        fail(path, "no blank line ends the header within its first " + std::to_string(kMaxHeader) + " bytes");
+    const std::size_t data_start = pos;
+
+    auto required = [&](const char* name) -> const std::string& {
+        const auto it = fields.find(name);
+        if (it == fields.end()) fail(path, std::string("header lacks the required field '") + name + "'");
+        return it->second;
+    };
+    auto optional = [&](const char* name) -> const std::string* {
+        const auto it = fields.find(name);
+        return it == fields.end() ? nullptr : &it->second;
+    };
+
+    VolumeHeader h;
+    VolumeInfo& info = h.info;
+    SampleLayout& layout = h.layout;
+    info.format = "nrrd";
+    info.file_bytes = file.size();
+
+    const std::size_t dimension = parse_size(path, "dimension", required("dimension"));
+    const std::vector<std::size_t> sizes = parse_sizes(path, "sizes", required("sizes"));
+    if (dimension != sizes.size())
+        fail(path, "'dimension' is " + std::to_string(dimension) + " but 'sizes' lists " +
+                       std::to_string(sizes.size()) + " values");
+    info.dims = volume_dims(path, sizes);
+    info.type = parse_type(path, required("type"));
+
+    const std::string encoding = lower(required("encoding"));
+    if (encoding == "raw") {
+        info.encoding = "raw";
+    } else if (encoding == "gzip" || encoding == "gz") {
+        info.encoding = "gzip";
+    } else {
+        fail(path, "NRRD encoding '" + encoding + "' is not supported (use raw or gzip)");
+    }
+
+    if (const std::string* endian = optional("endian")) {
+        if (*endian == "big") info.big_endian = true;
+        else if (*endian != "little") fail(path, "'endian' must be little or big, not '" + *endian + "'");
+    } else if (scalar_size(info.type) > 1) {
+        fail(path, "header lacks 'endian', required for multi-byte samples");
+    }
+
+    const std::string* spacings = optional("spacings");
+    const std::string* directions = optional("space directions");
+    if (spacings && directions) fail(path, "header has both 'spacings' and 'space directions' (contradictory)");
+    if (spacings) {
+        std::vector<double> values;
+        for (std::string_view word : split_words(*spacings))
+            values.push_back(lower(word) == "nan" ? NAN : parse_double(path, "spacings", word));
+        if (values.size() != dimension)
+            fail(path, "'dimension' is " + std::to_string(dimension) + " but 'spacings' lists " +
+                           std::to_string(values.size()) + " values");
+        for (std::size_t a = 0; a < 3; ++a)
+            info.spacing[a] = std::isnan(values[a]) ? 1.0 : checked_spacing(path, "spacings", values[a]);
+    }
+
+    std::size_t space_dim = 0;
+    if (const std::string* space = optional("space")) space_dim = space_dimension_of(path, *space);
+    if (const std::string* sd = optional("space dimension")) {
+        const std::size_t given = parse_size(path, "space dimension", *sd);
+        if (space_dim != 0 && given != space_dim)
+            fail(path, "'space' and 'space dimension' disagree");
+        if (given == 0 || given > 16) fail(path, "'space dimension' must be between 1 and 16");
+        space_dim = given;
+    }
+    if (directions) {
+        const auto vectors = parse_vectors(path, "space directions", *directions);
+        if (vectors.size() != dimension)
+            fail(path, "'dimension' is " + std::to_string(dimension) + " but 'space directions' lists " +
+                           std::to_string(vectors.size()) + " entries");
+        if (space_dim == 0) fail(path, "'space directions' given without 'space' or 'space dimension'");
+        for (std::size_t a = 0; a < vectors.size(); ++a) {
+            if (vectors[a].empty()) {
+                if (a < 3) fail(path, "'space directions' is 'none' for spatial axis " + std::to_string(a));
+                continue;
+            }
+            if (vectors[a].size() != space_dim)
+                fail(path, "a 'space directions' vector has " + std::to_string(vectors[a].size()) +
+                               " components but the space has " + std::to_string(space_dim));
+            if (a < 3) {
+                double norm2 = 0;
+                for (double c : vectors[a]) norm2 += c * c;
+                info.spacing[a] = checked_spacing(path, "space directions", std::sqrt(norm2));
+            }
+        }
+    }
+    if (const std::string* origin = optional("space origin")) {
+        if (space_dim == 0) fail(path, "'space origin' given without 'space' or 'space dimension'");
+        const auto vectors = parse_vectors(path, "space origin", *origin);
+        if (vectors.size() != 1 || vectors[0].size() != space_dim)
+            fail(path, "'space origin' must be one vector of " + std::to_string(space_dim) + " components");
+        for (std::size_t a = 0; a < 3 && a < space_dim; ++a)
+            info.origin[a] = checked_origin(path, "space origin", vectors[0][a]);
+    }
+
+    layout.type = info.type;
+    layout.dims = info.dims;
+    layout.big_endian = info.big_endian;
+    layout.compressed = info.encoding == "gzip";
+    layout.data_path = path;
+    std::size_t line_skip = 0;
+    long long byte_skip = 0;
+    if (const std::string* v = optional("line skip")) line_skip = parse_size(path, "line skip", *v);
+    if (const std::string* v = optional("byte skip")) byte_skip = parse_integer(path, "byte skip", *v);
+    if (byte_skip < -1) fail(path, "'byte skip' must be -1 or more");
+    if (byte_skip == -1 && layout.compressed) fail(path, "'byte skip: -1' is only allowed with raw encoding");
+
+    std::size_t offset = data_start;
+    if (const std::string* data_file = optional("data file")) {
+        if (split_words(*data_file).size() > 1 && data_file->find('%') != std::string::npos)
+            fail(path, "multi-file 'data file' patterns are not supported");
+        layout.data_path = sibling_path(path, *data_file);
+        offset = 0;
+    } else if (!blank_line) {
+        fail(path, "no blank line after the header and no 'data file': the samples are missing");
+    }
+    if (line_skip > 0) {
+        const InputFile data(layout.data_path);
+        if (layout.data_path == path) fail(path, "'line skip' is only supported with a detached data file");
+        offset = skip_lines(data, line_skip);
+    }
+    if (byte_skip == -1) {
+        layout.at_end = true;
+    } else if (layout.compressed) {
+        layout.skip = static_cast<std::size_t>(byte_skip);
+    } else {
+        offset += static_cast<std::size_t>(byte_skip);
+    }
+    layout.offset = offset;
+    info.data_file = layout.data_path;
+    return h;
+}
+
+}  // namespace voxmesh::io

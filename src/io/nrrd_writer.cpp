@@ -1,0 +1,76 @@
+// write_nrrd: a NRRD0004 header (raw encoding, host byte order) followed by the samples,
+// written through a temporary file so a failure never leaves a partial output.
+#include "core/atomic_file.hpp"
+
+#include <voxmesh/io.hpp>
+
+#include <bit>
+#include <charconv>
+#include <cmath>
+
+namespace voxmesh {
+
+namespace {
+
+const char* nrrd_type(ScalarType type) {
+    switch (type) {
+        case ScalarType::U8: return "uint8";
+        case ScalarType::I8: return "int8";
+        case ScalarType::U16: return "uint16";
+        case ScalarType::I16: return "int16";
+        case ScalarType::U32: return "uint32";
+        case ScalarType::I32: return "int32";
+        case ScalarType::F32: return "float";
+        case ScalarType::F64: return "double";
+    }
+    throw Error("unknown scalar type");
+}
+
+// Shortest text that reads back as the same double.
+std::string number(double value) {
+    char buffer[64];
+    const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+    return std::string(buffer, result.ptr);
+}
+
+}  // namespace
+
+void write_nrrd(const std::string& path, const VolumeView& volume) {
+    auto refuse = [&](const std::string& why) { throw Error("cannot write '" + path + "': " + why); };
+    std::size_t bytes = 0;
+    try {
+        bytes = checked_volume_bytes(volume.dims, volume.type);
+    } catch (const Error& e) {
+        refuse(e.what());
+    }
+    if (bytes == 0) refuse("the volume is empty");
+    if (!volume.data) refuse("the volume has no data");
+    for (std::size_t a = 0; a < 3; ++a) {
+        if (!std::isfinite(volume.spacing[a]) || volume.spacing[a] == 0) refuse("spacing must be finite and non-zero");
+        if (!std::isfinite(volume.origin[a])) refuse("origin must be finite");
+    }
+
+    std::string header = "NRRD0004\n# written by voxmesh " VOXMESH_VERSION_STRING "\n";
+    header += std::string("type: ") + nrrd_type(volume.type) + "\n";
+    header += "dimension: 3\n";
+    header += "space dimension: 3\n";
+    header += "sizes: " + std::to_string(volume.dims[0]) + " " + std::to_string(volume.dims[1]) + " " +
+              std::to_string(volume.dims[2]) + "\n";
+    header += "space directions: (" + number(volume.spacing[0]) + ",0,0) (0," + number(volume.spacing[1]) +
+              ",0) (0,0," + number(volume.spacing[2]) + ")\n";
+    header += "kinds: domain domain domain\n";
+    header += std::string("endian: ") + (std::endian::native == std::endian::big ? "big" : "little") + "\n";
+    header += "encoding: raw\n";
+    header += "space origin: (" + number(volume.origin[0]) + "," + number(volume.origin[1]) + "," +
+              number(volume.origin[2]) + ")\n\n";
+
+    // Pad the comment so the samples start 8-byte aligned: readers can then map them.
+    header.insert(header.find('\n', 9), (8 - header.size() % 8) % 8, ' ');
+
+    detail::write_file_atomically(path, [&](std::FILE* file) {
+        detail::write_bytes(file, header.data(), header.size());
+        detail::write_bytes(file, volume.data, bytes);
+    });
+}
+
+}  // namespace voxmesh

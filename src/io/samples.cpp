@@ -1,0 +1,157 @@
+#include "samples.hpp"
+
+#include "inflate.hpp"
+#include "input_file.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cstdint>
+#include <cstring>
+
+namespace voxmesh::io {
+
+namespace {
+
+// Deflate cannot expand data by more than about 1032:1; a header asking for more than
+// that from the stream at hand is lying, and we say so before allocating anything.
+constexpr std::size_t kMaxDeflateRatio = 1032;
+
+std::string where(const std::string& header_path, const SampleLayout& layout) {
+    if (layout.data_path == header_path) return "";
+    return " (data file of '" + header_path + "')";
+}
+
+std::string dims_text(std::array<std::size_t, 3> d) {
+    return std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]);
+}
+
+struct Located {
+    std::size_t file_size = 0;
+    std::size_t start = 0;   // raw: first sample; compressed: first stream byte
+    std::size_t length = 0;  // raw: sample bytes; compressed: stream bytes
+};
+
+Located locate(const InputFile& file, const std::string& header_path, const SampleLayout& layout,
+               std::size_t bytes) {
+    const std::string& path = file.path();
+    const std::string ctx = where(header_path, layout);
+    Located at;
+    at.file_size = file.size();
+    if (at.file_size == 0) fail(path, "file is empty" + ctx);
+    if (!layout.compressed) {
+        if (layout.at_end) {
+            if (at.file_size < bytes)
+                fail(path, "holds " + std::to_string(at.file_size) + " bytes but " + dims_text(layout.dims) + " " +
+                               scalar_name(layout.type) + " samples need " + std::to_string(bytes) + ctx);
+            at.start = at.file_size - bytes;
+        } else {
+            if (layout.offset > at.file_size || at.file_size - layout.offset != bytes)
+                fail(path, "holds " + std::to_string(at.file_size) + " bytes; " + dims_text(layout.dims) + " " +
+                               scalar_name(layout.type) + " samples after a " + std::to_string(layout.offset) +
+                               "-byte header need exactly " +
+                               (layout.offset > SIZE_MAX - bytes ? std::string("more than SIZE_MAX")
+                                                                 : std::to_string(layout.offset + bytes)) +
+                               " (truncated file, or dims that do not match it)" + ctx);
+            at.start = layout.offset;
+        }
+        at.length = bytes;
+        return at;
+    }
+    if (layout.offset >= at.file_size) fail(path, "no compressed data after the header" + ctx);
+    at.start = layout.offset;
+    at.length = at.file_size - layout.offset;
+    if (layout.compressed_size != 0) {
+        if (layout.compressed_size > at.length)
+            fail(path, "compressed data should be " + std::to_string(layout.compressed_size) + " bytes but only " +
+                           std::to_string(at.length) + " follow the header (truncated file?)" + ctx);
+        at.length = layout.compressed_size;
+    }
+    check_memory(path, bytes);
+    const std::size_t needed = bytes + std::min(layout.skip, SIZE_MAX - bytes);
+    if (needed / kMaxDeflateRatio > at.length + 64)
+        fail(path, std::to_string(at.length) + " bytes of compressed data cannot hold " + dims_text(layout.dims) + " " +
+                       scalar_name(layout.type) + " samples (" + std::to_string(bytes) +
+                       " bytes): the dims or the file are wrong" + ctx);
+    return at;
+}
+
+// The data file, with the header named in errors when they differ.
+InputFile open_data(const std::string& header_path, const SampleLayout& layout) {
+    try {
+        return InputFile(layout.data_path);
+    } catch (const Error& e) {
+        throw Error(e.what() + where(header_path, layout));
+    }
+}
+
+bool host_order(const SampleLayout& layout) {
+    return scalar_size(layout.type) == 1 || layout.big_endian == (std::endian::native == std::endian::big);
+}
+
+}  // namespace
+
+std::size_t sample_bytes(const std::string& path, std::array<std::size_t, 3> dims, ScalarType type) {
+    if (dims[0] == 0 || dims[1] == 0 || dims[2] == 0)
+        fail(path, "dimensions " + dims_text(dims) + " are empty; every size must be at least 1");
+    try {
+        return checked_volume_bytes(dims, type);
+    } catch (const Error& e) {
+        fail(path, e.what());
+    }
+}
+
+std::size_t check_samples(const std::string& header_path, const SampleLayout& layout) {
+    const std::size_t bytes = sample_bytes(header_path, layout.dims, layout.type);
+    const InputFile file = open_data(header_path, layout);
+    locate(file, header_path, layout, bytes);
+    return file.size();
+}
+
+void swap_bytes(void* data, std::size_t count, std::size_t size) {
+    auto* p = static_cast<unsigned char*>(data);
+    if (size <= 1) return;
+    for (std::size_t i = 0; i < count; ++i, p += size) std::reverse(p, p + size);
+}
+
+Volume load_samples(const std::string& header_path, const SampleLayout& layout) {
+    const std::size_t bytes = sample_bytes(header_path, layout.dims, layout.type);
+    const InputFile file = open_data(header_path, layout);
+    const Located at = locate(file, header_path, layout, bytes);
+    const std::size_t value_size = scalar_size(layout.type);
+    const std::string ctx = where(header_path, layout);
+
+    if (!layout.compressed && host_order(layout) && at.start % value_size == 0) {
+        // Map, don't copy: the Volume keeps the mapping alive.
+        std::shared_ptr<unsigned char> mapping = file.map();
+        Volume v;
+        v.type = layout.type;
+        v.dims = layout.dims;
+        v.data = mapping.get() + at.start;
+        v.storage = std::move(mapping);
+        return v;
+    }
+
+    check_memory(file.path(), bytes);
+    Volume v = Volume::allocate(layout.type, layout.dims);
+    if (!layout.compressed) {
+        file.read_exact(at.start, v.data, bytes);
+    } else {
+        const std::shared_ptr<unsigned char> mapping = file.map();
+        Inflater inflater(file.path(), mapping.get() + at.start, at.length);
+        if (inflater.skip(layout.skip) != layout.skip)
+            fail(file.path(), "decompressed data ends inside the " + std::to_string(layout.skip) + "-byte header" + ctx);
+        const std::size_t got = inflater.read(v.data, bytes);
+        if (got != bytes)
+            fail(file.path(), "decompressed data holds " + std::to_string(got) + " bytes of samples but " +
+                                  dims_text(layout.dims) + " " + scalar_name(layout.type) + " needs " +
+                                  std::to_string(bytes) + " (truncated data, or dims that do not match it)" + ctx);
+        if (!inflater.at_end())
+            fail(file.path(), "decompressed data is longer than the " + std::to_string(bytes) + " bytes that " +
+                                  dims_text(layout.dims) + " " + scalar_name(layout.type) +
+                                  " samples need (dims do not match the data)" + ctx);
+    }
+    if (!host_order(layout)) swap_bytes(v.data, bytes / value_size, value_size);
+    return v;
+}
+
+}  // namespace voxmesh::io

@@ -1,0 +1,38 @@
+// Where a volume's samples live, as a header describes them, and loading them: the one
+// place that checks sizes against the file, maps, copies, decompresses and byte-swaps.
+#pragma once
+
+#include <voxmesh/io.hpp>
+
+#include <cstddef>
+#include <string>
+
+namespace voxmesh::io {
+
+struct SampleLayout {
+    ScalarType type = ScalarType::U8;
+    std::array<std::size_t, 3> dims{0, 0, 0};
+    bool big_endian = false;
+    std::string data_path;        // the file holding the samples
+    std::size_t offset = 0;       // raw: first sample; compressed: start of the stream
+    bool at_end = false;          // raw: the samples are the file's last bytes
+    bool compressed = false;      // zlib or gzip stream
+    std::size_t skip = 0;         // compressed: decompressed bytes before the first sample
+    std::size_t compressed_size = 0;  // compressed: stream length; 0 = to the end of the file
+};
+
+// Overflow-checked byte size of the samples; errors name `path`. Zero dims are an error.
+std::size_t sample_bytes(const std::string& path, std::array<std::size_t, 3> dims, ScalarType type);
+
+// Everything that can be checked without reading samples: the data file exists, raw data
+// matches the file size exactly, compressed data could hold that much. Returns the data
+// file's size. `header_path` names the header in errors about a detached file.
+std::size_t check_samples(const std::string& header_path, const SampleLayout& layout);
+
+// The samples, mapped when possible (see io.hpp), otherwise copied / inflated / swapped.
+Volume load_samples(const std::string& header_path, const SampleLayout& layout);
+
+// Reverses the byte order of `count` values of `size` bytes each, in place.
+void swap_bytes(void* data, std::size_t count, std::size_t size);
+
+}  // namespace voxmesh::io

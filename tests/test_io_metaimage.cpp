@@ -1,0 +1,119 @@
+#include <catch2/catch.hpp>
+#include <voxmesh/io.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+namespace iotest {
+std::string make_temp_dir();
+void remove_tree(const std::string& dir);
+void write_file(const std::string& path, const std::string& bytes);
+std::string deflate_bytes(const std::string& data, bool gzip);
+}  // namespace iotest
+
+using Catch::Matchers::Contains;
+using namespace voxmesh;
+
+namespace {
+
+struct Scratch {
+    std::string dir = iotest::make_temp_dir();
+    ~Scratch() { iotest::remove_tree(dir); }
+    std::string file(const std::string& name, const std::string& bytes) const {
+        const std::string path = dir + "/" + name;
+        iotest::write_file(path, bytes);
+        return path;
+    }
+};
+
+// u16 samples 0, 3, 6, ... in the given byte order.
+std::string u16_samples(std::size_t count, bool big_endian) {
+    std::string out;
+    for (std::size_t i = 0; i < count; ++i) {
+        const auto v = static_cast<std::uint16_t>(i * 3 + 1000);
+        const char lo = static_cast<char>(v & 0xff), hi = static_cast<char>(v >> 8);
+        out += big_endian ? hi : lo;
+        out += big_endian ? lo : hi;
+    }
+    return out;
+}
+
+void check_u16(const Volume& v, std::size_t count) {
+    REQUIRE(v.type == ScalarType::U16);
+    REQUIRE(v.sample_count() == count);
+    const auto* s = static_cast<const std::uint16_t*>(v.data);
+    for (std::size_t i = 0; i < count; ++i) REQUIRE(s[i] == static_cast<std::uint16_t>(i * 3 + 1000));
+}
+
+const std::string kHead = "ObjectType = Image\nNDims = 3\nDimSize = 4 3 2\nElementType = MET_USHORT\n";
+constexpr std::size_t kCount = 24;
+
+}  // namespace
+
+TEST_CASE("metaimage: .mha LOCAL, .mhd detached, compressed, big endian", "[io][metaimage]") {
+    Scratch s;
+    SECTION(".mha with LOCAL data, spacing and offset") {
+        const std::string path = s.file("v.mha", kHead + "ElementSpacing = 0.5 0.25 2\nOffset = -1 2 3.5\n"
+                                                         "BinaryData = True\nBinaryDataByteOrderMSB = False\n"
+                                                         "ElementDataFile = LOCAL\n" + u16_samples(kCount, false));
+        const Volume v = read_volume(path);
+        check_u16(v, kCount);
+        CHECK(v.dims == std::array<std::size_t, 3>{4, 3, 2});
+        CHECK(v.spacing == std::array<double, 3>{0.5, 0.25, 2});
+        CHECK(v.origin == std::array<double, 3>{-1, 2, 3.5});
+        const VolumeInfo info = read_volume_info(path);
+        CHECK(info.format == "metaimage");
+        CHECK(info.encoding == "raw");
+    }
+    SECTION(".mhd with a detached big-endian data file and HeaderSize") {
+        s.file("v.raw", "HDR!" + u16_samples(kCount, true));
+        const std::string path =
+            s.file("v.mhd", kHead + "ElementByteOrderMSB = True\nHeaderSize = 4\nElementDataFile = v.raw\n");
+        check_u16(read_volume(path), kCount);
+        CHECK(read_volume_info(path).big_endian);
+    }
+    SECTION("compressed (zlib) .mha with CompressedDataSize") {
+        const std::string z = iotest::deflate_bytes(u16_samples(kCount, false), false);
+        const std::string path =
+            s.file("v.mha", kHead + "CompressedData = True\nCompressedDataSize = " + std::to_string(z.size()) +
+                                "\nElementDataFile = LOCAL\r\n" + z);
+        check_u16(read_volume(path), kCount);
+        CHECK(read_volume_info(path).encoding == "gzip");
+    }
+    SECTION("4-D with a size-1 axis") {
+        const std::string path = s.file("v.mha", "NDims = 4\nDimSize = 4 3 2 1\nElementType = MET_USHORT\n"
+                                                 "ElementDataFile = LOCAL\n" + u16_samples(kCount, false));
+        check_u16(read_volume(path), kCount);
+    }
+}
+
+TEST_CASE("metaimage: bad headers are errors naming the file", "[io][metaimage][errors]") {
+    Scratch s;
+    const std::string data = u16_samples(kCount, false);
+    auto fails = [&](const std::string& name, const std::string& bytes, const std::string& what) {
+        const std::string path = s.file(name, bytes);
+        CHECK_THROWS_WITH(read_volume(path), Contains(path) && Contains(what));
+    };
+    fails("a.mha", "NDims = 3\nDimSize = 4 3\nElementType = MET_USHORT\nElementDataFile = LOCAL\n" + data,
+          "NDims is 3 but DimSize lists 2");
+    fails("a.mha", "NDims = 3\nElementType = MET_USHORT\nElementDataFile = LOCAL\n" + data, "DimSize");
+    fails("a.mha", kHead, "ElementDataFile");
+    fails("a.mha", "NDims = 3\nDimSize = 4 3 2\nElementType = MET_LONG_LONG\nElementDataFile = LOCAL\n" + data,
+          "unsupported ElementType 'MET_LONG_LONG'");
+    fails("a.mha", kHead + "ElementDataFile = LOCAL\n" + data.substr(1), "truncated");
+    fails("a.mha", kHead + "ElementSpacing = 1 1\nElementDataFile = LOCAL\n" + data, "ElementSpacing");
+    fails("a.mha", kHead + "BinaryDataByteOrderMSB = True\nElementByteOrderMSB = False\nElementDataFile = LOCAL\n" + data,
+          "disagree");
+    fails("a.mha", kHead + "ElementNumberOfChannels = 3\nElementDataFile = LOCAL\n" + data, "ElementNumberOfChannels");
+    fails("a.mha", kHead + "BinaryData = False\nElementDataFile = LOCAL\n" + data, "ASCII");
+    fails("a.mha", kHead + "CompressedData = True\nElementDataFile = LOCAL\nnot zlib at all, no", "corrupt");
+    fails("a.mha", kHead + "CompressedData = True\nCompressedDataSize = 99999\nElementDataFile = LOCAL\nxx", "truncated");
+    fails("a.mha", "this is not a header\n", "not 'Key = Value'");
+    fails("a.mha", "", "empty");
+    fails("a.mhd", kHead + "ElementDataFile = missing.raw\n", "missing.raw");
+    fails("a.mhd", kHead + "ElementDataFile = img_%03d.raw 1 10 1\n", "not supported");
+    fails("a.mha", "NDims = 3\nDimSize = 4294967296 4294967296 4294967296\nElementType = MET_DOUBLE\n"
+                   "ElementDataFile = LOCAL\n" + data,
+          "overflow");
+}

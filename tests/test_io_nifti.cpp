@@ -1,0 +1,206 @@
+#include <catch2/catch.hpp>
+#include <voxmesh/io.hpp>
+
+#include <cstdint>
+#include <cstring>
+#include <string>
+
+namespace iotest {
+std::string make_temp_dir();
+void remove_tree(const std::string& dir);
+void write_file(const std::string& path, const std::string& bytes);
+std::string deflate_bytes(const std::string& data, bool gzip);
+}  // namespace iotest
+
+using Catch::Matchers::Contains;
+using namespace voxmesh;
+
+namespace {
+
+struct Scratch {
+    std::string dir = iotest::make_temp_dir();
+    ~Scratch() { iotest::remove_tree(dir); }
+    std::string file(const std::string& name, const std::string& bytes) const {
+        const std::string path = dir + "/" + name;
+        iotest::write_file(path, bytes);
+        return path;
+    }
+};
+
+// A minimal NIfTI-1 single file, built field by field (offsets from nifti1.h).
+struct Nifti {
+    std::string header = std::string(352, '\0');
+    bool big = false;
+    template <class T>
+    void put(std::size_t offset, T value) {
+        unsigned char b[sizeof(T)];
+        std::memcpy(b, &value, sizeof(T));
+        if (big) std::reverse(b, b + sizeof(T));
+        std::memcpy(header.data() + offset, b, sizeof(T));
+    }
+    explicit Nifti(bool big_endian, std::int16_t datatype = 4, std::int16_t bitpix = 16) : big(big_endian) {
+        put<std::int32_t>(0, 348);
+        const std::int16_t dim[8] = {3, 4, 3, 2, 1, 1, 1, 1};
+        for (int i = 0; i < 8; ++i) put<std::int16_t>(40 + 2 * static_cast<std::size_t>(i), dim[i]);
+        put<std::int16_t>(70, datatype);
+        put<std::int16_t>(72, bitpix);
+        const float pixdim[4] = {1, 1.5f, 2, 2.5f};
+        for (int i = 0; i < 4; ++i) put<float>(76 + 4 * static_cast<std::size_t>(i), pixdim[i]);
+        put<float>(108, 352);
+        put<float>(112, 2);  // scl_slope
+        put<float>(116, -5); // scl_inter
+        put<std::int16_t>(252, 1);  // qform_code
+        put<float>(268, 10);
+        put<float>(272, 20);
+        put<float>(276, 30);
+        std::memcpy(header.data() + 344, "n+1\0", 4);
+    }
+    std::string samples() const {  // i16 0, -3, -6, ...
+        std::string out;
+        for (int i = 0; i < 24; ++i) {
+            const auto v = static_cast<std::uint16_t>(static_cast<std::int16_t>(-3 * i));
+            const char lo = static_cast<char>(v & 0xff), hi = static_cast<char>(v >> 8);
+            out += big ? hi : lo;
+            out += big ? lo : hi;
+        }
+        return out;
+    }
+    std::string file() const { return header + samples(); }
+};
+
+void check_samples(const Volume& v) {
+    REQUIRE(v.type == ScalarType::I16);
+    REQUIRE(v.dims == std::array<std::size_t, 3>{4, 3, 2});
+    const auto* s = static_cast<const std::int16_t*>(v.data);
+    for (int i = 0; i < 24; ++i) REQUIRE(s[i] == -3 * i);
+    CHECK(v.spacing == std::array<double, 3>{1.5, 2, 2.5});
+    CHECK(v.origin == std::array<double, 3>{10, 20, 30});
+}
+
+}  // namespace
+
+TEST_CASE("nifti: real MRI reads with pixdim spacing and sform origin", "[io][nifti]") {
+    const std::string path = std::string(VOXMESH_TEST_DATA) + "/mri_someones_anatomy.nii.gz";
+    const VolumeInfo info = read_volume_info(path);
+    CHECK(info.format == "nifti");
+    CHECK(info.encoding == "gzip");
+    CHECK(info.type == ScalarType::U8);
+    CHECK(info.dims == std::array<std::size_t, 3>{57, 67, 56});
+    CHECK(info.spacing == std::array<double, 3>{2.75, 2.75, 2.75});
+    CHECK(info.origin == std::array<double, 3>{-78, -91, -91});
+    // scl_slope / scl_inter are reported, not applied.
+    CHECK(info.value_scale == Approx(0.35246).epsilon(1e-4));
+    CHECK(info.value_offset == Approx(6.6784).epsilon(1e-4));
+
+    const Volume v = read_volume(path);
+    CHECK(v.type == ScalarType::U8);
+    CHECK(v.dims == info.dims);
+    CHECK(v.origin == info.origin);
+    const auto* s = static_cast<const std::uint8_t*>(v.data);
+    unsigned hi = 0;
+    double sum = 0;
+    for (std::size_t i = 0; i < v.sample_count(); ++i) {
+        hi = std::max<unsigned>(hi, s[i]);
+        sum += s[i];
+    }
+    CHECK(hi == 255);
+    CHECK(sum / static_cast<double>(v.sample_count()) == Approx(111.5).margin(0.05));
+}
+
+TEST_CASE("nifti: byte orders, gzip, 4-D with dim4 = 1", "[io][nifti]") {
+    Scratch s;
+    SECTION("little endian .nii") {
+        const std::string path = s.file("a.nii", Nifti(false).file());
+        check_samples(read_volume(path));
+        const VolumeInfo info = read_volume_info(path);
+        CHECK(info.value_scale == 2);
+        CHECK(info.value_offset == -5);
+    }
+    SECTION("big endian .nii") { check_samples(read_volume(s.file("a.nii", Nifti(true).file()))); }
+    SECTION(".nii.gz, and a .nii that is really gzip") {
+        check_samples(read_volume(s.file("a.nii.gz", iotest::deflate_bytes(Nifti(false).file(), true))));
+        check_samples(read_volume(s.file("b.NII", iotest::deflate_bytes(Nifti(true).file(), true))));
+    }
+    SECTION("dim[0] = 4 with dim[4] = 1") {
+        Nifti n(false);
+        n.put<std::int16_t>(40, 4);
+        check_samples(read_volume(s.file("a.nii", n.file())));
+    }
+    SECTION("sform origin wins over qform") {
+        Nifti n(false);
+        n.put<std::int16_t>(254, 2);
+        n.put<float>(280 + 12, -1);
+        n.put<float>(296 + 12, -2);
+        n.put<float>(312 + 12, -3);
+        CHECK(read_volume(s.file("a.nii", n.file())).origin == std::array<double, 3>{-1, -2, -3});
+    }
+}
+
+TEST_CASE("nifti: bad headers are errors naming the file", "[io][nifti][errors]") {
+    Scratch s;
+    auto fails = [&](const std::string& name, const std::string& bytes, const std::string& what) {
+        const std::string path = s.file(name, bytes);
+        CHECK_THROWS_WITH(read_volume(path), Contains(path) && Contains(what));
+    };
+    {
+        Nifti n(false);
+        n.put<std::int32_t>(0, 349);
+        fails("a.nii", n.file(), "sizeof_hdr is 349");
+    }
+    {
+        Nifti n(false);
+        n.put<std::int16_t>(40, 2);
+        fails("a.nii", n.file(), "dim[0] is 2");
+    }
+    {
+        Nifti n(false);
+        n.put<std::int16_t>(40, 4);
+        n.put<std::int16_t>(48, 2);
+        fails("a.nii", n.file(), "only 3-D");
+    }
+    {
+        Nifti n(false);
+        n.put<std::int16_t>(44, -3);
+        fails("a.nii", n.file(), "dim[2] is -3");
+    }
+    {
+        Nifti n(false);
+        n.put<std::int16_t>(72, 8);
+        fails("a.nii", n.file(), "bitpix 8 contradicts datatype 4");
+    }
+    fails("a.nii", Nifti(false, 32, 64).file(), "unsupported NIfTI datatype 32");
+    {
+        Nifti n(false);
+        n.put<float>(108, 351.5f);
+        fails("a.nii", n.file(), "vox_offset");
+    }
+    {
+        Nifti n(false);
+        n.put<float>(80, 0);
+        fails("a.nii", n.file(), "spacing");
+    }
+    {
+        Nifti n(false);
+        std::memcpy(n.header.data() + 344, "ni1\0", 4);
+        fails("a.nii", n.file(), ".hdr/.img");
+    }
+    {
+        Nifti n(false);
+        n.put<std::int16_t>(42, 2000);
+        n.put<std::int16_t>(44, 2000);
+        n.put<std::int16_t>(46, 100);
+        fails("a.nii", n.file(), "need exactly");
+        fails("a.nii.gz", iotest::deflate_bytes(n.file(), true), "cannot hold");
+    }
+    const std::string good = Nifti(false).file();
+    fails("a.nii", good.substr(0, good.size() - 1), "truncated");
+    fails("a.nii", good.substr(0, 200), "too short");
+    fails("a.nii", "", "empty");
+    const std::string gz = iotest::deflate_bytes(good, true);
+    fails("a.nii.gz", gz.substr(0, gz.size() - 20), "ends early");
+    std::string corrupt = gz;
+    for (std::size_t i = 30; i < corrupt.size() - 8; ++i) corrupt[i] = static_cast<char>(corrupt[i] ^ 0x33);
+    fails("a.nii.gz", corrupt, "corrupt");
+    fails("a.nii.gz", iotest::deflate_bytes(good + "extra", true), "longer");
+    fails("a.nii.gz", iotest::deflate_bytes(good.substr(0, 100), true), "too short");
+}

@@ -1,0 +1,247 @@
+#include <catch2/catch.hpp>
+#include <voxmesh/io.hpp>
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace iotest {
+std::string make_temp_dir();
+void remove_tree(const std::string& dir);
+void write_file(const std::string& path, const std::string& bytes);
+std::string read_file(const std::string& path);
+std::string deflate_bytes(const std::string& data, bool gzip);
+}  // namespace iotest
+
+using Catch::Matchers::Contains;
+using namespace voxmesh;
+
+namespace {
+
+struct Scratch {
+    std::string dir = iotest::make_temp_dir();
+    ~Scratch() { iotest::remove_tree(dir); }
+    std::string file(const std::string& name, const std::string& bytes) const {
+        const std::string path = dir + "/" + name;
+        iotest::write_file(path, bytes);
+        return path;
+    }
+};
+
+std::string i16_samples(std::size_t count, bool big_endian) {
+    std::string out;
+    for (std::size_t i = 0; i < count; ++i) {
+        const auto v = static_cast<std::uint16_t>(static_cast<std::int16_t>(i * 7 - 100));
+        const char lo = static_cast<char>(v & 0xff), hi = static_cast<char>(v >> 8);
+        out += big_endian ? hi : lo;
+        out += big_endian ? lo : hi;
+    }
+    return out;
+}
+
+void check_i16(const Volume& v, std::size_t count) {
+    REQUIRE(v.type == ScalarType::I16);
+    REQUIRE(v.sample_count() == count);
+    const auto* s = static_cast<const std::int16_t*>(v.data);
+    for (std::size_t i = 0; i < count; ++i) REQUIRE(s[i] == static_cast<std::int16_t>(i * 7 - 100));
+}
+
+const std::string kHeader343 = "NRRD0004\ntype: short\ndimension: 3\nsizes: 3 4 5\nendian: little\n";
+
+}  // namespace
+
+TEST_CASE("nrrd: real headsq CT reads as 64x64x93 i16", "[io][nrrd]") {
+    const std::string path = std::string(VOXMESH_TEST_DATA) + "/headsq.nrrd";
+    const VolumeInfo info = read_volume_info(path);
+    CHECK(info.format == "nrrd");
+    CHECK(info.encoding == "gzip");
+    CHECK(info.type == ScalarType::I16);
+    CHECK(info.dims == std::array<std::size_t, 3>{64, 64, 93});
+    CHECK(info.file_bytes == 425434);
+
+    const Volume v = read_volume(path);
+    CHECK(v.type == ScalarType::I16);
+    CHECK(v.dims == std::array<std::size_t, 3>{64, 64, 93});
+    CHECK(v.spacing[0] == Approx(3.2));
+    CHECK(v.spacing[1] == Approx(3.2));
+    CHECK(v.spacing[2] == Approx(1.5));
+    CHECK(v.origin == std::array<double, 3>{0, 0, 0});
+    const auto* s = static_cast<const std::int16_t*>(v.data);
+    std::int16_t lo = s[0], hi = s[0];
+    double sum = 0;
+    for (std::size_t i = 0; i < v.sample_count(); ++i) {
+        lo = std::min(lo, s[i]);
+        hi = std::max(hi, s[i]);
+        sum += s[i];
+    }
+    CHECK(lo == 0);
+    CHECK(hi == 3926);
+    CHECK(sum / static_cast<double>(v.sample_count()) == Approx(507.7).margin(0.05));
+}
+
+TEST_CASE("nrrd: write_nrrd round trip is memory-mapped and exact", "[io][nrrd]") {
+    Scratch s;
+    std::vector<float> samples(6 * 5 * 4);
+    for (std::size_t i = 0; i < samples.size(); ++i) samples[i] = static_cast<float>(i) * 0.25f - 3.0f;
+    VolumeView view{samples.data(), ScalarType::F32, {6, 5, 4}, {0.5, 0.75, 1.25}, {-1.5, 2.0, 1e-3}};
+    const std::string path = s.dir + "/out.nrrd";
+    write_nrrd(path, view);
+    CHECK_FALSE(std::filesystem::exists(s.dir + "/.out.nrrd.tmp"));
+
+    const Volume v = read_volume(path);
+    CHECK(v.type == ScalarType::F32);
+    CHECK(v.dims == view.dims);
+    CHECK(v.spacing == view.spacing);
+    CHECK(v.origin == view.origin);
+    CHECK(std::memcmp(v.data, samples.data(), samples.size() * 4) == 0);
+    const VolumeInfo info = read_volume_info(path);
+    CHECK(info.encoding == "raw");
+
+    // Data at an aligned offset in host order is mapped: /proc/self/maps lists the file.
+    std::ifstream maps("/proc/self/maps");
+    bool mapped = false;
+    for (std::string line; std::getline(maps, line);) {
+        if (line.find(std::filesystem::canonical(path).string()) == std::string::npos) continue;
+        unsigned long long lo = 0, hi = 0;
+        std::sscanf(line.c_str(), "%llx-%llx", &lo, &hi);
+        const auto p = reinterpret_cast<std::uintptr_t>(v.data);
+        mapped = mapped || (p >= lo && p < hi);
+    }
+    CHECK(mapped);
+}
+
+TEST_CASE("nrrd: write_nrrd refuses bad views and missing directories", "[io][nrrd]") {
+    Scratch s;
+    float one = 1;
+    CHECK_THROWS_WITH(write_nrrd(s.dir + "/no/such/dir/x.nrrd", VolumeView{&one, ScalarType::F32, {1, 1, 1}}),
+                      Contains("x.nrrd") && Contains("does not exist"));
+    CHECK_THROWS_WITH(write_nrrd(s.dir + "/x.nrrd", VolumeView{nullptr, ScalarType::F32, {1, 1, 1}}),
+                      Contains("no data"));
+    CHECK_THROWS_WITH(write_nrrd(s.dir + "/x.nrrd", VolumeView{&one, ScalarType::F32, {0, 1, 1}}), Contains("empty"));
+    CHECK_FALSE(std::filesystem::exists(s.dir + "/x.nrrd"));
+}
+
+TEST_CASE("nrrd: encodings, byte orders, detached headers", "[io][nrrd]") {
+    Scratch s;
+    const std::size_t n = 3 * 4 * 5;
+    SECTION("attached raw, header length odd: copied, not misaligned") {
+        const std::string header = kHeader343 + "encoding: raw\n# pad\n\n";
+        REQUIRE(header.size() % 2 == 1);
+        check_i16(read_volume(s.file("a.nrrd", header + i16_samples(n, false))), n);
+    }
+    SECTION("attached raw, big endian") {
+        const std::string header = "NRRD0005\ntype: int16\ndimension: 3\nsizes: 3 4 5\nendian: big\nencoding: raw\n\n";
+        check_i16(read_volume(s.file("a.nrrd", header + i16_samples(n, true))), n);
+    }
+    SECTION("attached gzip with space directions and origin") {
+        const std::string header = kHeader343 +
+                                   "encoding: gzip\nspace: left-posterior-superior\n"
+                                   "space directions: (0,2,0) (3,0,0) (0,0,-4)\nspace origin: (1.5,-2,3)\n\n";
+        const std::string path = s.file("a.nrrd", header + iotest::deflate_bytes(i16_samples(n, false), true));
+        const Volume v = read_volume(path);
+        check_i16(v, n);
+        CHECK(v.spacing == std::array<double, 3>{2, 3, 4});
+        CHECK(v.origin == std::array<double, 3>{1.5, -2, 3});
+        CHECK(read_volume_info(path).encoding == "gzip");
+    }
+    SECTION("detached raw with byte skip -1 (data at the end)") {
+        s.file("d.raw", "JUNKJUNK!" + i16_samples(n, false));
+        const std::string path =
+            s.file("d.nhdr", kHeader343 + "encoding: raw\nbyte skip: -1\ndata file: d.raw\nspacings: 1 2 3\n");
+        const Volume v = read_volume(path);
+        check_i16(v, n);
+        CHECK(v.spacing == std::array<double, 3>{1, 2, 3});
+        const VolumeInfo info = read_volume_info(path);
+        CHECK(info.data_file == s.dir + "/d.raw");
+    }
+    SECTION("detached gzip with line skip") {
+        s.file("d.gz", "line one\nline two\n" + iotest::deflate_bytes(i16_samples(n, false), true));
+        check_i16(read_volume(s.file("d.nhdr", kHeader343 + "encoding: gz\nline skip: 2\ndatafile: d.gz\n")), n);
+    }
+    SECTION("4-D with a trailing size-1 axis is 3-D") {
+        const std::string header =
+            "NRRD0004\ntype: short\ndimension: 4\nsizes: 3 4 5 1\nendian: little\nencoding: raw\n\n";
+        check_i16(read_volume(s.file("a.nrrd", header + i16_samples(n, false))), n);
+    }
+}
+
+TEST_CASE("nrrd: bad headers and data are errors naming the file", "[io][nrrd][errors]") {
+    Scratch s;
+    const std::size_t n = 3 * 4 * 5;
+    const std::string data = i16_samples(n, false);
+    auto attached = [&](const std::string& header, const std::string& body) { return s.file("bad.nrrd", header + body); };
+    auto fails = [&](const std::string& path, const std::string& what) {
+        CHECK_THROWS_WITH(read_volume(path), Contains(path) && Contains(what));
+    };
+
+    fails(attached("NRRD0004\ntype: short\ndimension: 3\nsizes: 3 4\nendian: little\nencoding: raw\n\n", data),
+          "'dimension' is 3 but 'sizes' lists 2");
+    fails(attached("NRRD0004\ndimension: 3\nsizes: 3 4 5\nencoding: raw\n\n", data), "'type'");
+    fails(attached("NRRD0004\ntype: complex\ndimension: 3\nsizes: 3 4 5\nencoding: raw\n\n", data),
+          "unsupported NRRD type 'complex'");
+    fails(attached("NRRD0004\ntype: short\ndimension: 3\nsizes: 3 4 5\nencoding: raw\n\n", data), "endian");
+    fails(attached(kHeader343 + "encoding: bzip2\n\n", data), "encoding 'bzip2'");
+    fails(attached(kHeader343 + "encoding: raw\nspacings: 1 1 1\nspace dimension: 3\n"
+                                "space directions: (1,0,0) (0,1,0) (0,0,1)\n\n", data),
+          "contradictory");
+    fails(attached(kHeader343 + "encoding: raw\nspacings: 1 0 1\n\n", data), "spacing");
+    fails(attached(kHeader343 + "encoding: raw\n\n", data.substr(0, data.size() - 3)), "truncated");
+    fails(attached(kHeader343 + "encoding: raw\n\n", data + "xx"), "do not match");
+    fails(attached(kHeader343 + "encoding: raw\nencoding: raw\n\n", data), "twice");
+    fails(attached("NRRD0004\ntype: short\ndimension: 4\nsizes: 3 4 5 2\nendian: little\nencoding: raw\n\n", data),
+          "only 3-D");
+    fails(attached("NRRD0004\ntype: short\ndimension: 3\nsizes: 3 0 5\nendian: little\nencoding: raw\n\n", data),
+          "empty");
+    fails(attached("NRRD0004\ntype: short\ndimension: 3\nsizes: 3 4 5x\nendian: little\nencoding: raw\n\n", data),
+          "'5x' is not");
+    fails(s.file("bad.nrrd", "P5\n3 4\n255\n"), "not a NRRD file");
+    fails(s.file("bad.nrrd", ""), "empty");
+    fails(s.file("bad.nrrd", kHeader343 + "encoding: raw\n"), "no blank line");
+    // Data file that is missing, or a directory.
+    fails(s.file("bad.nhdr", kHeader343 + "encoding: raw\ndata file: nowhere.raw\n"), "nowhere.raw");
+    CHECK_THROWS_WITH(read_volume(s.file("bad.nhdr", kHeader343 + "encoding: raw\ndata file: nowhere.raw\n")),
+                      Contains("does not exist") && Contains("bad.nhdr"));
+    std::filesystem::create_directory(s.dir + "/sub");
+    fails(s.file("bad.nhdr", kHeader343 + "encoding: raw\ndata file: sub\n"), "directory");
+    fails(s.file("bad.nhdr", kHeader343 + "encoding: raw\ndata file: LIST\nx.raw\n"), "LIST");
+
+    // gzip: corrupt, truncated, longer or shorter than the sizes say.
+    const std::string gz = iotest::deflate_bytes(data, true);
+    std::string corrupt = gz;
+    for (std::size_t i = 12; i < corrupt.size() - 8; ++i) corrupt[i] = static_cast<char>(corrupt[i] ^ 0x5a);
+    fails(attached(kHeader343 + "encoding: gzip\n\n", corrupt), "corrupt compressed data");
+    fails(attached(kHeader343 + "encoding: gzip\n\n", gz.substr(0, gz.size() / 2)), "ends early");
+    fails(attached(kHeader343 + "encoding: gzip\n\n", iotest::deflate_bytes(data + "more", true)), "longer");
+    fails(attached(kHeader343 + "encoding: gzip\n\n", iotest::deflate_bytes(data.substr(4), true)), "truncated data");
+    fails(attached(kHeader343 + "encoding: gzip\n\n", gz + "trailing"), "unexpected data");
+    fails(attached(kHeader343 + "encoding: gzip\n\n", ""), "no compressed data");
+
+    // Sizes that overflow, or that no memory or compressed stream could hold: refused up front.
+    fails(attached("NRRD0004\ntype: double\ndimension: 3\nsizes: 4294967296 4294967296 4294967296\n"
+                   "endian: little\nencoding: gzip\n\n", gz),
+          "overflow");
+    fails(attached("NRRD0004\ntype: double\ndimension: 3\nsizes: 100000 100000 100000\n"
+                   "endian: little\nencoding: gzip\n\n", gz),
+          "memory");
+    fails(attached("NRRD0004\ntype: double\ndimension: 3\nsizes: 1000 1000 100\n"
+                   "endian: little\nencoding: gzip\n\n", gz),
+          "cannot hold");
+    fails(attached("NRRD0004\ntype: double\ndimension: 3\nsizes: 100000 100000 100000\n"
+                   "endian: little\nencoding: raw\n\n", data),
+          "need exactly");
+    // read_volume_info runs the same checks without loading.
+    CHECK_THROWS_WITH(read_volume_info(attached(kHeader343 + "encoding: raw\n\n", data + "xx")), Contains("bad.nrrd"));
+}
+
+TEST_CASE("read_volume: unknown extensions, directories and missing files", "[io][errors]") {
+    Scratch s;
+    CHECK_THROWS_WITH(read_volume(s.file("x.vtk", "abc")), Contains("x.vtk") && Contains("unknown volume format"));
+    CHECK_THROWS_WITH(read_volume(s.file("x.raw", "abc")), Contains("x.raw") && Contains("--dims"));
+    std::filesystem::create_directory(s.dir + "/d.nrrd");
+    CHECK_THROWS_WITH(read_volume(s.dir + "/d.nrrd"), Contains("d.nrrd") && Contains("directory"));
+    CHECK_THROWS_WITH(read_volume(s.dir + "/none.nii"), Contains("none.nii") && Contains("does not exist"));
+    CHECK_THROWS_WITH(read_volume_info(s.dir + "/none.mha"), Contains("none.mha") && Contains("does not exist"));
+}

@@ -1,0 +1,116 @@
+#include <catch2/catch.hpp>
+#include <voxmesh/io.hpp>
+
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <string>
+
+namespace iotest {
+std::string make_temp_dir();
+void remove_tree(const std::string& dir);
+void write_file(const std::string& path, const std::string& bytes);
+}  // namespace iotest
+
+using Catch::Matchers::Contains;
+using namespace voxmesh;
+
+namespace {
+
+struct Scratch {
+    std::string dir = iotest::make_temp_dir();
+    ~Scratch() { iotest::remove_tree(dir); }
+    std::string file(const std::string& name, const std::string& bytes) const {
+        const std::string path = dir + "/" + name;
+        iotest::write_file(path, bytes);
+        return path;
+    }
+};
+
+std::string f32_samples(std::size_t count, bool big_endian) {
+    std::string out;
+    for (std::size_t i = 0; i < count; ++i) {
+        const float f = static_cast<float>(i) * 1.5f - 7.0f;
+        unsigned char b[4];
+        std::memcpy(b, &f, 4);
+        if (big_endian) std::reverse(b, b + 4);
+        out.append(reinterpret_cast<const char*>(b), 4);
+    }
+    return out;
+}
+
+void check_f32(const Volume& v, std::size_t count) {
+    REQUIRE(v.type == ScalarType::F32);
+    REQUIRE(v.sample_count() == count);
+    const auto* s = static_cast<const float*>(v.data);
+    for (std::size_t i = 0; i < count; ++i) REQUIRE(s[i] == static_cast<float>(i) * 1.5f - 7.0f);
+}
+
+}  // namespace
+
+TEST_CASE("raw: little and big endian, offsets, geometry", "[io][raw]") {
+    Scratch s;
+    RawLayout layout;
+    layout.dims = {5, 4, 3};
+    layout.type = ScalarType::F32;
+    layout.spacing = {1, 2, 3};
+    layout.origin = {-1, 0, 1};
+    const std::size_t n = 60;
+    check_f32(read_raw(s.file("a.raw", f32_samples(n, false)), layout), n);
+
+    layout.offset = 6;  // misaligned: copied
+    check_f32(read_raw(s.file("b.raw", "header" + f32_samples(n, false)), layout), n);
+
+    layout.offset = 8;
+    layout.big_endian = true;
+    const std::string path = s.file("c.raw", "header!!" + f32_samples(n, true));
+    const Volume v = read_raw(path, layout);
+    check_f32(v, n);
+    CHECK(v.spacing == layout.spacing);
+    CHECK(v.origin == layout.origin);
+    const VolumeInfo info = read_raw_info(path, layout);
+    CHECK(info.format == "raw");
+    CHECK(info.file_bytes == 8 + 4 * n);
+
+    // Writing through a mapped volume never changes the file (private mapping).
+    layout.big_endian = false;
+    layout.offset = 0;
+    const std::string mapped = s.file("d.raw", f32_samples(n, false));
+    {
+        Volume m = read_raw(mapped, layout);
+        static_cast<float*>(m.data)[0] = 1234.f;
+    }
+    check_f32(read_raw(mapped, layout), n);
+}
+
+TEST_CASE("raw: sizes that do not match the file are errors naming it", "[io][raw][errors]") {
+    Scratch s;
+    RawLayout layout;
+    layout.dims = {5, 4, 3};
+    layout.type = ScalarType::F32;
+    const std::string data = f32_samples(60, false);
+    auto fails = [&](const std::string& path, const RawLayout& l, const std::string& what) {
+        CHECK_THROWS_WITH(read_raw(path, l), Contains(path) && Contains(what));
+        CHECK_THROWS_WITH(read_raw_info(path, l), Contains(path) && Contains(what));
+    };
+    fails(s.file("t.raw", data.substr(0, 100)), layout, "truncated");
+    fails(s.file("l.raw", data + "x"), layout, "do not match");
+    RawLayout big = layout;
+    big.dims = {1u << 22, 1u << 22, 1u << 22};
+    fails(s.file("o.raw", data), big, "overflow");
+    big.dims = {100000, 100000, 1000};
+    fails(s.file("m.raw", data), big, "need exactly");
+    RawLayout zero = layout;
+    zero.dims = {5, 0, 3};
+    fails(s.file("z.raw", data), zero, "empty");
+    RawLayout offset = layout;
+    offset.offset = 1000;
+    fails(s.file("f.raw", data), offset, "1000-byte header");
+    fails(s.file("e.raw", ""), layout, "empty");
+    std::filesystem::create_directory(s.dir + "/dir.raw");
+    fails(s.dir + "/dir.raw", layout, "directory");
+    fails(s.dir + "/missing.raw", layout, "does not exist");
+    RawLayout spacing = layout;
+    spacing.spacing = {1, 0, 1};
+    fails(s.file("s.raw", data), spacing, "spacing");
+}
