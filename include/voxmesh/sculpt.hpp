@@ -209,6 +209,8 @@ struct SculptBenchResult {
     double initial_update_ms = 0;   // first update(): every block
     LatencySummary update;          // per dab: update() latency
     LatencySummary frame;           // per dab: apply() + update()
+    LatencySummary update_cpu;      // per dab: CPU time of update(), all workers (std::clock; steadier
+                                    // than wall time on a loaded machine)
     double mean_blocks_remeshed = 0;
     double full_extract_ms = 0;     // median of extract_repeats full extract() runs (CPU engine)
     double mesh_assembly_ms = 0;    // one Sculpt::mesh() at the end
