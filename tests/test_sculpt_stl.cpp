@@ -1,0 +1,52 @@
+// Sculpting a model loaded from STL (read_stl + voxelize into a distance field).
+#include <catch2/catch.hpp>
+
+#include <voxmesh/sculpt.hpp>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+
+TEST_CASE("sculpt: an STL model is voxelized, sculpted in world units and stays closed", "[sculpt]") {
+    char dir[] = "/tmp/voxmesh-sculpt-stl-XXXXXX";
+    REQUIRE(mkdtemp(dir) != nullptr);
+    const std::string path = std::string(dir) + "/octahedron.stl";
+    {
+        // An octahedron with corners at +-10 on each axis, wound outward.
+        const double p[6][3] = {{10, 0, 0}, {-10, 0, 0}, {0, 10, 0}, {0, -10, 0}, {0, 0, 10}, {0, 0, -10}};
+        const int f[8][3] = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4}, {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+        std::ofstream out(path);
+        out << "solid octahedron\n";
+        for (const auto& t : f) {
+            out << " facet normal 0 0 0\n  outer loop\n";
+            for (int v : t) out << "   vertex " << p[v][0] << " " << p[v][1] << " " << p[v][2] << "\n";
+            out << "  endloop\n endfacet\n";
+        }
+        out << "endsolid octahedron\n";
+    }
+    voxmesh::SculptOptions o;
+    o.block_size = 8;
+    voxmesh::Sculpt s = voxmesh::Sculpt::from_stl(path, 32, o);
+    std::remove(path.c_str());
+    rmdir(dir);
+    REQUIRE(s.view().type == voxmesh::ScalarType::F32);
+    REQUIRE(s.options().strength_scale == Approx(s.view().spacing[0]));
+    s.update();
+    voxmesh::Options eo;
+    eo.backend = voxmesh::Backend::Cpu;
+    REQUIRE(s.mesh().indices == voxmesh::extract(s.view(), eo).indices);
+
+    // Carve a dent into the +x corner and build up the -y corner, in model units.
+    s.subtract({9, 0, 0}, 3, 2, voxmesh::Units::World);
+    s.add({0, -9, 0}, 3, 1.5, voxmesh::Units::World);
+    s.smooth({0, 0, 9}, 4, 1, voxmesh::Units::World);
+    REQUIRE(s.update().changed.size() > 0);
+    const voxmesh::Mesh m = s.mesh();
+    const voxmesh::Mesh want = voxmesh::extract(s.view(), eo);
+    REQUIRE(m.indices == want.indices);
+    REQUIRE(std::memcmp(m.positions.data(), want.positions.data(), 4 * m.positions.size()) == 0);
+    REQUIRE(voxmesh::analyze_topology(m).closed());
+    REQUIRE_THROWS_AS(voxmesh::Sculpt::from_stl("/nonexistent/model.stl", 32), voxmesh::Error);
+}
