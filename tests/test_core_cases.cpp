@@ -308,3 +308,34 @@ TEST_CASE("extreme integer values match the oracle", "[core]") {
     check(float{}, -3.0e38, 3.0e38, 1e30);
     check(double{}, -1e300, 1e300, -5e299);
 }
+
+TEST_CASE("rows around machine-word lengths match the oracle", "[core]") {
+    // Rows of 31..33, 63..65 and 127..129 samples: any packing of inside bits into words
+    // must handle the last partial word and crossings at word boundaries.
+    for (std::size_t nx : {31u, 32u, 33u, 63u, 64u, 65u, 127u, 128u, 129u}) {
+        const Dims dims{nx, 4, 3};
+        for (std::uint32_t seed : {41u, 42u}) {
+            INFO("nx " << nx << " seed " << seed);
+            const std::vector<double> dense = vmtest::random_doubles(dims, seed, 0, 9);
+            // Sparse: one crossing per row, placed at and around word boundaries.
+            std::vector<double> sparse(dense.size(), 0.0);
+            for (std::size_t row = 0; row < dims[1] * dims[2]; ++row) {
+                const std::size_t at = (row * 31 + seed) % nx;
+                sparse[row * nx + at] = 9.0;
+            }
+            for (const std::vector<double>* values : {&dense, static_cast<const std::vector<double>*>(&sparse)}) {
+                vmtest::RefOptions ro;
+                ro.iso = 4.5;
+                const vmtest::RefMesh ref = vmtest::reference_mc(*values, dims, ro);
+                for (unsigned threads : {1u, 2u})
+                    require_matches(voxmesh::extract(vmtest::view_of(*values, dims), cpu_options(4.5, threads)), ref);
+                const std::vector<std::uint8_t> u8 = [&] {
+                    std::vector<std::uint8_t> out(values->size());
+                    for (std::size_t i = 0; i < out.size(); ++i) out[i] = static_cast<std::uint8_t>((*values)[i]);
+                    return out;
+                }();
+                require_matches(voxmesh::extract(vmtest::view_of(u8, dims), cpu_options(4.5, 3)), ref);
+            }
+        }
+    }
+}
