@@ -4,6 +4,8 @@
 #pragma once
 
 #include <bit>
+#include <cmath>
+#include <limits>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
@@ -31,16 +33,18 @@ inline Word next_x(const Word* row, std::size_t q, std::size_t words) {
 
 // Inside bits of one row: compare into bytes (vectorises for every type), then gather each
 // 8 bytes into 8 bits with one multiply. `bytes` is scratch of 64 * words. Returns true
-// when the row holds a NaN.
+// when the row holds a NaN or an infinity.
 template <class T>
 bool pack_row_bits(const T* values, std::size_t nx, T threshold, std::uint8_t* bytes, Word* out) {
     const std::size_t words = words_per_row(nx);
     bool nan = false;
     if constexpr (std::is_floating_point_v<T>) {
+        // |v| <= max is false exactly for NaN and infinities, and vectorises.
+        constexpr T kMax = std::numeric_limits<T>::max();
         unsigned bad = 0;
         for (std::size_t i = 0; i < nx; ++i) {
             bytes[i] = values[i] >= threshold;
-            bad |= values[i] != values[i];
+            bad |= !(std::fabs(values[i]) <= kMax);
         }
         nan = bad != 0;
     } else {

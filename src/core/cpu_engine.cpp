@@ -23,9 +23,25 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// Infinite samples are refused with NaN: t = (iso - v0) / (v1 - v0) is undefined for them.
 [[noreturn]] void throw_nan(std::size_t z) {
-    throw Error("volume has NaN samples (first seen in z-plane " + std::to_string(z) +
-                "); replace them before meshing");
+    throw Error("volume has NaN or infinite samples (first seen in z-plane " + std::to_string(z) +
+                "); replace them with finite values before meshing");
+}
+
+// The classify pass finds non-finite samples; when iso is beyond the type's range it does not
+// run, so scan for them here.
+template <class T>
+void check_finite(const VolumeView& volume, ZRange range) {
+    if constexpr (std::is_floating_point_v<T>) {
+        const std::size_t plane = volume.dims[0] * volume.dims[1];
+        const T* data = static_cast<const T*>(volume.data);
+        for (std::size_t z = range.begin; z < range.end; ++z) {
+            unsigned bad = 0;
+            for (std::size_t i = 0; i < plane; ++i) bad |= !(std::fabs(data[z * plane + i]) <= std::numeric_limits<T>::max());
+            if (bad) throw_nan(z);
+        }
+    }
 }
 
 // A plane of packed inside bits (ny rows of words_per_row(nx) words) and the byte scratch
@@ -313,6 +329,7 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
         using T = decltype(tag);
         const Threshold<T> threshold = make_threshold<T>(options.iso);
         if (threshold.uniform != Uniform::Mixed) {
+            check_finite<T>(volume, range);
             plan.uniform = true;
             return;
         }
