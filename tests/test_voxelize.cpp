@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -155,8 +156,8 @@ TEST_CASE("voxelize: closed STL round trips at 128 within 2 % (distance field)",
             CHECK(std::abs(c.mhi[d] - c.hi[d]) < c.h);
         }
         if (std::string(name) == "unit_sphere.stl") {
-            CHECK(c.model_volume == Approx(4.0 / 3.0 * M_PI).epsilon(0.02));
-            CHECK(c.mesh_volume == Approx(4.0 / 3.0 * M_PI).epsilon(0.02));
+            CHECK(c.model_volume == Approx(4.0 / 3.0 * std::numbers::pi).epsilon(0.02));
+            CHECK(c.mesh_volume == Approx(4.0 / 3.0 * std::numbers::pi).epsilon(0.02));
         }
     }
 }

@@ -88,6 +88,7 @@ Soup weld_and_check(const Mesh& mesh) {
         }
     }
     if (soup.tris.empty()) throw Error("voxelize: every triangle of the mesh is degenerate (no area)");
+    if (soup.tris.size() > 0xffffffffull) throw Error("voxelize: the mesh has too many triangles (more than 2^32)");
     std::sort(edges.begin(), edges.end());
     std::size_t open = 0, nonmanifold = 0;
     for (std::size_t i = 0; i < edges.size();) {
@@ -233,7 +234,8 @@ Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
     }
 
     // Triangles per z row (CSR): those whose lattice z range contains the row's z.
-    std::vector<std::uint32_t> row_start(nz + 1, 0), row_tris;
+    std::vector<std::size_t> row_start(nz + 1, 0);
+    std::vector<std::uint32_t> row_tris;
     auto z_rows = [&](const std::array<std::uint32_t, 3>& t, std::size_t& k0, std::size_t& k1) {
         const std::int64_t zmin = std::min({q[t[0]][2], q[t[1]][2], q[t[2]][2]});
         const std::int64_t zmax = std::max({q[t[0]][2], q[t[1]][2], q[t[2]][2]});
@@ -250,7 +252,7 @@ Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
     for (std::size_t k = 0; k < nz; ++k) row_start[k + 1] += row_start[k];
     row_tris.resize(row_start[nz]);
     {
-        std::vector<std::uint32_t> fill(row_start.begin(), row_start.end() - 1);
+        std::vector<std::size_t> fill(row_start.begin(), row_start.end() - 1);
         for (std::size_t i = 0; i < soup.tris.size(); ++i) {
             std::size_t k0 = 0, k1 = 0;
             z_rows(soup.tris[i], k0, k1);

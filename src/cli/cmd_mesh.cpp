@@ -1,0 +1,129 @@
+// voxmesh mesh INPUT -o OUTPUT [--iso V] [--backend ...] [--threads N] [--device I]
+//   [--no-normals] [--inside-below] [--json] [raw flags]
+#include "common.hpp"
+
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+namespace voxmesh::cli {
+
+namespace {
+
+struct MeshArgs {
+    std::string input, output;
+    double iso = 0;
+    std::string backend = "auto";
+    unsigned threads = 0;
+    int device = -1;  // -1: every device of the backend
+    bool no_normals = false, inside_below = false, json = false;
+    RawFlags raw;
+    CLI::Option* iso_option = nullptr;
+};
+
+std::string devices_text(const Stats& stats) {
+    if (stats.devices.empty()) return "cpu";
+    std::string s;
+    for (const DeviceStats& d : stats.devices) {
+        if (!s.empty()) s += ", ";
+        s += d.name;
+        if (d.chunks) s += " (" + std::to_string(d.chunks) + (d.chunks == 1 ? " chunk)" : " chunks)");
+    }
+    return s;
+}
+
+void print_json(const MeshArgs& a, double iso, const std::string& iso_source, const Mesh& mesh,
+                const MeshTopology& topo, const Stats& stats) {
+    std::ostringstream o;
+    o << "{\"input\": " << json_string(a.input) << ", \"output\": " << json_string(a.output)
+      << ", \"iso\": " << format_double(iso) << ", \"iso_source\": " << json_string(iso_source)
+      << ", \"vertices\": " << mesh.vertex_count() << ", \"triangles\": " << mesh.triangle_count()
+      << ", \"closed\": " << (topo.closed() ? "true" : "false") << ", \"boundary_edges\": " << topo.boundary_edges
+      << ", \"nonmanifold_edges\": " << topo.nonmanifold_edges << ", \"euler\": " << topo.euler
+      << ", \"normals\": " << (mesh.normals.empty() ? "false" : "true") << ", \"times_s\": {\"classify\": "
+      << format_double(stats.times.classify) << ", \"scan\": " << format_double(stats.times.scan)
+      << ", \"generate\": " << format_double(stats.times.generate) << ", \"total\": "
+      << format_double(stats.times.total) << "}, \"backend\": " << json_string(backend_name(stats.backend))
+      << ", \"threads\": " << stats.threads << ", \"devices\": [";
+    for (std::size_t i = 0; i < stats.devices.size(); ++i) {
+        const DeviceStats& d = stats.devices[i];
+        o << (i ? ", " : "") << "{\"name\": " << json_string(d.name) << ", \"chunks\": " << d.chunks
+          << ", \"voxels\": " << d.voxels << ", \"kernel_s\": " << format_double(d.kernel_s)
+          << ", \"transfer_s\": " << format_double(d.transfer_s) << ", \"wall_s\": " << format_double(d.wall_s) << "}";
+    }
+    o << "], \"warnings\": [";
+    for (std::size_t i = 0; i < stats.warnings.size(); ++i) o << (i ? ", " : "") << json_string(stats.warnings[i]);
+    o << "]}";
+    std::cout << o.str() << "\n";
+}
+
+int run_mesh(const MeshArgs& a) {
+    check_output_path(a.output, {".stl", ".ply", ".obj"});
+    const Volume volume = load_volume(a.input, a.raw);
+
+    double iso = a.iso;
+    std::string iso_source = "given";
+    if (a.iso_option->count() == 0) {
+        const ValueRange r = value_range(volume.view());
+        iso = 0.5 * (r.min + r.max);
+        iso_source = "default: midpoint of value range " + format_double(r.min) + ".." + format_double(r.max);
+    }
+
+    Options options;
+    options.iso = iso;
+    options.backend = parse_backend(a.backend);
+    options.threads = a.threads;
+    options.normals = !a.no_normals;
+    options.inside_below = a.inside_below;
+    if (a.device >= 0) options.devices = {a.device};
+    options.log = [](const std::string& message) { std::cerr << "voxmesh: warning: " << message << "\n"; };
+
+    Stats stats;
+    const Mesh mesh = extract(volume.view(), options, stats);  // errors here are not about the file
+    const MeshTopology topo = analyze_topology(mesh);
+    if (mesh.triangle_count() == 0)
+        std::cerr << "voxmesh: warning: no surface at iso " << format_double(iso) << " in '" << a.input
+                  << "'; writing an empty mesh\n";
+    about_file(a.output, [&] { write_mesh(a.output, mesh); });
+
+    if (a.json) {
+        print_json(a, iso, iso_source, mesh, topo, stats);
+        return kExitOk;
+    }
+    std::ostringstream o;
+    o << a.input << " -> " << a.output << ": " << mesh.vertex_count() << " vertices, " << mesh.triangle_count()
+      << " triangles, ";
+    if (topo.closed()) o << "closed (euler " << topo.euler << ")";
+    else o << "open (" << topo.boundary_edges << " boundary, " << topo.nonmanifold_edges << " non-manifold edges)";
+    o << "; iso " << format_double(iso);
+    if (a.iso_option->count() == 0) o << " (" << iso_source << ")";
+    o << "; classify " << format_ms(stats.times.classify) << ", scan " << format_ms(stats.times.scan) << ", generate "
+      << format_ms(stats.times.generate) << ", total " << format_ms(stats.times.total) << "; backend "
+      << backend_name(stats.backend);
+    if (stats.threads) o << " (" << stats.threads << (stats.threads == 1 ? " thread)" : " threads)");
+    o << "; devices: " << devices_text(stats);
+    std::cout << o.str() << "\n";
+    return kExitOk;
+}
+
+}  // namespace
+
+Command add_mesh(CLI::App& app) {
+    auto a = std::make_shared<MeshArgs>();
+    CLI::App* sub = app.add_subcommand("mesh", "Extract the iso-surface of a volume file into a mesh file");
+    sub->add_option("INPUT", a->input, "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, or .raw with --dims --type")
+        ->required();
+    sub->add_option("-o,--output", a->output, "mesh file: .stl (binary), .ply (binary) or .obj")->required();
+    a->iso_option = sub->add_option("--iso", a->iso, "iso value (default: midpoint of the value range)");
+    sub->add_option("--backend", a->backend, "auto, cpu, opencl or hybrid (default auto)")
+        ->check(CLI::IsMember({"auto", "cpu", "opencl", "hybrid"}));
+    sub->add_option("--threads", a->threads, "CPU worker threads (default: all cores)");
+    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(CLI::NonNegativeNumber);
+    sub->add_flag("--no-normals", a->no_normals, "do not compute vertex normals");
+    sub->add_flag("--inside-below", a->inside_below, "values below iso are inside (SDFs): flips winding and normals");
+    sub->add_flag("--json", a->json, "print the summary as JSON");
+    add_raw_flags(sub, a->raw);
+    return {sub, [a] { return run_mesh(*a); }};
+}
+
+}  // namespace voxmesh::cli

@@ -1,0 +1,221 @@
+#include "common.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <system_error>
+
+namespace voxmesh::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const std::vector<std::string> kScalarNames{"u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64"};
+
+ScalarType parse_scalar(const std::string& name) {
+    for (ScalarType t : {ScalarType::U8, ScalarType::I8, ScalarType::U16, ScalarType::I16, ScalarType::U32,
+                         ScalarType::I32, ScalarType::F32, ScalarType::F64})
+        if (name == scalar_name(t)) return t;
+    throw BadInput("unknown sample type '" + name + "' (use u8, i8, u16, i16, u32, i32, f32 or f64)");
+}
+
+template <class T>
+ValueRange range_of(const T* s, const std::array<std::size_t, 3>& dims) {
+    ValueRange r;
+    const std::size_t n = dims[0] * dims[1] * dims[2];
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (std::size_t i = 0; i < n; ++i) {
+        const double v = static_cast<double>(s[i]);
+        if constexpr (std::is_floating_point_v<T>) {
+            if (!std::isfinite(v)) {
+                if (r.nonfinite++ == 0) r.first_nonfinite = {i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])};
+                continue;
+            }
+        }
+        lo = std::min(lo, v);
+        hi = std::max(hi, v);
+    }
+    if (lo <= hi) {
+        r.min = lo;
+        r.max = hi;
+    }
+    return r;
+}
+
+}  // namespace
+
+void add_raw_flags(CLI::App* sub, RawFlags& raw) {
+    const char* group = "Headerless .raw input";
+    sub->add_option("--dims", raw.dims, "samples along x, y, z")->expected(3)->group(group);
+    sub->add_option("--type", raw.type, "sample type")->check(CLI::IsMember(kScalarNames))->group(group);
+    sub->add_option("--endian", raw.endian, "byte order of the samples (default little)")
+        ->check(CLI::IsMember({"little", "big"}))
+        ->group(group);
+    sub->add_option("--offset", raw.offset, "bytes to skip before the first sample")->group(group);
+    sub->add_option("--spacing", raw.spacing, "sample spacing SX SY SZ (default 1 1 1)")->expected(3)->group(group);
+    sub->add_option("--origin", raw.origin, "position of the first sample OX OY OZ (default 0 0 0)")
+        ->expected(3)
+        ->group(group);
+}
+
+std::string lower_extension(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+bool is_raw_path(const std::string& path) { return lower_extension(path) == ".raw"; }
+
+void check_input_file(const std::string& path) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (ec || !fs::exists(st)) throw BadInput("'" + path + "': no such file");
+    if (fs::is_directory(st)) throw BadInput("'" + path + "': is a directory, not a file");
+    if (!fs::is_regular_file(st)) throw BadInput("'" + path + "': is not a regular file");
+    const auto size = fs::file_size(path, ec);
+    if (ec) throw BadInput("'" + path + "': cannot read its size (" + ec.message() + ")");
+    if (size == 0) throw BadInput("'" + path + "': is empty");
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) throw BadInput("'" + path + "': cannot be opened for reading");
+    std::fclose(f);
+}
+
+void check_output_path(const std::string& path, const std::vector<std::string>& extensions) {
+    const std::string ext = lower_extension(path);
+    if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end()) {
+        std::string list;
+        for (const auto& e : extensions) list += (list.empty() ? "" : ", ") + e;
+        throw BadInput("'" + path + "': unknown output format '" + ext + "' (use " + list + ")");
+    }
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw BadInput("'" + path + "': output is a directory");
+    fs::path dir = fs::path(path).parent_path();
+    if (dir.empty()) dir = ".";
+    if (!fs::is_directory(dir, ec))
+        throw BadInput("'" + path + "': output directory '" + dir.string() + "' does not exist");
+}
+
+RawLayout raw_layout(const std::string& path, const RawFlags& raw) {
+    if (raw.dims.size() != 3 || raw.type.empty())
+        throw BadInput("'" + path + "': a headerless .raw volume needs --dims NX NY NZ and --type");
+    RawLayout layout;
+    for (int a = 0; a < 3; ++a) {
+        if (raw.dims[a] == 0) throw BadInput("'" + path + "': --dims must be positive");
+        layout.dims[a] = raw.dims[a];
+        if (!raw.spacing.empty()) layout.spacing[a] = raw.spacing[a];
+        if (!raw.origin.empty()) layout.origin[a] = raw.origin[a];
+    }
+    layout.type = parse_scalar(raw.type);
+    layout.big_endian = raw.endian == "big";
+    layout.offset = raw.offset;
+    return layout;
+}
+
+Volume load_volume(const std::string& path, const RawFlags& raw) {
+    check_input_file(path);
+    const bool is_raw = is_raw_path(path);
+    if (!is_raw && raw.any_given())
+        throw BadInput("'" + path + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
+    Volume v = about_file(path, [&] { return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path); });
+    if (v.type == ScalarType::F32 || v.type == ScalarType::F64) {
+        const ValueRange r = value_range(v.view());
+        if (r.nonfinite)
+            throw BadInput("'" + path + "': " + std::to_string(r.nonfinite) + " samples are NaN or infinite (first at " +
+                           std::to_string(r.first_nonfinite[0]) + ", " + std::to_string(r.first_nonfinite[1]) + ", " +
+                           std::to_string(r.first_nonfinite[2]) + ")");
+    }
+    return v;
+}
+
+ValueRange value_range(const VolumeView& v) {
+    switch (v.type) {
+        case ScalarType::U8: return range_of(static_cast<const std::uint8_t*>(v.data), v.dims);
+        case ScalarType::I8: return range_of(static_cast<const std::int8_t*>(v.data), v.dims);
+        case ScalarType::U16: return range_of(static_cast<const std::uint16_t*>(v.data), v.dims);
+        case ScalarType::I16: return range_of(static_cast<const std::int16_t*>(v.data), v.dims);
+        case ScalarType::U32: return range_of(static_cast<const std::uint32_t*>(v.data), v.dims);
+        case ScalarType::I32: return range_of(static_cast<const std::int32_t*>(v.data), v.dims);
+        case ScalarType::F32: return range_of(static_cast<const float*>(v.data), v.dims);
+        case ScalarType::F64: return range_of(static_cast<const double*>(v.data), v.dims);
+    }
+    throw Error("unknown scalar type");
+}
+
+std::string format_bytes(std::uint64_t bytes) {
+    const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+    double v = double(bytes);
+    int u = 0;
+    while (v >= 1024 && u < 4) {
+        v /= 1024;
+        ++u;
+    }
+    char buf[64];
+    if (u == 0) std::snprintf(buf, sizeof buf, "%llu B", static_cast<unsigned long long>(bytes));
+    else std::snprintf(buf, sizeof buf, "%.1f %s", v, units[u]);
+    return buf;
+}
+
+std::string format_double(double v) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.10g", v);
+    return buf;
+}
+
+std::string format_ms(double seconds) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.2f ms", seconds * 1e3);
+    return buf;
+}
+
+std::string json_string(const std::string& s) {
+    std::string out = "\"";
+    for (unsigned char c : s) {
+        switch (c) {
+            case '"': out += "\\\""; break;
+            case '\\': out += "\\\\"; break;
+            case '\n': out += "\\n"; break;
+            case '\t': out += "\\t"; break;
+            case '\r': out += "\\r"; break;
+            default:
+                if (c < 0x20) {
+                    char buf[8];
+                    std::snprintf(buf, sizeof buf, "\\u%04x", c);
+                    out += buf;
+                } else {
+                    out += char(c);
+                }
+        }
+    }
+    return out + "\"";
+}
+
+std::string dims_text(const std::array<std::size_t, 3>& d) {
+    return std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]);
+}
+
+std::string triple_text(const std::array<double, 3>& v) {
+    return format_double(v[0]) + " " + format_double(v[1]) + " " + format_double(v[2]);
+}
+
+std::string device_type_name(DeviceType type) {
+    switch (type) {
+        case DeviceType::Any: return "any";
+        case DeviceType::Cpu: return "cpu";
+        case DeviceType::Gpu: return "gpu";
+        case DeviceType::Accelerator: return "accelerator";
+    }
+    return "?";
+}
+
+Backend parse_backend(const std::string& name) {
+    for (Backend b : {Backend::Auto, Backend::Cpu, Backend::OpenCL, Backend::Hybrid})
+        if (name == backend_name(b)) return b;
+    throw BadInput("unknown backend '" + name + "' (use auto, cpu, opencl or hybrid)");
+}
+
+}  // namespace voxmesh::cli

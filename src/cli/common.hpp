@@ -1,0 +1,93 @@
+// Shared pieces of the voxmesh CLI: exit codes, error kinds, input/output checks, small
+// formatting helpers. Each subcommand lives in its own cmd_*.cpp and registers itself
+// with add_*(app), which returns the function that runs it once parsing succeeded.
+#pragma once
+
+#include <voxmesh/io.hpp>
+#include <voxmesh/voxmesh.hpp>
+
+#include <CLI/CLI.hpp>
+
+#include <array>
+#include <cstddef>
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace voxmesh::cli {
+
+enum ExitCode : int {
+    kExitOk = 0,
+    kExitInternal = 1,  // a bug or resource failure (out of memory, ...)
+    kExitBadInput = 2,  // bad input file, bad flag combination, unusable output path
+};
+
+// Bad input or usage: exit code 2, message on stderr. The message names the file.
+struct BadInput : std::runtime_error {
+    using std::runtime_error::runtime_error;
+};
+
+// A registered subcommand and what runs it once parsing succeeded.
+struct Command {
+    CLI::App* sub = nullptr;
+    std::function<int()> run;
+};
+
+Command add_mesh(CLI::App& app);
+Command add_voxelize(CLI::App& app);
+Command add_info(CLI::App& app);
+Command add_devices(CLI::App& app);
+Command add_demo(CLI::App& app);
+
+// Runs f; a voxmesh::Error it throws becomes BadInput whose message names `path`.
+template <class F>
+auto about_file(const std::string& path, F&& f) -> decltype(f()) {
+    try {
+        return f();
+    } catch (const voxmesh::Error& e) {
+        const std::string what = e.what();
+        throw BadInput(what.find(path) != std::string::npos ? what : "'" + path + "': " + what);
+    }
+}
+
+// --dims/--type/... for headerless .raw input (mesh and info).
+struct RawFlags {
+    std::vector<std::size_t> dims;
+    std::string type;
+    std::string endian = "little";
+    std::size_t offset = 0;
+    std::vector<double> spacing, origin;
+    bool any_given() const { return !dims.empty() || !type.empty() || offset != 0 || !spacing.empty() || !origin.empty(); }
+};
+void add_raw_flags(CLI::App* sub, RawFlags& raw);
+
+bool is_raw_path(const std::string& path);
+std::string lower_extension(const std::string& path);
+
+// A readable, non-empty regular file, or BadInput naming it.
+void check_input_file(const std::string& path);
+// The output's extension is one of `extensions` and its directory exists; else BadInput.
+void check_output_path(const std::string& path, const std::vector<std::string>& extensions);
+
+// Reads a volume file (raw with the flags, else by extension) and rejects NaN/inf samples.
+Volume load_volume(const std::string& path, const RawFlags& raw);
+RawLayout raw_layout(const std::string& path, const RawFlags& raw);
+
+struct ValueRange {
+    double min = 0, max = 0;
+    std::size_t nonfinite = 0;  // NaN or infinite samples (float types)
+    std::array<std::size_t, 3> first_nonfinite{0, 0, 0};
+};
+ValueRange value_range(const VolumeView& volume);
+
+std::string format_bytes(std::uint64_t bytes);
+std::string format_double(double v);  // shortest round-trip-ish text
+std::string format_ms(double seconds);
+std::string json_string(const std::string& s);
+std::string dims_text(const std::array<std::size_t, 3>& d);
+std::string triple_text(const std::array<double, 3>& v);
+std::string device_type_name(DeviceType type);
+Backend parse_backend(const std::string& name);
+
+}  // namespace voxmesh::cli

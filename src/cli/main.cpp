@@ -1,0 +1,45 @@
+// voxmesh: mesh volumes, voxelize STL models, inspect files and devices, run the demo.
+// Exit codes: 0 success, 2 bad input or usage (message on stderr), 1 internal failure.
+#include "common.hpp"
+
+#include <exception>
+#include <iostream>
+#include <new>
+#include <vector>
+
+int main(int argc, char** argv) {
+    using namespace voxmesh::cli;
+    CLI::App app{"voxmesh " VOXMESH_VERSION_STRING
+                 ": marching cubes on every compute device (CPU threads, OpenCL), STL voxelization"};
+    app.name("voxmesh");
+    app.set_version_flag("--version", VOXMESH_VERSION_STRING);
+    app.require_subcommand(1);
+
+    std::vector<Command> commands;
+    try {
+        for (auto make : {add_mesh, add_voxelize, add_info, add_devices, add_demo}) commands.push_back(make(app));
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        const int code = app.exit(e);
+        return code == 0 ? kExitOk : kExitBadInput;
+    }
+
+    try {
+        for (const Command& c : commands)
+            if (c.sub->parsed()) return c.run();
+        std::cerr << "voxmesh: no subcommand given (see voxmesh --help)\n";
+        return kExitBadInput;
+    } catch (const BadInput& e) {
+        std::cerr << "voxmesh: error: " << e.what() << "\n";
+        return kExitBadInput;
+    } catch (const voxmesh::Error& e) {
+        std::cerr << "voxmesh: error: " << e.what() << "\n";
+        return kExitBadInput;
+    } catch (const std::bad_alloc&) {
+        std::cerr << "voxmesh: internal error: out of memory\n";
+        return kExitInternal;
+    } catch (const std::exception& e) {
+        std::cerr << "voxmesh: internal error: " << e.what() << "\n";
+        return kExitInternal;
+    }
+}

@@ -1,0 +1,251 @@
+// Runs the built `voxmesh` binary on real files and on bad input.
+#include <catch2/catch.hpp>
+
+#ifdef VOXMESH_CLI_PATH
+
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string quote(const std::string& s) {
+    std::string q = "'";
+    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return q + "'";
+}
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+// A scratch directory per test case, removed afterwards.
+struct Scratch {
+    fs::path dir;
+    Scratch() {
+        static int counter = 0;
+        dir = fs::temp_directory_path() /
+              ("voxmesh-cli-test-" + std::to_string(::getpid()) + "-" + std::to_string(++counter));
+        fs::create_directories(dir);
+    }
+    ~Scratch() {
+        std::error_code ec;
+        fs::remove_all(dir, ec);
+    }
+    std::string path(const std::string& name) const { return (dir / name).string(); }
+    std::string write(const std::string& name, const std::string& bytes) const {
+        std::ofstream(dir / name, std::ios::binary) << bytes;
+        return path(name);
+    }
+};
+
+struct Result {
+    int code = -1;
+    std::string out, err;
+};
+
+Result run(const Scratch& s, const std::string& args) {
+    const std::string out = s.path("stdout.txt"), err = s.path("stderr.txt");
+    const std::string cmd = quote(VOXMESH_CLI_PATH) + " " + args + " > " + quote(out) + " 2> " + quote(err);
+    const int status = std::system(cmd.c_str());
+    Result r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = slurp(out);
+    r.err = slurp(err);
+    return r;
+}
+
+std::string data_file(const std::string& name) {
+    const fs::path local = fs::path(VOXMESH_TEST_DATA) / name;
+    if (fs::exists(local)) return local.string();
+    return (fs::path("/work/shared/data") / name).string();
+}
+
+// Bad input: exit code 2, a message naming `names`, and no output file left behind.
+void expect_rejected(const Scratch& s, const std::string& args, const std::string& names, const std::string& output,
+                     const std::string& problem = "") {
+    INFO("voxmesh " << args);
+    const Result r = run(s, args);
+    INFO("stderr: " << r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find(names) != std::string::npos);
+    if (!problem.empty()) CHECK(r.err.find(problem) != std::string::npos);
+    if (!output.empty()) CHECK_FALSE(fs::exists(output));
+    // Nor a temporary next to it.
+    if (!output.empty() && fs::exists(fs::path(output).parent_path()))
+        for (const auto& e : fs::directory_iterator(fs::path(output).parent_path()))
+            CHECK(e.path().filename().string().find(fs::path(output).filename().string()) == std::string::npos);
+}
+
+std::string f32_bytes(const std::vector<float>& v) {
+    std::string s(v.size() * 4, '\0');
+    std::memcpy(s.data(), v.data(), s.size());
+    return s;
+}
+
+std::uint32_t stl_triangles(const std::string& path) {
+    const std::string b = slurp(path);
+    std::uint32_t n = 0;
+    if (b.size() >= 84) std::memcpy(&n, b.data() + 80, 4);
+    return n;
+}
+
+}  // namespace
+
+TEST_CASE("cli: help and usage", "[cli]") {
+    Scratch s;
+    for (const char* sub : {"", "mesh ", "voxelize ", "info ", "devices ", "demo "}) {
+        const Result r = run(s, std::string(sub) + "--help");
+        INFO(sub);
+        CHECK(r.code == 0);
+        CHECK(r.out.find("Usage") != std::string::npos);
+    }
+    CHECK(run(s, "").code == 2);                       // no subcommand
+    CHECK(run(s, "frobnicate").code == 2);             // unknown subcommand
+    CHECK(run(s, "mesh").code == 2);                   // missing INPUT and -o
+    CHECK(run(s, "mesh x.nrrd -o y.stl --backend warp").code == 2);
+    CHECK(run(s, "voxelize m.stl -o v.nrrd").code == 2);  // --resolution is required
+}
+
+TEST_CASE("cli: mesh a real CT volume", "[cli]") {
+    Scratch s;
+    const std::string in = data_file("headsq.nrrd"), out = s.path("head.stl");
+    const Result r = run(s, "mesh " + quote(in) + " -o " + quote(out) + " --iso 499.5 --backend cpu");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(r.out.find("57698 triangles") != std::string::npos);
+    CHECK(r.out.find("29057 vertices") != std::string::npos);
+    // The head touches the volume's border: the surface is cut open there.
+    CHECK(r.out.find("open") != std::string::npos);
+    CHECK(stl_triangles(out) == 57698);
+
+    const std::string ply = s.path("head.ply");
+    const Result j = run(s, "mesh " + quote(in) + " -o " + quote(ply) + " --json --threads 2 --no-normals");
+    REQUIRE(j.code == 0);
+    CHECK(j.out.front() == '{');
+    CHECK(j.out.find("\"iso_source\": \"default: midpoint of value range 0..3926\"") != std::string::npos);
+    CHECK(j.out.find("\"iso\": 1963") != std::string::npos);
+    CHECK(j.out.find("\"closed\": false") != std::string::npos);
+    CHECK(fs::file_size(ply) > 0);
+
+    const Result info = run(s, "info " + quote(in));
+    REQUIRE(info.code == 0);
+    CHECK(info.out.find("64x64x93") != std::string::npos);
+    CHECK(info.out.find("i16") != std::string::npos);
+    CHECK(info.out.find("3.2 3.2 1.5") != std::string::npos);
+    CHECK(info.out.find("0 .. 3926") != std::string::npos);
+}
+
+TEST_CASE("cli: voxelize then mesh round trip on a real STL", "[cli]") {
+    Scratch s;
+    const std::string vol = s.path("torus.nrrd"), mesh = s.path("torus.obj");
+    const Result v = run(s, "voxelize " + quote(data_file("torus.stl")) + " -o " + quote(vol) + " --resolution 48");
+    INFO(v.err);
+    REQUIRE(v.code == 0);
+    const Result m = run(s, "mesh " + quote(vol) + " -o " + quote(mesh) + " --iso 0");
+    INFO(m.err);
+    REQUIRE(m.code == 0);
+    CHECK(m.out.find("closed (euler 0)") != std::string::npos);  // a torus: genus 1
+
+    const std::string occ = s.path("cube.nrrd"), cube = s.path("cube.stl");
+    REQUIRE(run(s, "voxelize " + quote(data_file("20mm-xyz-cube.stl")) + " -o " + quote(occ) +
+                       " --resolution 24 --padding 1 --field occupancy")
+                .code == 0);
+    const Result c = run(s, "mesh " + quote(occ) + " -o " + quote(cube));  // default iso: 127.5
+    REQUIRE(c.code == 0);
+    CHECK(c.out.find("iso 127.5 (default") != std::string::npos);
+    CHECK(c.out.find("closed (euler 2)") != std::string::npos);
+
+    // Raw input with the layout on the command line.
+    std::vector<float> ball(16 * 16 * 16);
+    for (int z = 0; z < 16; ++z)
+        for (int y = 0; y < 16; ++y)
+            for (int x = 0; x < 16; ++x)
+                ball[x + 16 * (y + 16 * z)] = 5.f - std::sqrt(float((x - 7.5) * (x - 7.5) + (y - 7.5) * (y - 7.5) + (z - 7.5) * (z - 7.5)));
+    const std::string raw = s.write("ball.raw", f32_bytes(ball));
+    const Result b = run(s, "mesh " + quote(raw) + " -o " + quote(s.path("ball.stl")) +
+                                " --dims 16 16 16 --type f32 --iso 0 --spacing 0.5 0.5 0.5");
+    INFO(b.err);
+    REQUIRE(b.code == 0);
+    CHECK(b.out.find("closed (euler 2)") != std::string::npos);
+    CHECK(run(s, "info " + quote(raw) + " --dims 16 16 16 --type f32").code == 0);
+}
+
+TEST_CASE("cli: bad input exits 2 with a message and leaves no output", "[cli]") {
+    Scratch s;
+    const std::string out = s.path("out.stl");
+    const std::string head = quote(data_file("headsq.nrrd"));
+
+    const std::string truncated = s.write("truncated.raw", std::string(100, '\x01'));
+    expect_rejected(s, "mesh " + quote(truncated) + " -o " + quote(out) + " --dims 10 10 10 --type u8", "truncated.raw",
+                    out);
+    const std::string longer = s.write("longer.raw", std::string(1500, '\x01'));
+    expect_rejected(s, "mesh " + quote(longer) + " -o " + quote(out) + " --dims 10 10 10 --type u8", "longer.raw", out);
+    expect_rejected(s, "mesh " + quote(longer) + " -o " + quote(out) + " --dims 4294967296 4294967296 4294967296 --type f64",
+                    "longer.raw", out);
+    expect_rejected(s, "mesh " + quote(longer) + " -o " + quote(out) + " --dims 10 10 15 --type f16", "f16", out);
+    expect_rejected(s, "mesh " + quote(longer) + " -o " + quote(out), "longer.raw", out, "--dims");  // raw without layout
+    const std::string f16 = s.write("f16.nrrd", "NRRD0004\ntype: float16\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n" +
+                                                    std::string(16, '\0'));
+    expect_rejected(s, "mesh " + quote(f16) + " -o " + quote(out), "f16.nrrd", out);
+
+    expect_rejected(s, "mesh " + head + " -o " + quote(s.path("missing/dir/out.stl")), "missing/dir", "");
+    CHECK_FALSE(fs::exists(s.path("missing")));
+    expect_rejected(s, "mesh " + quote(s.dir.string()) + " -o " + quote(out), s.dir.string(), out, "directory");
+    const std::string empty = s.write("empty.nrrd", "");
+    expect_rejected(s, "mesh " + quote(empty) + " -o " + quote(out), "empty.nrrd", out, "empty");
+    expect_rejected(s, "mesh " + quote(s.path("nonexistent.nrrd")) + " -o " + quote(out), "nonexistent.nrrd", out);
+
+    std::vector<float> samples(27, 1.0f);
+    samples[13] = std::nanf("");
+    const std::string nan = s.write("nan.raw", f32_bytes(samples));
+    expect_rejected(s, "mesh " + quote(nan) + " -o " + quote(out) + " --dims 3 3 3 --type f32 --iso 0.5", "nan.raw", out,
+                    "NaN");
+
+    expect_rejected(s, "mesh " + head + " -o " + quote(s.path("out.xyz")), "out.xyz", s.path("out.xyz"), "format");
+    const std::string odd = s.write("volume.foo", "abc");
+    expect_rejected(s, "mesh " + quote(odd) + " -o " + quote(out), "volume.foo", out);
+    expect_rejected(s, "info " + quote(empty), "empty.nrrd", "");
+
+    // Voxelize: an open STL (one triangle), garbage, and a wrong output extension.
+    std::string tri(84, '\0');
+    const std::uint32_t one = 1;
+    std::memcpy(tri.data() + 80, &one, 4);
+    const float rec[12] = {0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0};
+    tri.append(reinterpret_cast<const char*>(rec), sizeof rec);
+    tri.append(2, '\0');
+    const std::string open = s.write("open.stl", tri);
+    const std::string vol = s.path("v.nrrd");
+    expect_rejected(s, "voxelize " + quote(open) + " -o " + quote(vol) + " --resolution 16", "open.stl", vol, "closed");
+    const std::string junk = s.write("junk.stl", "solid junk\nthis is not an stl\n");
+    expect_rejected(s, "voxelize " + quote(junk) + " -o " + quote(vol) + " --resolution 16", "junk.stl", vol);
+    expect_rejected(s, "voxelize " + quote(data_file("torus.stl")) + " -o " + quote(s.path("v.raw")) + " --resolution 16",
+                    "v.raw", s.path("v.raw"));
+}
+
+TEST_CASE("cli: devices and demo", "[cli]") {
+    Scratch s;
+    const Result d = run(s, "devices");
+    CHECK(d.code == 0);
+    CHECK(d.out.find("hardware threads") != std::string::npos);
+    const Result demo = run(s, "demo");
+    INFO(demo.out << demo.err);
+    CHECK(demo.code == 0);
+    CHECK(demo.out.find("index buffer identical") != std::string::npos);
+    CHECK(demo.out.find("opencl") != std::string::npos);
+}
+
+#else
+TEST_CASE("cli: not built", "[cli]") { WARN("voxmesh_cli is not built (VOXMESH_BUILD_CLI=OFF): CLI tests skipped"); }
+#endif
