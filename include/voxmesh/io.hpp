@@ -7,8 +7,9 @@
 //
 // Samples: uncompressed data in host byte order at a suitably aligned offset is
 // memory-mapped (Volume::storage owns the mapping; MAP_PRIVATE, so writes through
-// Volume::data never reach the file). Data in the other byte order, misaligned, or
-// compressed is copied into a heap block.
+// Volume::data never reach the file; the file must not be truncated while the Volume
+// lives). Data in the other byte order, misaligned, or compressed is copied into a heap
+// block.
 //
 // Geometry: a Volume has spacing and origin but no orientation. NRRD `space directions`
 // give the spacing as each axis vector's length and the rotation is dropped; MetaImage

@@ -1,0 +1,69 @@
+// What every fuzz target shares. The readers take paths (they map files and open detached
+// data files), so each input is written to a file in a private scratch directory and read
+// back through the public API: the whole path is fuzzed, not just the header parser.
+#pragma once
+
+#include <voxmesh/io.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+namespace fuzz {
+
+// The scratch directory, created once per process with a companion "data.bin" (a few KB
+// of varied bytes) that inputs can name as a detached data file. Removed at exit.
+inline const std::string& scratch_dir() {
+    static const std::string dir = [] {
+        std::string pattern = (std::filesystem::temp_directory_path() / "voxmesh_fuzz_XXXXXX").string();
+        if (!mkdtemp(pattern.data())) std::abort();
+        std::FILE* f = std::fopen((pattern + "/data.bin").c_str(), "wb");
+        if (!f) std::abort();
+        for (unsigned i = 0; i < 4096; ++i) std::fputc(static_cast<int>((i * 37u) ^ (i >> 3)) & 0xff, f);
+        std::fclose(f);
+        static const std::string keep = pattern;
+        std::atexit([] {
+            std::error_code ec;
+            std::filesystem::remove_all(keep, ec);
+        });
+        return pattern;
+    }();
+    return dir;
+}
+
+// Writes the input to scratch_dir()/name and returns its path.
+inline std::string input_file(const char* name, const std::uint8_t* data, std::size_t size) {
+    const std::string path = scratch_dir() + "/" + name;
+    std::FILE* f = std::fopen(path.c_str(), "wb");
+    if (!f) std::abort();
+    if (size && std::fwrite(data, 1, size, f) != size) std::abort();
+    std::fclose(f);
+    return path;
+}
+
+// Reads every byte of a loaded volume, so a mapping or buffer shorter than its dims shows up
+// under ASan (or as SIGSEGV/SIGBUS for a mapping).
+inline void touch(const voxmesh::Volume& v) {
+    const auto* p = static_cast<const volatile unsigned char*>(v.data);
+    unsigned sum = 0;
+    for (std::size_t i = 0, n = v.byte_size(); i < n; ++i) sum += p[i];
+    static volatile unsigned sink;
+    sink = sum;
+}
+
+// Reads a volume file both ways; voxmesh::Error is the expected outcome for bad input, and
+// anything else (another exception, a crash, a sanitizer report) is a finding.
+inline void read_volume_file(const std::string& path) {
+    try {
+        const voxmesh::VolumeInfo info = voxmesh::read_volume_info(path);
+        const voxmesh::Volume v = voxmesh::read_volume(path);
+        if (v.dims != info.dims || v.type != info.type) std::abort();  // info and load must agree
+        touch(v);
+    } catch (const voxmesh::Error&) {
+    }
+}
+
+}  // namespace fuzz

@@ -1,0 +1,7 @@
+// libFuzzer target: read_volume / read_volume_info on a .nrrd file.
+#include "fuzz_common.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    fuzz::read_volume_file(fuzz::input_file("input.nrrd", data, size));
+    return 0;
+}
