@@ -364,7 +364,7 @@ struct Sculpt::Impl {
         s.tris.clear();
         m.triangles(box, s, nullptr);
         fit(out.indices, s.tris.size());
-        std::memcpy(out.indices.data(), s.tris.data(), s.tris.size() * sizeof(std::uint32_t));
+        if (!s.tris.empty()) std::memcpy(out.indices.data(), s.tris.data(), s.tris.size() * sizeof(std::uint32_t));
     }
 
     unsigned workers_for(std::size_t jobs) const {
