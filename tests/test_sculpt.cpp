@@ -400,6 +400,8 @@ TEST_CASE("sculpt: construction errors", "[sculpt]") {
     v.data = f.data();
     v.type = ScalarType::F32;
     REQUIRE_THROWS_WITH(Sculpt(v), Catch::Contains("NaN"));
+    f[100] = INFINITY;
+    REQUIRE_THROWS_WITH(Sculpt(v), Catch::Contains("infinite"));
     f[100] = 0;
     SculptOptions o;
     o.block_size = 1;

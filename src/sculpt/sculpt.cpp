@@ -593,7 +593,8 @@ Sculpt::Sculpt(const VolumeView& volume, const SculptOptions& options) {
         const float* p = static_cast<const float*>(impl_->volume.data);
         const std::size_t count = impl_->volume.sample_count();
         for (std::size_t i = 0; i < count; ++i)
-            if (std::isnan(p[i])) throw Error("sculpt: the volume has NaN samples; replace them first");
+            if (!std::isfinite(p[i]))
+                throw Error("sculpt: the volume has NaN or infinite samples; replace them first");
     }
 }
 
