@@ -94,13 +94,14 @@ void print_json(const std::vector<Result>& results, std::FILE* out = stdout);
 // Table 1 of the paper beside ours: threads down, resolution across.
 void print_paper(const std::vector<Result>& results, const std::string& field, const std::string& type);
 
-// ---- nrrd_lite.cpp ----
-// Raw little-endian NRRD with the iso and field as key/value pairs (voxmesh_iso:=...).
+// ---- sculpt_bench.cpp ----
+// --sculpt: stroke-path latency per size; 0 threads = all cores. Returns the exit code.
+int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::size_t dabs, bool json, bool quiet);
+
+// ---- volume_files.cpp ----
+// NRRD with the iso and field as key/value pairs (voxmesh_iso:=...).
 void write_volume_nrrd(const std::string& path, const Input& input);
 // The iso stored by write_volume_nrrd, if the file has one.
 bool read_nrrd_iso(const std::string& path, double& iso);
-// The volume in `path`: voxmesh::read_volume when the library has readers, else the raw
-// NRRD files write_volume_nrrd writes.
-voxmesh::Volume load_volume(const std::string& path);
 
 }  // namespace vmbench

@@ -4,9 +4,11 @@
 //   voxmesh-bench --paper --repeat 5          # the paper's Table 1 grid, beside the paper
 //   voxmesh-bench --input head.nrrd --iso 400.5 --json
 //   voxmesh-bench --field gyroid --sizes 512 --write-volume gyroid512.nrrd   # for bench/peers
+//   voxmesh-bench --sculpt                    # stroke latency p50/p95/p99 at 256^3 and 512^3
 #include "bench.hpp"
 
 #include <voxmesh/fields.hpp>
+#include <voxmesh/io.hpp>
 
 #include <CLI/CLI.hpp>
 
@@ -82,6 +84,8 @@ int main(int argc, char** argv) {
     std::uint32_t seed = 1;
     Settings settings;
     bool paper = false, csv = false, json = false, no_normals = false, list = false, no_floor = false;
+    bool sculpt = false;
+    std::size_t dabs = 300;
 
     app.add_option("--field", fields, "built-in fields: sphere, gyroid, blobs, ct (comma list; default sphere)")
         ->delimiter(',');
@@ -99,6 +103,10 @@ int main(int argc, char** argv) {
     app.add_option("--seed", seed, "seed of the blobs and ct fields");
     app.add_flag("--no-normals", no_normals, "mesh without normals (default: normals on)");
     app.add_flag("--paper", paper, "the paper's Table 1 grid: sizes 64..512 x threads 1,2,4,6,16 on the CPU");
+    app.add_flag("--sculpt", sculpt,
+                 "sculpting: a built-in stroke path over a sphere, update latency p50/p95/p99 beside a full re-mesh "
+                 "(sizes default 256,512)");
+    app.add_option("--dabs", dabs, "brush dabs of the --sculpt stroke path")->check(CLI::Range(1, 100000));
     app.add_flag("--csv", csv, "CSV output");
     app.add_flag("--json", json, "one JSON object per line");
     std::string save_path;
@@ -124,6 +132,11 @@ int main(int argc, char** argv) {
                             d.platform.c_str(), d.name.c_str(), d.version.c_str(), d.compute_units,
                             double(d.global_memory) / 1048576.0, double(d.max_allocation) / 1048576.0);
             return 0;
+        }
+        if (sculpt) {
+            std::signal(SIGINT, on_sigint);
+            return run_sculpt(sizes_opt->count() ? sizes : std::vector<std::size_t>{256, 512},
+                              threads_opt->count() && !threads.empty() ? threads[0] : 0, dabs, json, settings.quiet);
         }
         if (paper) {
             if (!sizes_opt->count()) sizes = {64, 128, 256, 512};
@@ -221,7 +234,7 @@ int main(int argc, char** argv) {
             const double g0 = now_s();
             if (rc.file) {
                 in.field = rc.path;
-                in.volume = load_volume(rc.path);
+                in.volume = voxmesh::read_volume(rc.path);
                 double file_iso = 0;
                 if (!std::isnan(iso)) in.iso = iso;
                 else if (read_nrrd_iso(rc.path, file_iso)) in.iso = file_iso;

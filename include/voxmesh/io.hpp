@@ -30,6 +30,7 @@
 
 #include <array>
 #include <cstddef>
+#include <map>
 #include <string>
 
 namespace voxmesh {
@@ -60,6 +61,8 @@ struct VolumeInfo {
     // Stored-to-physical value mapping (NIfTI scl_slope/scl_inter); 1 and 0 elsewhere.
     double value_scale = 1;
     double value_offset = 0;
+    // NRRD "key:=value" lines (e.g. what write_nrrd was given); empty for other formats.
+    std::map<std::string, std::string> key_values;
 };
 
 // NRRD (.nrrd, .nhdr), MetaImage (.mhd, .mha), NIfTI-1 (.nii, .nii.gz), chosen by extension
@@ -72,7 +75,9 @@ VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout);
 // NRRD with raw encoding in host byte order (spacing and origin written as `space
 // directions` / `space origin` with `space dimension: 3`), through a temporary file renamed
 // into place.
-void write_nrrd(const std::string& path, const VolumeView& volume);
+// `key_values` become "key:=value" lines (keys without ":=" or newlines, values without newlines).
+void write_nrrd(const std::string& path, const VolumeView& volume,
+                const std::map<std::string, std::string>& key_values = {});
 
 // STL, binary or ASCII (binary when 84 + 50*n == file size, whatever the header says),
 // welded by exact float position (-0 and +0 are one position): positions and indices

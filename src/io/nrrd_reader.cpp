@@ -105,7 +105,7 @@ VolumeHeader read_nrrd_header(const std::string& path) {
     if (line.size() < 8 || line.substr(0, 7) != "NRRD000" || line[7] < '1' || line[7] > '5')
         fail(path, "not a NRRD file (the first line is not NRRD0001..NRRD0005)");
 
-    std::map<std::string, std::string> fields;
+    std::map<std::string, std::string> fields, key_values;
     bool blank_line = false;
     std::size_t line_number = 1;
     while (next_line(text, pos, line)) {
@@ -117,7 +117,10 @@ VolumeHeader read_nrrd_header(const std::string& path) {
         if (line.front() == '#') continue;
         const std::size_t sep = line.find(": ");
         const std::size_t kv = line.find(":=");
-        if (kv != std::string_view::npos && (sep == std::string_view::npos || kv < sep)) continue;  // key/value pair
+        if (kv != std::string_view::npos && (sep == std::string_view::npos || kv < sep)) {  // key/value pair
+            key_values[std::string(line.substr(0, kv))] = std::string(line.substr(kv + 2));
+            continue;
+        }
         if (sep == std::string_view::npos)
             fail(path, "header line " + std::to_string(line_number) + " is not 'field: value'");
         std::string name = lower(trim(line.substr(0, sep)));
@@ -147,6 +150,7 @@ VolumeHeader read_nrrd_header(const std::string& path) {
     SampleLayout& layout = h.layout;
     info.format = "nrrd";
     info.file_bytes = file.size();
+    info.key_values = std::move(key_values);
 
     const std::size_t dimension = parse_size(path, "dimension", required("dimension"));
     const std::vector<std::size_t> sizes = parse_sizes(path, "sizes", required("sizes"));

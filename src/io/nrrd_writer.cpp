@@ -35,7 +35,8 @@ std::string number(double value) {
 
 }  // namespace
 
-void write_nrrd(const std::string& path, const VolumeView& volume) {
+void write_nrrd(const std::string& path, const VolumeView& volume,
+                const std::map<std::string, std::string>& key_values) {
     auto refuse = [&](const std::string& why) { throw Error("cannot write '" + path + "': " + why); };
     std::size_t bytes = 0;
     try {
@@ -62,7 +63,14 @@ void write_nrrd(const std::string& path, const VolumeView& volume) {
     header += std::string("endian: ") + (std::endian::native == std::endian::big ? "big" : "little") + "\n";
     header += "encoding: raw\n";
     header += "space origin: (" + number(volume.origin[0]) + "," + number(volume.origin[1]) + "," +
-              number(volume.origin[2]) + ")\n\n";
+              number(volume.origin[2]) + ")\n";
+    for (const auto& [key, value] : key_values) {
+        if (key.empty() || key.find(":=") != std::string::npos || key.find('\n') != std::string::npos ||
+            value.find('\n') != std::string::npos)
+            refuse("key/value '" + key + "' cannot be written as a NRRD 'key:=value' line");
+        header += key + ":=" + value + "\n";
+    }
+    header += "\n";
 
     // Pad the comment so the samples start 8-byte aligned: readers can then map them.
     header.insert(header.find('\n', 9), (8 - header.size() % 8) % 8, ' ');
