@@ -38,7 +38,7 @@ typedef VOXEL_T voxel;
 #define IS_NAN(v) 0
 #else
 #define DIFF(hi, lo) ((real)(hi) - (real)(lo))
-#define IS_NAN(v) ((v) != (v))
+#define IS_NAN(v) (!isfinite(v)) /* NaN or infinite: refused like the CPU engine */
 #endif
 
 // iso - v0. Without fp64, integer samples subtract from iso's integer part exactly and add

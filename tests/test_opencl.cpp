@@ -348,6 +348,11 @@ TEST_CASE("OpenCL errors are clear", "[opencl]") {
     o.devices.clear();
     v[10] = std::numeric_limits<float>::quiet_NaN();
     CHECK_THROWS_WITH(extract(view_of(v.data(), ScalarType::F32, g), o), Catch::Contains("NaN"));
+    v[10] = -std::numeric_limits<float>::infinity();  // refused like NaN, as by the CPU engine
+    CHECK_THROWS_WITH(extract(view_of(v.data(), ScalarType::F32, g), o), Catch::Contains("infinite"));
+    std::vector<double> w(g.size(), 0.0);
+    w[62] = std::numeric_limits<double>::infinity();
+    CHECK_THROWS_WITH(extract(view_of(w.data(), ScalarType::F64, g), o), Catch::Contains("infinite"));
     o.devices.clear();
     o.device_type = DeviceType::Accelerator;
     v[10] = 0;

@@ -277,7 +277,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             for (std::size_t i = 0; i < data_samples; ++i) {
                 const double v = src[i];
                 float f = static_cast<float>(std::clamp(v, -static_cast<double>(FLT_MAX), static_cast<double>(FLT_MAX)));
-                if (v != v) f = std::numeric_limits<float>::quiet_NaN();
+                if (!std::isfinite(v)) f = std::numeric_limits<float>::quiet_NaN();  // refused in the kernel
                 else if (v >= options_.iso && !(f >= thr)) f = thr;
                 else if (v < options_.iso && f >= thr) f = std::nextafter(thr, -std::numeric_limits<float>::infinity());
                 converted[i] = f;
@@ -321,8 +321,8 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         cl_int nan_plane = INT_MAX;
         d.queue.enqueueReadBuffer(nan, CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr, &log.add(Pass::Transfer));
         if (nan_plane != INT_MAX)
-            throw Error("volume has NaN samples (first seen in z-plane " + std::to_string(nan_plane) +
-                        "); replace them before meshing");
+            throw Error("volume has NaN or infinite samples (first seen in z-plane " + std::to_string(nan_plane) +
+                        "); replace them with finite values before meshing");
         std::uint64_t vertices = all_vertices;
         if (owned < count) {  // the first vertex id of plane `end`: its group's base + the samples before
             const std::size_t g = owned / kGroup;
@@ -562,14 +562,11 @@ Mesh Engine::run(Stats& stats) {
         report();
         return cpu_extract(volume_, options_, stats);
     }
-    // A threshold no sample can cross: nothing to mesh (as the CPU engine).
+    // A threshold no sample can cross: nothing to mesh; the CPU engine only checks the samples.
     const bool uniform = dispatch_scalar(volume_.type, [&](auto tag) {
         return make_threshold<decltype(tag)>(options_.iso).uniform != Uniform::Mixed;
     });
-    if (uniform) {
-        stats.times.total = seconds_since(t0);
-        return Mesh{};
-    }
+    if (uniform) return cpu_extract(volume_, options_, stats);
 
     std::vector<DeviceJob> jobs(chosen.size());
     for (std::size_t i = 0; i < chosen.size(); ++i) {
