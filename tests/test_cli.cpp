@@ -246,6 +246,31 @@ TEST_CASE("cli: devices and demo", "[cli]") {
     CHECK(demo.out.find("opencl") != std::string::npos);
 }
 
+TEST_CASE("cli: sculpt a real STL model with a stroke script", "[cli]") {
+    Scratch s;
+    const std::string strokes = s.write("strokes.txt",
+                                        "# a groove over the top of the unit sphere, then smoothed\n"
+                                        "units world\n"
+                                        "subtract 0 0 1 0.3 2\n"
+                                        "subtract 0.3 0 0.95 0.3 2\n"
+                                        "add -0.5 0 0.8 0.25 1\n"
+                                        "smooth 0.15 0 0.97 0.3 0.5\n");
+    const std::string out = s.path("sculpted.stl");
+    const Result r = run(s, "sculpt " + quote(data_file("unit_sphere.stl")) + " --resolution 48 --strokes " +
+                                quote(strokes) + " -o " + quote(out) + " --frames");
+    INFO(r.out << r.err);
+    REQUIRE(r.code == 0);
+    CHECK(r.out.find("4 dabs") != std::string::npos);
+    CHECK(r.out.find("frame 3:") != std::string::npos);
+    CHECK(r.out.find("closed") != std::string::npos);
+    CHECK(stl_triangles(out) > 1000);
+
+    const std::string bad = s.write("bad.txt", "add 1 2\n");
+    expect_rejected(s, "sculpt " + quote(data_file("unit_sphere.stl")) + " --resolution 48 --strokes " + quote(bad) +
+                           " -o " + quote(s.path("never.stl")),
+                    "bad.txt:1", s.path("never.stl"));
+}
+
 #else
 TEST_CASE("cli: not built", "[cli]") { WARN("voxmesh_cli is not built (VOXMESH_BUILD_CLI=OFF): CLI tests skipped"); }
 #endif

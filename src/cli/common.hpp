@@ -39,6 +39,7 @@ Command add_voxelize(CLI::App& app);
 Command add_info(CLI::App& app);
 Command add_devices(CLI::App& app);
 Command add_demo(CLI::App& app);
+Command add_sculpt(CLI::App& app);
 
 // Runs f; a voxmesh::Error it throws becomes BadInput whose message names `path`.
 template <class F>

@@ -1,4 +1,4 @@
-// voxmesh: mesh volumes, voxelize STL models, inspect files and devices, run the demo.
+// voxmesh: mesh volumes, voxelize and sculpt STL models, inspect files and devices, run the demo.
 // Exit codes: 0 success, 2 bad input or usage (message on stderr), 1 internal failure.
 #include "common.hpp"
 
@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
 
     std::vector<Command> commands;
     try {
-        for (auto make : {add_mesh, add_voxelize, add_info, add_devices, add_demo}) commands.push_back(make(app));
+        for (auto make : {add_mesh, add_voxelize, add_sculpt, add_info, add_devices, add_demo}) commands.push_back(make(app));
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         const int code = app.exit(e);
