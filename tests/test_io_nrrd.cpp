@@ -8,28 +8,14 @@
 #include <string>
 #include <vector>
 
-namespace iotest {
-std::string make_temp_dir();
-void remove_tree(const std::string& dir);
-void write_file(const std::string& path, const std::string& bytes);
-std::string read_file(const std::string& path);
-std::string deflate_bytes(const std::string& data, bool gzip);
-}  // namespace iotest
+#include "support/io_scratch.hpp"
 
 using Catch::Matchers::Contains;
 using namespace voxmesh;
 
 namespace {
 
-struct Scratch {
-    std::string dir = iotest::make_temp_dir();
-    ~Scratch() { iotest::remove_tree(dir); }
-    std::string file(const std::string& name, const std::string& bytes) const {
-        const std::string path = dir + "/" + name;
-        iotest::write_file(path, bytes);
-        return path;
-    }
-};
+using iotest::Scratch;
 
 std::string i16_samples(std::size_t count, bool big_endian) {
     std::string out;

@@ -1,5 +1,7 @@
-// Helpers shared by the test_io_*.cpp files (declared again at the top of each, since the
-// test folder has no header of the io area's own): scratch directories, files, zlib.
+// Helpers shared by the test_io_*.cpp files (declared in support/io_scratch.hpp): scratch
+// directories, files, zlib.
+#include "support/io_scratch.hpp"
+
 #include <voxmesh/voxmesh.hpp>
 
 #include <cstdlib>
