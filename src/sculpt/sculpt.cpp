@@ -78,6 +78,19 @@ struct Span {
     bool empty() const { return lo > hi; }
 };
 
+// Grows the box `changed` to hold sample (x, y, z).
+void include_sample(std::array<Span, 3>& changed, std::size_t x, std::size_t y, std::size_t z) {
+    const std::size_t p[3] = {x, y, z};
+    for (int d = 0; d < 3; ++d) {
+        if (changed[d].empty()) {
+            changed[d].lo = changed[d].hi = p[d];
+        } else {
+            changed[d].lo = std::min(changed[d].lo, p[d]);
+            changed[d].hi = std::max(changed[d].hi, p[d]);
+        }
+    }
+}
+
 // Samples with a <= coordinate <= b, clipped to [0, n-1].
 Span clip_span(double a, double b, std::size_t n) {
     Span s;
@@ -205,17 +218,6 @@ struct Sculpt::Impl {
         T* data = static_cast<T*>(volume.data);
         const std::size_t sy = n[0], sz = n[0] * n[1];
         std::array<Span, 3> changed;
-        auto note = [&](std::size_t x, std::size_t y, std::size_t z) {
-            const std::size_t p[3] = {x, y, z};
-            for (int d = 0; d < 3; ++d) {
-                if (changed[d].empty()) {
-                    changed[d].lo = changed[d].hi = p[d];
-                } else {
-                    changed[d].lo = std::min(changed[d].lo, p[d]);
-                    changed[d].hi = std::max(changed[d].hi, p[d]);
-                }
-            }
-        };
         const double inv[3] = {1 / r[0], 1 / r[1], 1 / r[2]};
 
         // Smoothing reads the old values only (Jacobi), so the result does not depend on the
@@ -283,7 +285,7 @@ struct Sculpt::Impl {
                     const T stored = store_value<T>(next);
                     if (stored != v) {
                         v = stored;
-                        note(x, y, z);
+                        include_sample(changed, x, y, z);
                     }
                 }
             }
@@ -307,15 +309,7 @@ struct Sculpt::Impl {
                 for (std::size_t x = box[0].lo; x <= box[0].hi; ++x) {
                     if (row[x] == stored) continue;
                     row[x] = stored;
-                    const std::size_t p[3] = {x, y, z};
-                    for (int d = 0; d < 3; ++d) {
-                        if (changed[d].empty()) {
-                            changed[d].lo = changed[d].hi = p[d];
-                        } else {
-                            changed[d].lo = std::min(changed[d].lo, p[d]);
-                            changed[d].hi = std::max(changed[d].hi, p[d]);
-                        }
-                    }
+                    include_sample(changed, x, y, z);
                 }
             }
         mark_changed(changed);
