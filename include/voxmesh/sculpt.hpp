@@ -17,7 +17,11 @@
 // block whose range contains a sample whose value changed (an edit at a block corner marks
 // up to 8 blocks). Edits are clipped to the volume; a brush entirely outside does nothing.
 //
-// Threads: a Sculpt is used from one thread at a time (update() runs its own workers).
+// Threads: a Sculpt is used from one thread at a time. update() re-meshes on a pool of
+// worker threads the Sculpt keeps for its lifetime, or on an OpenCL device
+// (SculptOptions::backend): one batch of launches per update, every block mesh identical to
+// the CPU's (same vertices, triangles and indices; positions and normals bit-identical on
+// devices with fp64, within a few ulps without).
 //
 // Coordinates: brushes work in sample (index) coordinates unless Units::World is given,
 // where a point p maps to (p - origin) / spacing and a radius r to r / spacing per axis.
@@ -47,6 +51,12 @@ struct SculptOptions {
     // distance field in model units, the voxel spacing makes strength "samples of surface
     // displacement" (from_stl sets it so when left at 0). 0 = 1 for other volumes.
     double strength_scale = 0;
+    // Where update() re-meshes: Cpu (threads), OpenCL (device), or Auto (a GPU or accelerator
+    // when there is one, else the CPU). Hybrid is not supported (an Error). Without a usable
+    // OpenCL device, OpenCL and Auto mesh on the CPU; OpenCL says so through `log`.
+    Backend backend = Backend::Cpu;
+    int device = -1;  // OpenCL device: an index into list_devices(); -1 = a GPU/accelerator, else the first
+    std::function<void(const std::string&)> log;  // warnings (fallback to the CPU); may be empty
 };
 
 enum class BrushOp {
@@ -137,6 +147,8 @@ public:
     VolumeView view() const;
     void* data();  // the samples, for bulk writes; call invalidate_all() afterwards
     const SculptOptions& options() const;  // strength_scale resolved
+    Backend backend() const;               // where update() re-meshes: Cpu or OpenCL
+    std::string device_name() const;       // "cpu" or the OpenCL device's name
     std::array<double, 3> to_samples(std::array<double, 3> world) const;
     SculptMemory memory() const;
 
@@ -200,11 +212,16 @@ struct SculptBenchOptions {
     std::size_t block_size = 32;
     double radius_min = 8, radius_max = 16;
     std::size_t extract_repeats = 3;  // full extract() timings (median reported); 0 = skip
+    Backend backend = Backend::Cpu;   // where update() re-meshes (SculptOptions::backend)
+    int device = -1;                  // SculptOptions::device
 };
 
 struct SculptBenchResult {
     SculptBenchOptions options;
     unsigned threads = 0;           // resolved
+    Backend backend = Backend::Cpu; // what update() ran on (Cpu after a fallback)
+    std::string device = "cpu";     // Sculpt::device_name()
+    std::vector<std::string> warnings;  // e.g. the fallback to the CPU
     double build_model_ms = 0;      // volume generation
     double initial_update_ms = 0;   // first update(): every block
     LatencySummary update;          // per dab: update() latency

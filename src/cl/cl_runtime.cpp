@@ -133,7 +133,8 @@ cl::Program Device::build(const std::string& source, const std::string& options)
 }
 
 cl::Kernel& Device::kernel(const unsigned char* source, const std::string& options, const char* name) {
-    const std::string key = (source == kKernel_scan ? "scan " : "mc ") + options;
+    const char* file = source == kKernel_scan ? "scan " : source == kKernel_sculpt_blocks ? "sculpt " : "mc ";
+    const std::string key = file + options;
     auto it = programs_.find(key);
     if (it == programs_.end())
         it = programs_.emplace(key, Program{build(reinterpret_cast<const char*>(source), options), {}}).first;
@@ -149,6 +150,10 @@ cl::Kernel& Device::mc_kernel(const std::string& options, const char* name) {
 
 cl::Kernel& Device::scan_kernel(const char* name) {
     return kernel(kKernel_scan, "-DSCAN_ITEMS=" + std::to_string(kScanItems), name);
+}
+
+cl::Kernel& Device::sculpt_kernel(const std::string& options, const char* name) {
+    return kernel(kKernel_sculpt_blocks, options, name);
 }
 
 std::size_t Device::scan_local_size() {

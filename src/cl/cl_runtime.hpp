@@ -18,6 +18,7 @@ namespace voxmesh::detail {
 
 extern const unsigned char kKernel_marching_cubes[];
 extern const unsigned char kKernel_scan[];
+extern const unsigned char kKernel_sculpt_blocks[];  // sculpting's batched block mesher
 
 namespace cl_engine {
 
@@ -51,6 +52,8 @@ public:
     // throw Error with the device name and the build log.
     cl::Kernel& mc_kernel(const std::string& options, const char* name);
     cl::Kernel& scan_kernel(const char* name);
+    // Kernels of sculpt_blocks.cl built with `options` (src/cl/cl_blocks.cpp).
+    cl::Kernel& sculpt_kernel(const std::string& options, const char* name);
     std::size_t scan_local_size();
 
     // A buffer of at least `bytes` for slot `id`, kept for the next chunk and call.

@@ -14,6 +14,8 @@
 #include <voxmesh/sculpt.hpp>
 
 #include "block_mesher.hpp"
+#include "device_blocks.hpp"
+#include "worker_pool.hpp"
 #include "core/cpu_engine.hpp"
 #include "core/parallel.hpp"
 #include "core/threshold.hpp"
@@ -155,6 +157,13 @@ struct Sculpt::Impl {
     std::vector<std::uint8_t> was_nonempty;  // per dirty-list entry, during update()
     std::vector<Scratch> scratch;            // per worker
     std::vector<double> plane_prev, plane_cur;  // smoothing: old values of planes z-1 and z
+    WorkerPool pool;                            // update() and mesh() workers, kept between calls
+    std::unique_ptr<DeviceBlockMesher> device;  // set: update() re-meshes on this OpenCL device
+    std::vector<BlockBox> device_boxes;         // the dirty blocks' boxes, for the device
+
+    void warn(const std::string& message) const {
+        if (options.log) options.log(message);
+    }
 
     std::size_t block_index(std::size_t bx, std::size_t by, std::size_t bz) const { return bx + nb[0] * (by + nb[1] * bz); }
     std::array<std::size_t, 3> block_coord(std::size_t index) const {
@@ -365,6 +374,49 @@ struct Sculpt::Impl {
         return static_cast<unsigned>(std::max<std::size_t>(1, std::min<std::size_t>(threads, jobs)));
     }
 
+    void remesh_on_cpu() {
+        const std::size_t jobs = dirty_list.size();
+        const unsigned workers = workers_for(jobs);
+        if (scratch.size() < workers) scratch.resize(workers);
+        dispatch_sculpt_type(volume.type, [&](auto tag) {
+            using T = decltype(tag);
+            const BlockMesher<T> m = mesher<T>();
+            std::atomic<std::size_t> next{0};
+            pool.run(workers, [&](unsigned w) {
+                Scratch& s = scratch[w];
+                s.reserve_for(bs);
+                for (std::size_t i; (i = next.fetch_add(1, std::memory_order_relaxed)) < jobs;)
+                    mesh_block(m, dirty_list[i], s);
+            });
+        });
+    }
+
+    // False after an OpenCL failure: the device is dropped (with a warning) and the caller
+    // re-meshes on the CPU, now and from then on.
+    bool remesh_on_device() {
+        device_boxes.resize(dirty_list.size());
+        for (std::size_t i = 0; i < dirty_list.size(); ++i) device_boxes[i] = box_of(dirty_list[i]);
+        try {
+            device->mesh(device_boxes, [&](std::size_t i, const DeviceBlockMesh& m) {
+                BlockStore& out = blocks[dirty_list[i]];
+                copy_into(out.positions, m.positions);
+                copy_into(out.normals, m.normals);
+                copy_into(out.indices, m.indices);
+            });
+        } catch (const Error& e) {
+            warn(std::string(e.what()) + "; sculpt re-meshes on the CPU from now on");
+            device.reset();
+            return false;
+        }
+        return true;
+    }
+
+    template <class V, class S>
+    static void copy_into(V& v, S from) {
+        fit(v, from.size());
+        if (!from.empty()) std::memcpy(v.data(), from.data(), from.size_bytes());
+    }
+
     UpdateResult update() {
         const auto t0 = Clock::now();
         UpdateResult result;
@@ -372,19 +424,7 @@ struct Sculpt::Impl {
         if (jobs > 0) {
             was_nonempty.resize(jobs);
             for (std::size_t i = 0; i < jobs; ++i) was_nonempty[i] = !blocks[dirty_list[i]].indices.empty();
-            const unsigned workers = workers_for(jobs);
-            if (scratch.size() < workers) scratch.resize(workers);
-            dispatch_sculpt_type(volume.type, [&](auto tag) {
-                using T = decltype(tag);
-                const BlockMesher<T> m = mesher<T>();
-                std::atomic<std::size_t> next{0};
-                detail::run_workers(workers, [&](unsigned w) {
-                    Scratch& s = scratch[w];
-                    s.reserve_for(bs);
-                    for (std::size_t i; (i = next.fetch_add(1, std::memory_order_relaxed)) < jobs;)
-                        mesh_block(m, dirty_list[i], s);
-                });
-            });
+            if (!device || no_surface || !remesh_on_device()) remesh_on_cpu();
             for (std::size_t i = 0; i < jobs; ++i) {
                 const std::uint32_t b = dirty_list[i];
                 dirty_flag[b] = 0;
@@ -435,7 +475,7 @@ struct Sculpt::Impl {
         // 1. Per block: edge keys, ownership, row counts (parallel).
         {
             std::atomic<std::size_t> next{0};
-            detail::run_workers(workers, [&](unsigned w) {
+            pool.run(workers, [&](unsigned w) {
                 Scratch& s = scratch[w];
                 s.reserve_for(bs);
                 for (std::size_t j; (j = next.fetch_add(1, std::memory_order_relaxed)) < nonempty.size();) {
@@ -508,7 +548,7 @@ struct Sculpt::Impl {
         //    owned vertices' data copied into place (parallel).
         {
             std::atomic<std::size_t> next{0};
-            detail::run_workers(workers, [&](unsigned) {
+            pool.run(workers, [&](unsigned) {
                 for (std::size_t j; (j = next.fetch_add(1, std::memory_order_relaxed)) < nonempty.size();) {
                     const std::size_t b = nonempty[j];
                     Assembly& a = asm_[b];
@@ -602,7 +642,7 @@ Sculpt Sculpt::from_function(std::array<std::size_t, 3> dims, ScalarType type,
         T* data = static_cast<T*>(im.volume.data);
         const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(im.threads, dims[2]));
         std::atomic<bool> nan{false};
-        detail::run_workers(workers, [&](unsigned w) {
+        im.pool.run(workers, [&](unsigned w) {
             for (std::size_t z = dims[2] * w / workers; z < dims[2] * (w + 1) / workers; ++z)
                 for (std::size_t y = 0; y < dims[1]; ++y) {
                     T* row = data + (z * dims[1] + y) * dims[0];
@@ -619,6 +659,30 @@ Sculpt Sculpt::from_function(std::array<std::size_t, 3> dims, ScalarType type,
 }
 
 namespace {
+
+// Opens the OpenCL device update() re-meshes on, when the options ask for one and one exists.
+void choose_backend(Sculpt::Impl& im) {
+    const SculptOptions& o = im.options;
+    if (o.backend == Backend::Cpu) return;
+    if (o.backend == Backend::Hybrid)
+        throw Error("sculpt: the hybrid backend is not supported; use cpu, opencl or auto");
+    int index = o.device;
+    if (o.backend == Backend::Auto && index < 0) {
+        // Auto: a GPU or accelerator re-meshes faster than the CPU's threads; a CPU OpenCL
+        // device (PoCL) does not.
+        for (const DeviceInfo& d : list_devices())
+            if (d.type != DeviceType::Cpu && index < 0) index = d.index;
+        if (index < 0) return;
+    }
+    DeviceBlockSetup setup;
+    setup.volume = im.view();
+    setup.iso = o.iso;
+    setup.inside_below = o.inside_below;
+    setup.normals = o.normals;
+    std::string why;
+    im.device = open_opencl_block_mesher(setup, index, why);
+    if (!im.device) im.warn("no usable OpenCL device (" + why + "); sculpt re-meshes on the CPU");
+}
 
 std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarType type, std::array<double, 3> spacing,
                                         std::array<double, 3> origin, const SculptOptions& options) {
@@ -657,6 +721,7 @@ std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarT
         im.no_surface = detail::make_threshold<T>(options.iso).uniform != detail::Uniform::Mixed;
     });
     im.mark_all();
+    choose_backend(im);
     return impl;
 }
 
@@ -722,6 +787,8 @@ Mesh Sculpt::mesh() {
 VolumeView Sculpt::view() const { return impl_->view(); }
 void* Sculpt::data() { return impl_->volume.data; }
 const SculptOptions& Sculpt::options() const { return impl_->options; }
+Backend Sculpt::backend() const { return impl_->device ? Backend::OpenCL : Backend::Cpu; }
+std::string Sculpt::device_name() const { return impl_->device ? impl_->device->device_name() : "cpu"; }
 std::array<double, 3> Sculpt::to_samples(std::array<double, 3> world) const { return impl_->to_samples(world); }
 
 SculptMemory Sculpt::memory() const {

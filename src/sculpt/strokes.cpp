@@ -209,9 +209,17 @@ SculptBenchResult run_sculpt_benchmark(const SculptBenchOptions& options,
     SculptOptions so;
     so.threads = options.threads;
     so.block_size = options.block_size;
+    so.backend = options.backend;
+    so.device = options.device;
+    so.log = [&](const std::string& w) {
+        r.warnings.push_back(w);
+        say(w);
+    };
     auto t = Clock::now();
     Sculpt sculpt = make_sculpt_sphere(n, so);
     r.build_model_ms = ms_since(t);
+    r.backend = sculpt.backend();
+    r.device = sculpt.device_name();
     say("sculpt " + std::to_string(n) + "^3: model built in " + std::to_string(r.build_model_ms) + " ms");
 
     t = Clock::now();
@@ -276,8 +284,10 @@ std::string format_sculpt_benchmark(const SculptBenchResult& r) {
     std::ostringstream o;
     o << std::fixed << std::setprecision(2);
     const std::size_t n = r.options.resolution;
-    o << "sculpt " << n << "^3, block " << r.options.block_size << ", " << r.threads << " threads, "
-      << r.update.count << " dabs (radius " << r.options.radius_min << ".." << r.options.radius_max << ")\n";
+    o << "sculpt " << n << "^3, block " << r.options.block_size << ", ";
+    if (r.backend == Backend::OpenCL) o << "OpenCL '" << r.device << "', ";
+    else o << r.threads << " threads, ";
+    o << r.update.count << " dabs (radius " << r.options.radius_min << ".." << r.options.radius_max << ")\n";
     o << "  update latency ms: p50 " << r.update.p50 << "  p95 " << r.update.p95 << "  p99 " << r.update.p99
       << "  max " << r.update.max << "  mean " << r.update.mean << "\n";
     o << "  edit+update ms:    p50 " << r.frame.p50 << "  p95 " << r.frame.p95 << "  p99 " << r.frame.p99
