@@ -3,17 +3,14 @@
 // of word q stands for sample x = 64q + r; bits past the row's end are always 0.
 #pragma once
 
+#include "row_packer.hpp"  // Word
+
 #include <bit>
-#include <cmath>
-#include <limits>
 #include <cstddef>
 #include <cstdint>
-#include <cstring>
-#include <type_traits>
 
 namespace voxmesh::detail {
 
-using Word = std::uint64_t;
 constexpr Word kNoBits = 0, kAllBits = ~Word{0};
 
 inline std::size_t words_per_row(std::size_t nx) { return (nx + 63) / 64; }
@@ -31,39 +28,6 @@ inline Word next_x(const Word* row, std::size_t q, std::size_t words) {
     return row[q] >> 1 | (q + 1 < words ? row[q + 1] << 63 : 0);
 }
 
-// Inside bits of one row: compare into bytes (vectorises for every type), then gather each
-// 8 bytes into 8 bits with one multiply. `bytes` is scratch of 64 * words. Returns true
-// when the row holds a NaN or an infinity.
-template <class T>
-bool pack_row_bits(const T* values, std::size_t nx, T threshold, std::uint8_t* bytes, Word* out) {
-    const std::size_t words = words_per_row(nx);
-    bool nan = false;
-    if constexpr (std::is_floating_point_v<T>) {
-        // |v| <= max is false exactly for NaN and infinities, and vectorises.
-        constexpr T kMax = std::numeric_limits<T>::max();
-        unsigned bad = 0;
-        for (std::size_t i = 0; i < nx; ++i) {
-            bytes[i] = values[i] >= threshold;
-            bad |= !(std::fabs(values[i]) <= kMax);
-        }
-        nan = bad != 0;
-    } else {
-        for (std::size_t i = 0; i < nx; ++i) bytes[i] = values[i] >= threshold;
-    }
-    std::memset(bytes + nx, 0, 64 * words - nx);
-    for (std::size_t q = 0; q < words; ++q) {
-        Word w = 0;
-        for (unsigned g = 0; g < 8; ++g) {
-            std::uint64_t eight;
-            std::memcpy(&eight, bytes + 64 * q + 8 * g, 8);
-            // Bytes of 0/1 at bit 8k land, without carries, at bit 56+k of the product.
-            w |= ((eight * 0x0102040810204080ull) >> 56) << (8 * g);
-        }
-        out[q] = w;
-    }
-    return nan;
-}
-
 // Crossed owned edges of a row (sample x owns x->x+1, y->y+1, z->z+1) as three masks.
 // next_y / next_z are the neighbouring rows, or null at the volume's border.
 struct EdgeMasks {
@@ -79,24 +43,29 @@ inline EdgeMasks edge_masks(const Word* row, const Word* next_y, const Word* nex
 
 inline unsigned popcount(Word w) { return static_cast<unsigned>(std::popcount(w)); }
 
-// Cells x of the cell row spanned by rows a=(y,z), b=(y+1,z), c=(y,z+1), d=(y+1,z+1):
-// bit set where the cell's 8 corners are not all equal.
-inline Word nonuniform_cells(const Word* a, const Word* b, const Word* c, const Word* d, std::size_t q,
-                             std::size_t words, std::size_t nx) {
-    const Word a0 = a[q];
-    const Word diff = (a0 ^ next_x(a, q, words)) | (a0 ^ b[q]) | (a0 ^ next_x(b, q, words)) | (a0 ^ c[q]) |
-                      (a0 ^ next_x(c, q, words)) | (a0 ^ d[q]) | (a0 ^ next_x(d, q, words));
-    return diff & bits_below(q, nx - 1);
-}
+// The eight corner masks of the 64 cells in word q of the cell row spanned by rows
+// a=(y,z), b=(y+1,z), c=(y,z+1), d=(y+1,z+1), in case-bit order: bit k of a cell's case is
+// bit r of corner[k]. Loaded once per word, then read per cell.
+struct CellWord {
+    Word corner[8];
 
-// Case index of cell 64q + r (bit k set where corner k is inside).
-inline unsigned cell_case(const Word* a, const Word* b, const Word* c, const Word* d, std::size_t q, unsigned r,
-                          std::size_t words) {
-    auto bit = [&](const Word* row, bool plus_x) {
-        return static_cast<unsigned>((plus_x ? next_x(row, q, words) : row[q]) >> r & 1);
-    };
-    return bit(a, false) | bit(a, true) << 1 | bit(b, true) << 2 | bit(b, false) << 3 | bit(c, false) << 4 |
-           bit(c, true) << 5 | bit(d, true) << 6 | bit(d, false) << 7;
-}
+    CellWord(const Word* a, const Word* b, const Word* c, const Word* d, std::size_t q, std::size_t words)
+        : corner{a[q], next_x(a, q, words), next_x(b, q, words), b[q],
+                 c[q], next_x(c, q, words), next_x(d, q, words), d[q]} {}
+
+    // Bit set where the cell's 8 corners are not all equal (cells x < nx - 1 only).
+    Word nonuniform(std::size_t q, std::size_t nx) const {
+        Word diff = 0;
+        for (unsigned k = 1; k < 8; ++k) diff |= corner[0] ^ corner[k];
+        return diff & bits_below(q, nx - 1);
+    }
+
+    // Case index of cell 64q + r (bit k set where corner k is inside).
+    unsigned cell_case(unsigned r) const {
+        unsigned c = 0;
+        for (unsigned k = 0; k < 8; ++k) c |= static_cast<unsigned>(corner[k] >> r & 1) << k;
+        return c;
+    }
+};
 
 }  // namespace voxmesh::detail

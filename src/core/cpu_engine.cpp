@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <string>
 #include <type_traits>
 
@@ -44,8 +45,7 @@ void check_finite(const VolumeView& volume, ZRange range) {
     }
 }
 
-// A plane of packed inside bits (ny rows of words_per_row(nx) words) and the byte scratch
-// that packing needs.
+// A plane of packed inside bits: ny rows of words_per_row(nx) words.
 struct BitPlane {
     std::vector<Word> words;
     const Word* row(std::size_t j, std::size_t stride) const { return words.data() + j * stride; }
@@ -60,14 +60,14 @@ public:
           ny_(volume.dims[1]),
           stride_(words_per_row(volume.dims[0])),
           threshold_(threshold),
-          bytes_(64 * stride_) {}
+          pack_(row_packer<T>()) {}
 
     std::size_t stride() const { return stride_; }
     void resize(BitPlane& plane) const { plane.words.assign(ny_ * stride_, 0); }
 
     // Packs plane z; with `rows` (classify results), rows without crossings are uniform and
     // are filled without reading the volume. Returns true when a sample is NaN.
-    bool fill(BitPlane& plane, std::size_t z, const RowInfo* rows) {
+    bool fill(BitPlane& plane, std::size_t z, const RowInfo* rows) const {
         bool nan = false;
         for (std::size_t j = 0; j < ny_; ++j) {
             Word* out = plane.words.data() + j * stride_;
@@ -75,7 +75,7 @@ public:
                 const Word w = rows[j].uniform_bit ? kAllBits : kNoBits;
                 for (std::size_t q = 0; q < stride_; ++q) out[q] = w & bits_below(q, nx_);
             } else {
-                nan |= pack_row_bits(data_ + (z * ny_ + j) * nx_, nx_, threshold_, bytes_.data(), out);
+                nan |= pack_(data_ + (z * ny_ + j) * nx_, nx_, threshold_, out);
             }
         }
         return nan;
@@ -85,19 +85,21 @@ private:
     const T* data_;
     std::size_t nx_, ny_, stride_;
     T threshold_;
-    std::vector<std::uint8_t> bytes_;
+    RowPacker<T> pack_;
 };
 
 // ---------------------------------------------------------------- classify
 
-// Counts the crossed edges a row owns and where the first and last lie.
-void classify_row(const Word* row, const Word* next_y, const Word* next_z, std::size_t words, std::size_t nx,
-                  RowInfo& info) {
+// Counts the crossed edges a row owns and where the first and last lie. Compiled twice:
+// without POPCNT the count is a library call, which costs more than the rest of the loop.
+[[gnu::always_inline]] inline void classify_row_body(const Word* row, const Word* next_y, const Word* next_z,
+                                                    std::size_t words, std::size_t nx, RowInfo& info) {
     std::uint32_t count = 0;
     std::size_t first = kEmptyRow, last = 0;
     for (std::size_t q = 0; q < words; ++q) {
         const EdgeMasks m = edge_masks(row, next_y, next_z, q, words, nx);
-        count += popcount(m.x) + popcount(m.y) + popcount(m.z);
+        count += static_cast<std::uint32_t>(__builtin_popcountll(m.x) + __builtin_popcountll(m.y) +
+                                            __builtin_popcountll(m.z));
         if (const Word any = m.any()) {
             if (first == kEmptyRow) first = 64 * q + static_cast<std::size_t>(std::countr_zero(any));
             last = 64 * q + 63 - static_cast<std::size_t>(std::countl_zero(any));
@@ -108,6 +110,23 @@ void classify_row(const Word* row, const Word* next_y, const Word* next_z, std::
     info.last = static_cast<std::uint32_t>(last);
     info.uniform_bit = static_cast<std::uint8_t>(row[0] & 1);
 }
+
+using ClassifyRow = void (*)(const Word*, const Word*, const Word*, std::size_t, std::size_t, RowInfo&);
+
+void classify_row_portable(const Word* row, const Word* next_y, const Word* next_z, std::size_t words,
+                           std::size_t nx, RowInfo& info) {
+    classify_row_body(row, next_y, next_z, words, nx, info);
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+__attribute__((target("popcnt"))) void classify_row_popcnt(const Word* row, const Word* next_y, const Word* next_z,
+                                                           std::size_t words, std::size_t nx, RowInfo& info) {
+    classify_row_body(row, next_y, next_z, words, nx, info);
+}
+ClassifyRow pick_classify_row() { return cpu_has_popcnt() ? &classify_row_popcnt : &classify_row_portable; }
+#else
+ClassifyRow pick_classify_row() { return &classify_row_portable; }
+#endif
 
 // A non-uniform cell has a crossed edge owned by rows (y, z) or (y+1, z) (those edges join
 // all 8 corners), so a cell row whose two first rows have no crossing has no triangles.
@@ -125,6 +144,7 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
     bits.resize(here);
     bits.resize(up);
     if (bits.fill(here, a, nullptr)) throw_nan(a);
+    const ClassifyRow classify_row = pick_classify_row();
     for (std::size_t k = a; k < b; ++k) {
         const bool has_up = k + 1 < nz;
         if (has_up && bits.fill(up, k + 1, nullptr)) throw_nan(k + 1);
@@ -138,11 +158,11 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
                 const Word *ra = here.row(j, words), *rb = here.row(j + 1, words), *rc = up.row(j, words),
                            *rd = up.row(j + 1, words);
                 std::uint32_t count = 0;
-                for (std::size_t q = 0; q < words; ++q)
-                    for (Word cells = nonuniform_cells(ra, rb, rc, rd, q, words, nx); cells; cells &= cells - 1) {
-                        const unsigned r = static_cast<unsigned>(std::countr_zero(cells));
-                        count += kCaseTable[cell_case(ra, rb, rc, rd, q, r, words)].count;
-                    }
+                for (std::size_t q = 0; q < words; ++q) {
+                    const CellWord cell(ra, rb, rc, rd, q, words);
+                    for (Word cells = cell.nonuniform(q, nx); cells; cells &= cells - 1)
+                        count += kCaseTable[cell.cell_case(static_cast<unsigned>(std::countr_zero(cells)))].count;
+                }
                 info[j].triangles = count;
             }
         }
@@ -173,11 +193,10 @@ struct EdgePlane {  // per sample of one plane: crossed-edge code (x|y<<1|z<<2) 
     std::vector<std::uint32_t> id;
 };
 
-inline std::uint32_t edge_id(const EdgePlane& plane, std::size_t sample, unsigned axis) {
-    const unsigned code = plane.code[sample];
-    const unsigned offset = axis == 0 ? 0 : axis == 1 ? (code & 1) : (code & 1) + (code >> 1 & 1);
-    return plane.id[sample] + offset;
-}
+// A sample's vertices are stored in axis order: the offset of the `axis` vertex among the
+// crossed edges in `code` (bit = axis).
+constexpr std::uint8_t kEdgeOffset[8][3] = {{0, 0, 0}, {0, 1, 1}, {0, 0, 1}, {0, 1, 2},
+                                            {0, 0, 0}, {0, 1, 1}, {0, 0, 1}, {0, 1, 2}};
 
 template <class T>
 class Generator {
@@ -267,18 +286,28 @@ private:
             if (!cell_row_active(rows[j], rows[j + 1])) continue;
             const Word *a = planes_[0].row(j, words_), *b = planes_[0].row(j + 1, words_),
                        *c = planes_[1].row(j, words_), *d = planes_[1].row(j + 1, words_);
+            // Edge codes and ids of the four sample rows around the cell row, indexed dy + 2 dz.
+            const std::size_t at[4] = {j * nx_, (j + 1) * nx_, j * nx_, (j + 1) * nx_};
+            const std::uint8_t* codes[4];
+            const std::uint32_t* ids[4];
+            for (unsigned r = 0; r < 4; ++r) {
+                codes[r] = edges_[r >> 1].code.data() + at[r];
+                ids[r] = edges_[r >> 1].id.data() + at[r];
+            }
             std::uint32_t* out = out_.indices + 3 * tri_base[j];
             for (std::size_t q = 0; q < words_; ++q) {
-                for (Word cells = nonuniform_cells(a, b, c, d, q, words_, nx_); cells; cells &= cells - 1) {
+                const CellWord cell(a, b, c, d, q, words_);
+                for (Word cells = cell.nonuniform(q, nx_); cells; cells &= cells - 1) {
                     const unsigned r = static_cast<unsigned>(std::countr_zero(cells));
                     const std::size_t i = 64 * q + r;
-                    const CaseEntry& entry = kCaseTable[cell_case(a, b, c, d, q, r, words_)];
+                    const CaseEntry& entry = kCaseTable[cell.cell_case(r)];
                     for (unsigned t = 0; t < entry.count; ++t) {
                         std::uint32_t v[3];
                         for (unsigned e = 0; e < 3; ++e) {
                             const CellEdge& edge = kCellEdge[entry.edges[3 * t + e]];
-                            const EdgePlane& plane = edge.dz ? edges_[1] : edges_[0];
-                            v[e] = out_.vertex_base + edge_id(plane, (j + edge.dy) * nx_ + i + edge.dx, edge.axis);
+                            const unsigned row = edge.dy + 2u * edge.dz;
+                            const std::size_t x = i + edge.dx;
+                            v[e] = out_.vertex_base + ids[row][x] + kEdgeOffset[codes[row][x]][edge.axis];
                         }
                         out[0] = v[0];
                         out[1] = flip ? v[2] : v[1];
@@ -304,6 +333,34 @@ std::vector<std::size_t> even_split(std::size_t n, unsigned parts) {
     std::vector<std::size_t> cuts(parts + 1);
     for (unsigned p = 0; p <= parts; ++p) cuts[p] = n * p / parts;
     return cuts;
+}
+
+// std::vector zero-fills on resize, and for a large mesh that first touch of every page is
+// a pass of its own: spread the three arrays over the workers (largest first, each to the
+// least loaded worker) instead of filling them one after another.
+void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads) {
+    struct Job {
+        std::size_t bytes;
+        std::function<void()> fill;
+    };
+    std::vector<Job> jobs{{12 * triangles, [&] { mesh.indices.resize(3 * triangles); }},
+                          {12 * vertices, [&] { mesh.positions.resize(3 * vertices); }}};
+    if (normals) jobs.push_back({12 * vertices, [&] { mesh.normals.resize(3 * vertices); }});
+    std::size_t total = 0;
+    for (const Job& job : jobs) total += job.bytes;
+    constexpr std::size_t kWorthThreads = std::size_t{8} << 20;
+    const unsigned workers = total < kWorthThreads ? 1u : std::min<unsigned>(threads, static_cast<unsigned>(jobs.size()));
+    std::vector<std::size_t> load(workers, 0);
+    std::vector<unsigned> owner(jobs.size());
+    for (std::size_t i = 0; i < jobs.size(); ++i) {  // jobs are already largest first
+        const auto least = std::min_element(load.begin(), load.end()) - load.begin();
+        owner[i] = static_cast<unsigned>(least);
+        load[least] += jobs[i].bytes;
+    }
+    run_workers(workers, [&](unsigned w) {
+        for (std::size_t i = 0; i < jobs.size(); ++i)
+            if (owner[i] == w) jobs[i].fill();
+    });
 }
 
 }  // namespace
@@ -411,9 +468,7 @@ Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats)
     // Output allocation counts toward generate: it is the first write of the output.
     const auto t = Clock::now();
     Mesh mesh;
-    mesh.positions.resize(3 * plan.vertices);
-    if (options.normals) mesh.normals.resize(3 * plan.vertices);
-    mesh.indices.resize(3 * plan.triangles);
+    allocate_output(mesh, plan.vertices, plan.triangles, options.normals, threads);
 
     cpu_generate(plan, volume, options, threads,
                  MeshOut{mesh.positions.data(), options.normals ? mesh.normals.data() : nullptr, mesh.indices.data(), 0});

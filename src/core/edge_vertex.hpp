@@ -40,8 +40,15 @@ public:
         std::size_t at1[3] = {i, j, k};
         ++at1[axis];
         double g0[3], g1[3];
-        gradient(idx0, at0, g0);
-        gradient(idx1, at1, g1);
+        // Most vertices lie away from the border: there both gradients are plain central
+        // differences, computed without the per-axis border tests (same arithmetic).
+        if (interior(at0) && at1[axis] + 1 < n_[axis]) {
+            central_gradient(idx0, g0);
+            central_gradient(idx1, g1);
+        } else {
+            gradient(idx0, at0, g0);
+            gradient(idx1, at1, g1);
+        }
         // Outward is toward decreasing values: the negated gradient (flipped for inside_below).
         const double sign = inside_below_ ? 1.0 : -1.0;
         double n[3], len2 = 0;
@@ -60,6 +67,17 @@ public:
     }
 
 private:
+    bool interior(const std::size_t at[3]) const {
+        return at[0] - 1 < n_[0] - 2 && at[1] - 1 < n_[1] - 2 && at[2] - 1 < n_[2] - 2;  // 1 <= at < n-1
+    }
+
+    void central_gradient(std::size_t idx, double g[3]) const {
+        for (unsigned d = 0; d < 3; ++d) {
+            const std::size_t s = stride_[d];
+            g[d] = (static_cast<double>(data_[idx + s]) - static_cast<double>(data_[idx - s])) * 0.5 * inv_spacing_[d];
+        }
+    }
+
     void gradient(std::size_t idx, const std::size_t at[3], double g[3]) const {
         for (unsigned d = 0; d < 3; ++d) {
             const std::size_t pos = at[d], s = stride_[d];

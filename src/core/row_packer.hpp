@@ -1,0 +1,32 @@
+// Packing one row of samples into inside bits (value >= threshold), 64 to a word: the
+// step that reads every sample, so it has an AVX2 variant chosen at run time. Both variants
+// give identical bits; bits past the row's end are 0.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace voxmesh::detail {
+
+using Word = std::uint64_t;
+
+// Writes words_per_row(nx) words; returns true when the row holds a NaN or an infinity.
+template <class T>
+using RowPacker = bool (*)(const T* values, std::size_t nx, T threshold, Word* out);
+
+template <class T>
+bool pack_row_portable(const T* values, std::size_t nx, T threshold, Word* out);
+
+// Null where the build or the processor has no AVX2.
+template <class T>
+RowPacker<T> avx2_row_packer();
+
+// The fastest packer this processor runs; the environment variable VOXMESH_ISA=portable
+// forces the portable one (to compare, or to rule the vector code out).
+template <class T>
+RowPacker<T> row_packer();
+
+// True when the processor has POPCNT (and the build may use it): see cpu_engine.cpp.
+bool cpu_has_popcnt();
+
+}  // namespace voxmesh::detail
