@@ -64,8 +64,15 @@ public:
             default: store_threshold<float>(); break;
         }
         std::lock_guard<std::mutex> lock(device_->mutex);
+        // A fixed work-group size: PoCL compiles a kernel anew for every local size it meets,
+        // and its own choice follows the global size, which changes from update to update.
+        std::size_t local = 64;
         for (const char* name : {"block_classify", "block_vertices", "block_triangles"})
-            device_->sculpt_kernel(options_, name);
+            local = std::min<std::size_t>(
+                local, device_->sculpt_kernel(options_, name).getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(
+                           device_->device));
+        local_ = 1;
+        while (local_ * 2 <= local) local_ *= 2;
         device_->scan_local_size();
     }
 
@@ -135,6 +142,7 @@ private:
     DeviceBlockSetup setup_;
     std::size_t sample_bytes_ = 4;
     bool fp64_ = false;
+    std::size_t local_ = 1;  // work-items per group along the rows
     std::string options_;
     std::vector<unsigned char> threshold_;
     // Host buffers reused from batch to batch.
@@ -206,7 +214,7 @@ void OpenclBlockMesher::run_batch(std::span<const BlockBox> boxes, std::size_t f
     d.queue.enqueueWriteBuffer(staged, CL_FALSE, 0, stage_.size(), stage_.data());
     d.queue.enqueueWriteBuffer(meta, CL_FALSE, 0, meta_.size() * sizeof(cl_uint), meta_.data());
 
-    const cl::NDRange global(round_up(max_rows, 64), boxes.size());
+    const cl::NDRange global(round_up(max_rows, local_), boxes.size()), local(local_, 1);
     cl::Kernel& classify = d.sculpt_kernel(options_, "block_classify");
     classify.setArg(0, staged);
     classify.setArg(1, meta);
@@ -216,7 +224,7 @@ void OpenclBlockMesher::run_batch(std::span<const BlockBox> boxes, std::size_t f
     classify.setArg(5, codes);
     classify.setArg(6, vcount);
     classify.setArg(7, tcount);
-    d.queue.enqueueNDRangeKernel(classify, cl::NullRange, global, cl::NullRange);
+    d.queue.enqueueNDRangeKernel(classify, cl::NullRange, global, local);
 
     // In place: vcount/tcount become every row's first vertex/triangle in the batch.
     const std::uint64_t vertices = scan(d, vcount, rows, log);
@@ -263,7 +271,7 @@ void OpenclBlockMesher::run_batch(std::span<const BlockBox> boxes, std::size_t f
         k.setArg(22, vid);
         k.setArg(23, positions);
         k.setArg(24, normals);
-        d.queue.enqueueNDRangeKernel(k, cl::NullRange, global, cl::NullRange);
+        d.queue.enqueueNDRangeKernel(k, cl::NullRange, global, local);
         d.queue.enqueueReadBuffer(positions, CL_FALSE, 0, vertices * 12, positions_.data());
         if (setup_.normals) d.queue.enqueueReadBuffer(normals, CL_FALSE, 0, vertices * 12, normals_.data());
 
@@ -282,7 +290,7 @@ void OpenclBlockMesher::run_batch(std::span<const BlockBox> boxes, std::size_t f
             t.setArg(9, vcount);
             t.setArg(10, tcount);
             t.setArg(11, indices);
-            d.queue.enqueueNDRangeKernel(t, cl::NullRange, global, cl::NullRange);
+            d.queue.enqueueNDRangeKernel(t, cl::NullRange, global, local);
             d.queue.enqueueReadBuffer(indices, CL_FALSE, 0, triangles * 12, indices_.data());
         }
     }
