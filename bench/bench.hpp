@@ -95,8 +95,10 @@ void print_json(const std::vector<Result>& results, std::FILE* out = stdout);
 void print_paper(const std::vector<Result>& results, const std::string& field, const std::string& type);
 
 // ---- sculpt_bench.cpp ----
-// --sculpt: stroke-path latency per size; 0 threads = all cores. Returns the exit code.
-int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::size_t dabs, bool json, bool quiet);
+// --sculpt: stroke-path latency per size and backend (cpu, opencl, auto: --backends); 0 threads =
+// all cores. Returns the exit code.
+int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::size_t dabs,
+               const std::vector<std::string>& backends, bool json, bool quiet);
 
 // ---- volume_files.cpp ----
 // NRRD with the iso and field as key/value pairs (voxmesh_iso:=...).

@@ -136,7 +136,8 @@ int main(int argc, char** argv) {
         if (sculpt) {
             std::signal(SIGINT, on_sigint);
             return run_sculpt(sizes_opt->count() ? sizes : std::vector<std::size_t>{256, 512},
-                              threads_opt->count() && !threads.empty() ? threads[0] : 0, dabs, json, settings.quiet);
+                              threads_opt->count() && !threads.empty() ? threads[0] : 0, dabs, backends, json,
+                              settings.quiet);
         }
         if (paper) {
             if (!sizes_opt->count()) sizes = {64, 128, 256, 512};

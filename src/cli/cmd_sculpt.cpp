@@ -1,4 +1,5 @@
-// voxmesh sculpt MODEL.stl --resolution N --strokes FILE -o OUT.ply [--threads T] [--frames]
+// voxmesh sculpt MODEL.stl --resolution N --strokes FILE -o OUT.ply [--backend cpu|opencl|auto] [--device I]
+//                [--threads T] [--frames]
 // The paper's loop: voxelize a model, apply brush dabs, re-mesh only what each dab touched.
 #include "common.hpp"
 
@@ -17,6 +18,8 @@ struct SculptArgs {
     std::string input, strokes, output;
     std::size_t resolution = 0;
     unsigned threads = 0;
+    std::string backend = "cpu";
+    int device = -1;  // -1: a GPU/accelerator, else the first device
     bool frames = false;
 };
 
@@ -29,6 +32,9 @@ int run_sculpt(const SculptArgs& a) {
 
     SculptOptions options;
     options.threads = a.threads;
+    options.backend = parse_backend(a.backend);
+    options.device = a.device;
+    options.log = [](const std::string& message) { std::cerr << "voxmesh: warning: " << message << "\n"; };
     const auto t0 = std::chrono::steady_clock::now();
     Sculpt sculpt = about_file(a.input, [&] { return Sculpt::from_stl(a.input, a.resolution, options); });
     const UpdateResult first = sculpt.update();
@@ -48,10 +54,10 @@ int run_sculpt(const SculptArgs& a) {
     const LatencySummary s = summarize_latencies(update_ms);
     const MeshTopology topo = analyze_topology(mesh);
     const auto dims = sculpt.view().dims;
-    std::printf("%s -> %s: %s volume, voxelized and meshed in %s (%zu blocks); %zu dabs, update p50 %.2f ms, "
+    std::printf("%s -> %s: %s volume, voxelized and meshed in %s (%zu blocks); %zu dabs re-meshed on %s, update p50 %.2f ms, "
                 "p95 %.2f ms, p99 %.2f ms, max %.2f ms; %zu vertices, %zu triangles, %s\n",
                 a.input.c_str(), a.output.c_str(), dims_text(dims).c_str(), format_ms(load_s).c_str(), first.remeshed,
-                dabs.size(), s.p50, s.p95, s.p99, s.max, mesh.vertex_count(), mesh.triangle_count(),
+                dabs.size(), sculpt.device_name().c_str(), s.p50, s.p95, s.p99, s.max, mesh.vertex_count(), mesh.triangle_count(),
                 topo.closed() ? "closed" : "open");
     return kExitOk;
 }
@@ -71,6 +77,11 @@ Command add_sculpt(CLI::App& app) {
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (8..2048)")
         ->required()
         ->check(CLI::Range(std::size_t(8), std::size_t(2048)));
+    sub->add_option("--backend", a->backend,
+                    "where each update re-meshes: cpu (threads), opencl (a device; the CPU with a warning when there "
+                    "is none) or auto (a GPU when there is one); default cpu")
+        ->check(CLI::IsMember({"auto", "cpu", "opencl"}));
+    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(CLI::NonNegativeNumber);
     sub->add_option("--threads", a->threads, "CPU threads (default: all cores)");
     sub->add_flag("--frames", a->frames, "print every frame's edit and update time");
     return {sub, [a] { return run_sculpt(*a); }};
