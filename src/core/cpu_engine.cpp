@@ -66,14 +66,17 @@ public:
     void resize(BitPlane& plane) const { plane.words.assign(ny_ * stride_, 0); }
 
     // Packs plane z; with `rows` (classify results), rows without crossings are uniform and
-    // are filled without reading the volume. Returns true when a sample is NaN.
-    bool fill(BitPlane& plane, std::size_t z, const RowInfo* rows) const {
+    // are filled without reading the volume, and rows with crossings are copied from
+    // `stored` (classify's bits). Returns true when a sample is NaN.
+    bool fill(BitPlane& plane, std::size_t z, const RowInfo* rows, const std::vector<Word>* stored) const {
         bool nan = false;
         for (std::size_t j = 0; j < ny_; ++j) {
             Word* out = plane.words.data() + j * stride_;
             if (rows && rows[j].first == kEmptyRow) {
                 const Word w = rows[j].uniform_bit ? kAllBits : kNoBits;
                 for (std::size_t q = 0; q < stride_; ++q) out[q] = w & bits_below(q, nx_);
+            } else if (rows && stored) {
+                std::copy_n(stored->data() + rows[j].bits_at, stride_, out);
             } else {
                 nan |= pack_(data_ + (z * ny_ + j) * nx_, nx_, threshold_, out);
             }
@@ -136,22 +139,32 @@ inline bool cell_row_active(const RowInfo& a, const RowInfo& b) {
 
 template <class T>
 void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T threshold, std::size_t a, std::size_t b,
-                     RowInfo* rows) {
+                     RowInfo* rows, std::vector<Word>* plane_bits) {
     const std::size_t nx = volume.dims[0], ny = volume.dims[1], nz = volume.dims[2];
     PlaneBits<T> bits(volume, threshold);
     const std::size_t words = bits.stride();
     BitPlane here, up;
     bits.resize(here);
     bits.resize(up);
-    if (bits.fill(here, a, nullptr)) throw_nan(a);
+    if (bits.fill(here, a, nullptr, nullptr)) throw_nan(a);
     const ClassifyRow classify_row = pick_classify_row();
     for (std::size_t k = a; k < b; ++k) {
         const bool has_up = k + 1 < nz;
-        if (has_up && bits.fill(up, k + 1, nullptr)) throw_nan(k + 1);
+        if (has_up && bits.fill(up, k + 1, nullptr, nullptr)) throw_nan(k + 1);
         RowInfo* info = rows + (k - plan.range.begin) * ny;
-        for (std::size_t j = 0; j < ny; ++j)
+        std::size_t active = 0;
+        for (std::size_t j = 0; j < ny; ++j) {
             classify_row(here.row(j, words), j + 1 < ny ? here.row(j + 1, words) : nullptr,
                          has_up ? up.row(j, words) : nullptr, words, nx, info[j]);
+            active += info[j].first != kEmptyRow;
+        }
+        std::vector<Word>& store = plane_bits[k - plan.range.begin];
+        store.reserve(active * words);
+        for (std::size_t j = 0; j < ny; ++j)
+            if (info[j].first != kEmptyRow) {
+                info[j].bits_at = static_cast<std::uint32_t>(store.size());
+                store.insert(store.end(), here.row(j, words), here.row(j, words) + words);
+            }
         if (has_up && k < plan.range.end) {
             for (std::size_t j = 0; j + 1 < ny; ++j) {
                 if (!cell_row_active(info[j], info[j + 1])) continue;
@@ -188,15 +201,26 @@ std::vector<std::size_t> balanced_split(const std::vector<double>& cost, unsigne
 
 // ---------------------------------------------------------------- generate
 
-struct EdgePlane {  // per sample of one plane: crossed-edge code (x|y<<1|z<<2) and first local vertex id
-    std::vector<std::uint8_t> code;
+// Per sample of one plane, the local vertex id of each crossed edge it owns (slot 3i + axis);
+// slots of edges that do not cross are never read.
+struct EdgePlane {
     std::vector<std::uint32_t> id;
 };
 
-// A sample's vertices are stored in axis order: the offset of the `axis` vertex among the
-// crossed edges in `code` (bit = axis).
-constexpr std::uint8_t kEdgeOffset[8][3] = {{0, 0, 0}, {0, 1, 1}, {0, 0, 1}, {0, 1, 2},
-                                            {0, 0, 0}, {0, 1, 1}, {0, 0, 1}, {0, 1, 2}};
+// Per cell edge: which of the four sample rows around a cell row holds it (dy + 2 dz) and its
+// slot relative to the cell's own sample (3 dx + axis).
+struct EdgeSlot {
+    std::uint8_t row, slot;
+};
+std::array<EdgeSlot, 12> make_edge_slots() {
+    std::array<EdgeSlot, 12> slots{};
+    for (unsigned e = 0; e < 12; ++e) {
+        const CellEdge& edge = kCellEdge[e];
+        slots[e] = {static_cast<std::uint8_t>(edge.dy + 2 * edge.dz), static_cast<std::uint8_t>(3 * edge.dx + edge.axis)};
+    }
+    return slots;
+}
+const std::array<EdgeSlot, 12> kEdgeSlot = make_edge_slots();  // kCellEdge is constant-initialised
 
 template <class T>
 class Generator {
@@ -213,10 +237,7 @@ public:
           nz_(volume.dims[2]),
           words_(bits_.stride()) {
         for (auto& b : planes_) bits_.resize(b);
-        for (auto& e : edges_) {
-            e.code.resize(nx_ * ny_);
-            e.id.resize(nx_ * ny_);
-        }
+        for (auto& e : edges_) e.id.resize(3 * nx_ * ny_);
     }
 
     // Meshes planes [a, b) of the range: vertices of sample planes a..b-1 and triangles of
@@ -243,7 +264,10 @@ private:
         return p < plan_.meta_planes ? plan_.rows.data() + p * ny_ : nullptr;
     }
 
-    void fill_bits(std::size_t z, int slot) { bits_.fill(planes_[slot], z, meta_rows(z)); }
+    void fill_bits(std::size_t z, int slot) {
+        const std::size_t p = z - plan_.range.begin;
+        bits_.fill(planes_[slot], z, meta_rows(z), p < plan_.meta_planes ? &plan_.plane_bits[p] : nullptr);
+    }
 
     void build_edges(std::size_t z, const BitPlane& plane, const BitPlane* up, EdgePlane& edges, bool write_vertices) {
         const RowInfo* rows = meta_rows(z);
@@ -253,8 +277,7 @@ private:
             const Word* row = plane.row(j, words_);
             const Word* next_y = j + 1 < ny_ ? plane.row(j + 1, words_) : nullptr;
             const Word* next_z = up ? up->row(j, words_) : nullptr;
-            std::uint8_t* code = edges.code.data() + j * nx_;
-            std::uint32_t* id = edges.id.data() + j * nx_;
+            std::uint32_t* id = edges.id.data() + 3 * j * nx_;
             std::uint32_t next_id = bases[j];
             for (std::size_t q = 0; q < words_; ++q) {
                 const EdgeMasks m = edge_masks(row, next_y, next_z, q, words_, nx_);
@@ -262,12 +285,12 @@ private:
                     const unsigned r = static_cast<unsigned>(std::countr_zero(any));
                     const std::size_t i = 64 * q + r;
                     const unsigned c = static_cast<unsigned>((m.x >> r & 1) | (m.y >> r & 1) << 1 | (m.z >> r & 1) << 2);
-                    code[i] = static_cast<std::uint8_t>(c);
-                    id[i] = next_id;
-                    if (write_vertices)
-                        for (unsigned axis = 0; axis < 3; ++axis)
-                            if (c >> axis & 1) write_vertex(i, j, z, axis, next_id++);
-                    if (!write_vertices) next_id += popcount(c);
+                    for (unsigned axis = 0; axis < 3; ++axis) {
+                        if (!(c >> axis & 1)) continue;
+                        id[3 * i + axis] = next_id;
+                        if (write_vertices) write_vertex(i, j, z, axis, next_id);
+                        ++next_id;
+                    }
                 }
             }
         }
@@ -286,14 +309,10 @@ private:
             if (!cell_row_active(rows[j], rows[j + 1])) continue;
             const Word *a = planes_[0].row(j, words_), *b = planes_[0].row(j + 1, words_),
                        *c = planes_[1].row(j, words_), *d = planes_[1].row(j + 1, words_);
-            // Edge codes and ids of the four sample rows around the cell row, indexed dy + 2 dz.
-            const std::size_t at[4] = {j * nx_, (j + 1) * nx_, j * nx_, (j + 1) * nx_};
-            const std::uint8_t* codes[4];
+            // Vertex ids of the four sample rows around the cell row, indexed dy + 2 dz.
+            const std::size_t at[4] = {3 * j * nx_, 3 * (j + 1) * nx_, 3 * j * nx_, 3 * (j + 1) * nx_};
             const std::uint32_t* ids[4];
-            for (unsigned r = 0; r < 4; ++r) {
-                codes[r] = edges_[r >> 1].code.data() + at[r];
-                ids[r] = edges_[r >> 1].id.data() + at[r];
-            }
+            for (unsigned r = 0; r < 4; ++r) ids[r] = edges_[r >> 1].id.data() + at[r];
             std::uint32_t* out = out_.indices + 3 * tri_base[j];
             for (std::size_t q = 0; q < words_; ++q) {
                 const CellWord cell(a, b, c, d, q, words_);
@@ -304,10 +323,8 @@ private:
                     for (unsigned t = 0; t < entry.count; ++t) {
                         std::uint32_t v[3];
                         for (unsigned e = 0; e < 3; ++e) {
-                            const CellEdge& edge = kCellEdge[entry.edges[3 * t + e]];
-                            const unsigned row = edge.dy + 2u * edge.dz;
-                            const std::size_t x = i + edge.dx;
-                            v[e] = out_.vertex_base + ids[row][x] + kEdgeOffset[codes[row][x]][edge.axis];
+                            const EdgeSlot edge = kEdgeSlot[static_cast<unsigned>(entry.edges[3 * t + e])];
+                            v[e] = out_.vertex_base + ids[edge.row][3 * i + edge.slot];
                         }
                         out[0] = v[0];
                         out[1] = flip ? v[2] : v[1];
@@ -392,11 +409,12 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
         }
         plan.meta_planes = std::min(range.end + 1, nz) - range.begin;
         plan.rows.assign(plan.meta_planes * ny, RowInfo{});
+        plan.plane_bits.resize(plan.meta_planes);
         const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(std::max(threads, 1u), plan.meta_planes));
         const auto cuts = even_split(plan.meta_planes, workers);
         run_workers(workers, [&](unsigned w) {
             classify_planes<T>(plan, volume, threshold.value, range.begin + cuts[w], range.begin + cuts[w + 1],
-                               plan.rows.data());
+                               plan.rows.data(), plan.plane_bits.data());
         });
     });
     if (plan.uniform) return plan;

@@ -7,6 +7,8 @@
 // always its vertex base plus the local id. The OpenCL engine follows the same rule.
 #pragma once
 
+#include "row_packer.hpp"
+
 #include <voxmesh/voxmesh.hpp>
 
 #include <cstdint>
@@ -27,6 +29,7 @@ struct RowInfo {
     std::uint32_t last = 0;           // last such x
     std::uint32_t vertices = 0;       // crossed edges owned by the row
     std::uint32_t triangles = 0;      // triangles of cells (x, y, z) for all x
+    std::uint32_t bits_at = 0;        // with crossings: where its inside bits are in the plane's store
     std::uint8_t uniform_bit = 0;     // the row's inside bit when it has no crossing
 };
 
@@ -35,6 +38,9 @@ struct CpuChunkPlan {
     ZRange range;
     std::size_t meta_planes = 0;             // planes with RowInfo: the range plus plane `end` if it exists
     std::vector<RowInfo> rows;               // meta_planes * ny
+    // Per meta plane, the inside bits classify packed for the rows with crossings (the only
+    // rows generate reads samples of), so generate does not read and pack them again.
+    std::vector<std::vector<Word>> plane_bits;
     std::vector<std::uint32_t> vertex_base;  // local id of each row's first vertex
     std::vector<std::uint64_t> triangle_base;
     std::uint64_t vertices = 0;   // owned by the range (excludes plane `end`)
