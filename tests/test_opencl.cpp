@@ -280,6 +280,7 @@ TEST_CASE("Hybrid runs the CPU engine and OpenCL on one queue", "[opencl]") {
     const Mesh cpu = run(v, Options{}, Backend::Cpu);
     Options o;
     o.chunk_planes = 2;
+    o.devices = {0};  // named: a CPU device (PoCL) joins Hybrid only when asked for
     Stats stats;
     require_same(cpu, run(v, o, Backend::Hybrid, &stats), v);
     CHECK(stats.backend == Backend::Hybrid);
@@ -291,6 +292,38 @@ TEST_CASE("Hybrid runs the CPU engine and OpenCL on one queue", "[opencl]") {
         voxels += d.voxels;
     }
     CHECK(voxels == g.size());
+}
+
+TEST_CASE("Hybrid leaves out OpenCL devices that are the CPU itself unless they are named", "[opencl]") {
+    if (!have_device()) return;
+    const auto devices = list_devices();
+    const bool only_cpus = std::all_of(devices.begin(), devices.end(),
+                                       [](const DeviceInfo& d) { return d.type == DeviceType::Cpu; });
+    Grid g{{40, 40, 40}};
+    const auto f = gyroid(g);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, Options{}, Backend::Cpu);
+    Stats stats;
+    require_same(cpu, run(v, Options{}, Backend::Hybrid, &stats), v);
+    for (const DeviceStats& d : stats.devices) {
+        INFO("device " << d.name);
+        const bool is_cpu_device = std::any_of(devices.begin(), devices.end(), [&](const DeviceInfo& info) {
+            return info.name == d.name && info.type == DeviceType::Cpu;
+        });
+        CHECK_FALSE(is_cpu_device);
+    }
+    if (only_cpus) {
+        REQUIRE(stats.warnings.size() == 1);
+        CHECK_THAT(stats.warnings[0], Catch::Contains("would compete with the CPU engine"));
+    }
+    // Asked for by type, the CPU device takes chunks again.
+    Options by_type;
+    by_type.device_type = DeviceType::Cpu;
+    by_type.chunk_planes = 4;
+    Stats typed;
+    require_same(cpu, run(v, by_type, Backend::Hybrid, &typed), v);
+    if (std::any_of(devices.begin(), devices.end(), [](const DeviceInfo& d) { return d.type == DeviceType::Cpu; }))
+        CHECK(typed.devices.size() >= 2);
 }
 
 TEST_CASE("Two OpenCL devices share the chunks", "[opencl]") {

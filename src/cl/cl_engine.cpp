@@ -151,6 +151,13 @@ std::vector<std::shared_ptr<Device>> Engine::select_devices() const {
     }
     for (const auto& d : all)
         if (options_.device_type == DeviceType::Any || d->info.type == options_.device_type) chosen.push_back(d);
+    // Hybrid already runs the CPU engine on every core; an OpenCL device that is this same
+    // CPU (PoCL) would only take cores from it, and does less with them, so it joins only
+    // when asked for by index or by type.
+    if (hybrid_ && options_.device_type == DeviceType::Any)
+        chosen.erase(std::remove_if(chosen.begin(), chosen.end(),
+                                    [](const auto& d) { return d->info.type == DeviceType::Cpu; }),
+                     chosen.end());
     return chosen;
 }
 
@@ -554,9 +561,15 @@ Mesh Engine::run(Stats& stats) {
 
     const auto chosen = select_devices();
     if (chosen.empty()) {
-        const std::string why = cl_engine::devices().empty()
-                                    ? "no OpenCL platform or usable device was found"
-                                    : "no OpenCL device matches the requested devices/device_type";
+        const auto all = cl_engine::devices();
+        const bool only_cpus = hybrid_ && !all.empty() && options_.device_type == DeviceType::Any &&
+                               std::all_of(all.begin(), all.end(),
+                                           [](const auto& d) { return d->info.type == DeviceType::Cpu; });
+        const std::string why = all.empty()   ? "no OpenCL platform or usable device was found"
+                                : only_cpus ? "the only OpenCL devices run on this CPU and would compete with the CPU "
+                                              "engine's threads (name one in Options::devices, or set device_type "
+                                              "to Cpu, to use it anyway)"
+                                            : "no OpenCL device matches the requested devices/device_type";
         if (!hybrid_) throw Error(why + "; use Backend::Cpu, Backend::Auto or check the OpenCL installation (clinfo)");
         warn(why + "; the hybrid backend runs the CPU engine alone");
         report();
