@@ -273,8 +273,11 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
     Piece piece;
     piece.range = range;
     try {
-        // Upload the planes, in place (or converted from f64 keeping every inside bit).
-        cl::Buffer& data = d.buffer(kData, data_samples * sample_bytes);
+        // Upload the planes, in place (or converted from f64 keeping every inside bit). A device
+        // that shares the host's memory reads the caller's samples where they are.
+        const bool zero_copy = info.host_memory && !job.convert;
+        cl::Buffer in_place;
+        cl::Buffer& data = zero_copy ? in_place : d.buffer(kData, data_samples * sample_bytes);
         const auto* bytes = static_cast<const unsigned char*>(volume_.data) + zlo * plane_ * scalar_size(volume_.type);
         if (job.convert) {
             const double* src = reinterpret_cast<const double*>(bytes);
@@ -291,8 +294,12 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             }
             bytes = reinterpret_cast<const unsigned char*>(converted.data());
         }
-        d.queue.enqueueWriteBuffer(data, CL_FALSE, 0, data_samples * sample_bytes, bytes, nullptr,
-                                   &log.add(Pass::Transfer));
+        if (zero_copy)
+            in_place = cl::Buffer(d.context, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, data_samples * sample_bytes,
+                                  const_cast<unsigned char*>(bytes));  // read only: the kernels never write it
+        else
+            d.queue.enqueueWriteBuffer(data, CL_FALSE, 0, data_samples * sample_bytes, bytes, nullptr,
+                                       &log.add(Pass::Transfer));
         cl::Buffer& codes = d.buffer(kCodes, count);
         cl::Buffer& cases = d.buffer(kCases, count);
         cl::Buffer& vbase = d.buffer(kVBase, groups * 4);  // per group: counts, then their prefix sums
@@ -519,6 +526,13 @@ Mesh Engine::assemble(std::vector<std::vector<Piece>>& results) {
     std::vector<Piece*> pieces;
     for (auto& chunk : results)
         for (Piece& p : chunk) pieces.push_back(&p);
+    if (pieces.size() == 1) {  // one chunk: its ids are already global, nothing to copy
+        Mesh mesh;
+        mesh.positions = std::move(pieces[0]->positions);
+        mesh.normals = std::move(pieces[0]->normals);
+        mesh.indices = std::move(pieces[0]->indices);
+        return mesh;
+    }
     std::vector<std::uint64_t> vbase(pieces.size()), tbase(pieces.size());
     std::uint64_t vertices = 0, triangles = 0;
     for (std::size_t i = 0; i < pieces.size(); ++i) {

@@ -34,6 +34,7 @@ DeviceInfo describe(const cl::Device& device, const std::string& platform, const
     info.global_memory = device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
     info.max_allocation = device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
     info.fp64 = device.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos;
+    info.host_memory = device.getInfo<CL_DEVICE_HOST_UNIFIED_MEMORY>() == CL_TRUE;
     return info;
 }
 

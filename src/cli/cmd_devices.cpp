@@ -39,7 +39,8 @@ int run_devices() {
         std::cout << "  [" << d.index << "] " << d.name << " (" << device_type_name(d.type) << ", " << d.version
                   << "): " << d.compute_units << " compute units, " << format_bytes(d.global_memory)
                   << " global memory, " << format_bytes(d.max_allocation) << " max allocation, fp64 "
-                  << (d.fp64 ? "yes" : "no") << "\n";
+                  << (d.fp64 ? "yes" : "no") << (d.host_memory ? ", shares host memory (zero-copy input)" : "")
+                  << "\n";
     }
     return kExitOk;
 }
