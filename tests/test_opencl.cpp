@@ -326,6 +326,27 @@ TEST_CASE("Hybrid leaves out OpenCL devices that are the CPU itself unless they 
         CHECK(typed.devices.size() >= 2);
 }
 
+TEST_CASE("OpenCL programs are built once per device: a second extract builds nothing", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{24, 20, 18}};
+    const auto f = gyroid(g);
+    std::vector<std::uint16_t> u16(f.size());  // a sample type no other test case meshes first
+    for (std::size_t i = 0; i < f.size(); ++i) u16[i] = static_cast<std::uint16_t>(30000 + 20000 * f[i]);
+    const VolumeView v = view_of(u16.data(), ScalarType::U16, g);
+    Options o;
+    o.iso = 30000.5;
+    o.devices = {0};
+    Stats first, second;
+    const Mesh a = run(v, o, Backend::OpenCL, &first);
+    const Mesh b = run(v, o, Backend::OpenCL, &second);
+    CHECK(a.indices == b.indices);
+    REQUIRE(first.devices.size() == 1);
+    REQUIRE(second.devices.size() == 1);
+    CHECK(first.devices[0].programs_built <= 2);  // marching_cubes.cl for u16, scan.cl if not yet built
+    CHECK(second.devices[0].programs_built == 0);
+    CHECK(second.devices[0].setup_s < first.devices[0].setup_s + 0.05);
+}
+
 TEST_CASE("Two OpenCL devices share the chunks", "[opencl]") {
     if (!have_device()) return;
     detail::opencl_split_devices(true);

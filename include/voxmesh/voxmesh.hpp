@@ -98,6 +98,8 @@ struct DeviceStats {
     double kernel_s = 0;        // device execution time (profiling events)
     double transfer_s = 0;      // host<->device copies
     double wall_s = 0;
+    double setup_s = 0;         // OpenCL: kernel builds and set-up in this call (0 once cached)
+    std::size_t programs_built = 0;  // OpenCL programs compiled in this call (0 once cached)
 };
 
 struct Stats {

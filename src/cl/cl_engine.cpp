@@ -183,10 +183,15 @@ void Engine::prepare(DeviceJob& job) {
     std::size_t limit = info.global_memory / 2;
     if (options_.memory_budget > 0) limit = std::min(limit, options_.memory_budget);
     job.limit = limit;
-    // Build now, in the caller's thread, so that a build failure surfaces at once.
+    // Build now, in the caller's thread, so that a build failure surfaces at once. Programs
+    // are cached per device and options: only the first call pays for them.
+    const auto t0 = Clock::now();
     std::lock_guard<std::mutex> lock(job.device->mutex);
+    const std::size_t built = job.device->programs_built;
     for (const char* name : {"classify", "compact", "vertices", "triangles"}) job.device->mc_kernel(job.options, name);
     job.device->scan_local_size();
+    job.stats.programs_built = job.device->programs_built - built;
+    job.stats.setup_s = seconds_since(t0);
 }
 
 // Device bytes of a chunk of `planes` planes, outputs excluded.

@@ -117,6 +117,7 @@ Device::Device(const cl::Device& dev, DeviceInfo description)
 }
 
 cl::Program Device::build(const std::string& source, const std::string& options) {
+    ++programs_built;
     cl::Program program(context, source);
     try {
         program.build(std::vector<cl::Device>{device}, options.c_str());

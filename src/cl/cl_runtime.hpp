@@ -47,6 +47,7 @@ public:
     cl::CommandQueue queue;
     cl::Buffer case_table, cell_edge, pair_to_case;  // from src/core/case_tables.cpp
     std::mutex mutex;  // whoever uses queue, kernels or buffers holds it
+    std::size_t programs_built = 0;  // by build(): programs are cached, so this stops growing
 
     // Kernels of marching_cubes.cl built with `options`, and of scan.cl. Build failures
     // throw Error with the device name and the build log.

@@ -49,6 +49,7 @@ void print_json(const MeshArgs& a, double iso, const std::string& iso_source, co
         const DeviceStats& d = stats.devices[i];
         o << (i ? ", " : "") << "{\"name\": " << json_string(d.name) << ", \"chunks\": " << d.chunks
           << ", \"voxels\": " << d.voxels << ", \"kernel_s\": " << format_double(d.kernel_s)
+          << ", \"setup_s\": " << format_double(d.setup_s) << ", \"programs_built\": " << d.programs_built
           << ", \"transfer_s\": " << format_double(d.transfer_s) << ", \"wall_s\": " << format_double(d.wall_s) << "}";
     }
     o << "], \"warnings\": [";
