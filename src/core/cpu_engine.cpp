@@ -98,19 +98,16 @@ private:
 [[gnu::always_inline]] inline void classify_row_body(const Word* row, const Word* next_y, const Word* next_z,
                                                     std::size_t words, std::size_t nx, RowInfo& info) {
     std::uint32_t count = 0;
-    std::size_t first = kEmptyRow, last = 0;
+    std::size_t first = kEmptyRow;
     for (std::size_t q = 0; q < words; ++q) {
         const EdgeMasks m = edge_masks(row, next_y, next_z, q, words, nx);
         count += static_cast<std::uint32_t>(__builtin_popcountll(m.x) + __builtin_popcountll(m.y) +
                                             __builtin_popcountll(m.z));
-        if (const Word any = m.any()) {
-            if (first == kEmptyRow) first = 64 * q + static_cast<std::size_t>(std::countr_zero(any));
-            last = 64 * q + 63 - static_cast<std::size_t>(std::countl_zero(any));
-        }
+        if (const Word any = m.any(); any && first == kEmptyRow)
+            first = 64 * q + static_cast<std::size_t>(std::countr_zero(any));
     }
     info.vertices = count;
     info.first = static_cast<std::uint32_t>(first);
-    info.last = static_cast<std::uint32_t>(last);
     info.uniform_bit = static_cast<std::uint8_t>(row[0] & 1);
 }
 
@@ -158,13 +155,15 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
                          has_up ? up.row(j, words) : nullptr, words, nx, info[j]);
             active += info[j].first != kEmptyRow;
         }
-        std::vector<Word>& store = plane_bits[k - plan.range.begin];
-        store.reserve(active * words);
-        for (std::size_t j = 0; j < ny; ++j)
-            if (info[j].first != kEmptyRow) {
-                info[j].bits_at = static_cast<std::uint32_t>(store.size());
-                store.insert(store.end(), here.row(j, words), here.row(j, words) + words);
-            }
+        if (plane_bits) {
+            std::vector<Word>& store = plane_bits[k - plan.range.begin];
+            store.reserve(active * words);
+            for (std::size_t j = 0; j < ny; ++j)
+                if (info[j].first != kEmptyRow) {
+                    info[j].bits_at = static_cast<std::uint32_t>(store.size());
+                    store.insert(store.end(), here.row(j, words), here.row(j, words) + words);
+                }
+        }
         if (has_up && k < plan.range.end) {
             for (std::size_t j = 0; j + 1 < ny; ++j) {
                 if (!cell_row_active(info[j], info[j + 1])) continue;
@@ -266,7 +265,7 @@ private:
 
     void fill_bits(std::size_t z, int slot) {
         const std::size_t p = z - plan_.range.begin;
-        bits_.fill(planes_[slot], z, meta_rows(z), p < plan_.meta_planes ? &plan_.plane_bits[p] : nullptr);
+        bits_.fill(planes_[slot], z, meta_rows(z), p < plan_.plane_bits.size() ? &plan_.plane_bits[p] : nullptr);
     }
 
     void build_edges(std::size_t z, const BitPlane& plane, const BitPlane* up, EdgePlane& edges, bool write_vertices) {
@@ -409,12 +408,12 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
         }
         plan.meta_planes = std::min(range.end + 1, nz) - range.begin;
         plan.rows.assign(plan.meta_planes * ny, RowInfo{});
-        plan.plane_bits.resize(plan.meta_planes);
+        if (sizeof(T) >= 2) plan.plane_bits.resize(plan.meta_planes);
         const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(std::max(threads, 1u), plan.meta_planes));
         const auto cuts = even_split(plan.meta_planes, workers);
         run_workers(workers, [&](unsigned w) {
             classify_planes<T>(plan, volume, threshold.value, range.begin + cuts[w], range.begin + cuts[w + 1],
-                               plan.rows.data(), plan.plane_bits.data());
+                               plan.rows.data(), plan.plane_bits.empty() ? nullptr : plan.plane_bits.data());
         });
     });
     if (plan.uniform) return plan;

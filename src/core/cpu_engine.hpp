@@ -26,7 +26,6 @@ constexpr std::uint32_t kEmptyRow = std::numeric_limits<std::uint32_t>::max();
 // What the classify pass learns about one sample row (y, z) and the cell row it starts.
 struct RowInfo {
     std::uint32_t first = kEmptyRow;  // first x whose owned edges cross; kEmptyRow if none
-    std::uint32_t last = 0;           // last such x
     std::uint32_t vertices = 0;       // crossed edges owned by the row
     std::uint32_t triangles = 0;      // triangles of cells (x, y, z) for all x
     std::uint32_t bits_at = 0;        // with crossings: where its inside bits are in the plane's store
@@ -39,7 +38,9 @@ struct CpuChunkPlan {
     std::size_t meta_planes = 0;             // planes with RowInfo: the range plus plane `end` if it exists
     std::vector<RowInfo> rows;               // meta_planes * ny
     // Per meta plane, the inside bits classify packed for the rows with crossings (the only
-    // rows generate reads samples of), so generate does not read and pack them again.
+    // rows generate reads samples of), so generate does not read and pack them again. Kept
+    // for samples of 2 bytes or more only, where they cost at most 1/16 of the volume; 8-bit
+    // samples are cheaper to pack again than to keep.
     std::vector<std::vector<Word>> plane_bits;
     std::vector<std::uint32_t> vertex_base;  // local id of each row's first vertex
     std::vector<std::uint64_t> triangle_base;
