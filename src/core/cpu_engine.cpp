@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <memory>
 #include <string>
 #include <type_traits>
 
@@ -200,10 +201,12 @@ std::vector<std::size_t> balanced_split(const std::vector<double>& cost, unsigne
 
 // ---------------------------------------------------------------- generate
 
-// Per sample of one plane, the local vertex id of each crossed edge it owns (slot 3i + axis);
-// slots of edges that do not cross are never read.
+// Per sample of one plane, the local vertex id of each crossed edge it owns (slot 3i + axis).
+// Slots of edges that do not cross are never read, so the array is left uninitialised: a
+// worker touches only the pages of rows with crossings (many workers on few cores, or a
+// sparse surface, do not pay for a full plane).
 struct EdgePlane {
-    std::vector<std::uint32_t> id;
+    std::unique_ptr<std::uint32_t[]> id;
 };
 
 // Per cell edge: which of the four sample rows around a cell row holds it (dy + 2 dz) and its
@@ -236,7 +239,7 @@ public:
           nz_(volume.dims[2]),
           words_(bits_.stride()) {
         for (auto& b : planes_) bits_.resize(b);
-        for (auto& e : edges_) e.id.resize(3 * nx_ * ny_);
+        for (auto& e : edges_) e.id.reset(new std::uint32_t[3 * nx_ * ny_]);  // default-initialised: no fill
     }
 
     // Meshes planes [a, b) of the range: vertices of sample planes a..b-1 and triangles of
@@ -276,7 +279,7 @@ private:
             const Word* row = plane.row(j, words_);
             const Word* next_y = j + 1 < ny_ ? plane.row(j + 1, words_) : nullptr;
             const Word* next_z = up ? up->row(j, words_) : nullptr;
-            std::uint32_t* id = edges.id.data() + 3 * j * nx_;
+            std::uint32_t* id = edges.id.get() + 3 * j * nx_;
             std::uint32_t next_id = bases[j];
             for (std::size_t q = 0; q < words_; ++q) {
                 const EdgeMasks m = edge_masks(row, next_y, next_z, q, words_, nx_);
@@ -311,7 +314,7 @@ private:
             // Vertex ids of the four sample rows around the cell row, indexed dy + 2 dz.
             const std::size_t at[4] = {3 * j * nx_, 3 * (j + 1) * nx_, 3 * j * nx_, 3 * (j + 1) * nx_};
             const std::uint32_t* ids[4];
-            for (unsigned r = 0; r < 4; ++r) ids[r] = edges_[r >> 1].id.data() + at[r];
+            for (unsigned r = 0; r < 4; ++r) ids[r] = edges_[r >> 1].id.get() + at[r];
             std::uint32_t* out = out_.indices + 3 * tri_base[j];
             for (std::size_t q = 0; q < words_; ++q) {
                 const CellWord cell(a, b, c, d, q, words_);
