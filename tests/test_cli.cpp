@@ -269,6 +269,18 @@ TEST_CASE("cli: sculpt a real STL model with a stroke script", "[cli]") {
     expect_rejected(s, "sculpt " + quote(data_file("unit_sphere.stl")) + " --resolution 48 --strokes " + quote(bad) +
                            " -o " + quote(s.path("never.stl")),
                     "bad.txt:1", s.path("never.stl"));
+
+    // The same strokes re-meshed on an OpenCL device (or on the CPU with a warning where
+    // there is none) write the same file, byte for byte.
+    const std::string cpu_out = s.path("cpu.ply"), cl_out = s.path("opencl.ply");
+    const std::string common = "sculpt " + quote(data_file("unit_sphere.stl")) + " --resolution 40 --strokes " +
+                               quote(strokes) + " -o ";
+    const Result cpu = run(s, common + quote(cpu_out) + " --backend cpu");
+    const Result cl = run(s, common + quote(cl_out) + " --backend opencl");
+    INFO(cpu.out << cpu.err << cl.out << cl.err);
+    REQUIRE(cpu.code == 0);
+    REQUIRE(cl.code == 0);
+    CHECK(slurp(cpu_out) == slurp(cl_out));
 }
 
 #else

@@ -368,7 +368,8 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
     std::size_t total = 0;
     for (const Job& job : jobs) total += job.bytes;
     constexpr std::size_t kWorthThreads = std::size_t{8} << 20;
-    const unsigned workers = total < kWorthThreads ? 1u : std::min<unsigned>(threads, static_cast<unsigned>(jobs.size()));
+    const unsigned workers =
+        total < kWorthThreads ? 1u : std::min({threads, resolve_threads(0), static_cast<unsigned>(jobs.size())});
     std::vector<std::size_t> load(workers, 0);
     std::vector<unsigned> owner(jobs.size());
     for (std::size_t i = 0; i < jobs.size(); ++i) {  // jobs are already largest first
@@ -414,7 +415,7 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
         if (sizeof(T) >= 2) plan.plane_bits.resize(plan.meta_planes);
         const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(std::max(threads, 1u), plan.meta_planes));
         const auto cuts = even_split(plan.meta_planes, workers);
-        run_workers(workers, [&](unsigned w) {
+        run_slabs(workers, workers, [&](unsigned w) {
             classify_planes<T>(plan, volume, threshold.value, range.begin + cuts[w], range.begin + cuts[w + 1],
                                plan.rows.data(), plan.plane_bits.empty() ? nullptr : plan.plane_bits.data());
         });
@@ -461,12 +462,15 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
         }
         cost[p] = c;
     }
-    const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(std::max(threads, 1u), planes));
-    const auto cuts = balanced_split(cost, workers);
+    // Four slabs per thread, pulled in order: the cost model is an estimate, and a thread
+    // that finishes early takes the next slab instead of waiting for the slowest one.
+    threads = std::max(threads, 1u);
+    const unsigned slabs = static_cast<unsigned>(std::min<std::size_t>(threads > 1 ? 4 * threads : 1, planes));
+    const auto cuts = balanced_split(cost, slabs);
     dispatch_scalar(volume.type, [&](auto tag) {
         using T = decltype(tag);
         const T threshold = make_threshold<T>(options.iso).value;
-        run_workers(workers, [&](unsigned w) {
+        run_slabs(slabs, threads, [&](unsigned w) {
             if (cuts[w] == cuts[w + 1]) return;
             Generator<T> generator(plan, volume, options, out, threshold);
             generator.run(plan.range.begin + cuts[w], plan.range.begin + cuts[w + 1]);

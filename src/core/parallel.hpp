@@ -2,6 +2,8 @@
 // exception a worker threw.
 #pragma once
 
+#include <algorithm>
+#include <atomic>
 #include <exception>
 #include <mutex>
 #include <thread>
@@ -35,5 +37,22 @@ void run_workers(unsigned n, F&& f) {
 
 // Hardware concurrency when `requested` is 0, at least 1.
 unsigned resolve_threads(unsigned requested);
+
+// Runs f(0..n-1) for n independent pieces of work (slabs) on at most max_threads threads and
+// at most as many as the machine runs at once: more threads than that only take turns on the same cores, and a slab
+// whose thread is descheduled holds up the rest. Threads pull slabs in order; the partition,
+// and so the output, is the caller's and does not depend on the cap.
+template <class F>
+void run_slabs(unsigned n, unsigned max_threads, F&& f) {
+    const unsigned threads = std::min({n, std::max(max_threads, 1u), resolve_threads(0)});
+    if (threads >= n) {
+        run_workers(n, f);
+        return;
+    }
+    std::atomic<unsigned> next{0};
+    run_workers(threads, [&](unsigned) {
+        for (unsigned slab = next++; slab < n; slab = next++) f(slab);
+    });
+}
 
 }  // namespace voxmesh::detail
