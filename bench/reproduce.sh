@@ -8,6 +8,7 @@ BUILD=${1:-build-bench}
 OUT=${2:-bench-out}
 REPEAT=${REPEAT:-5}
 THREADS=${THREADS:-2}
+TOOLS=${TOOLS:-voxmesh,fe,mc,skimage}   # peers to time; TOOLS=voxmesh,fe skips the slow ones
 BENCH="$BUILD/bench/voxmesh-bench"
 HERE=$(dirname "$0")
 TMP=${TMPDIR:-/tmp}/voxmesh-peers.$$
@@ -29,7 +30,7 @@ for spec in sphere:f32:256 sphere:f32:512 gyroid:f32:256 gyroid:f32:512 sphere:u
     file="$TMP/${field}_${type}_${size}.nrrd"
     "$BENCH" --field "$field" --type "$type" --sizes "$size" --write-volume "$file"
     /usr/bin/python3 "$HERE/peers/peers.py" "$file" --threads "$THREADS" --repeat "$REPEAT" --bench "$BENCH" \
-        --fe-scaling >> "$OUT/peers.txt" || echo "(peers reported a mismatch for $spec)" >> "$OUT/peers.txt"
+        --tools "$TOOLS" --fe-scaling >> "$OUT/peers.txt" || echo "(peers reported a mismatch for $spec)" >> "$OUT/peers.txt"
     echo >> "$OUT/peers.txt"
     rm -f "$file"
 done
