@@ -37,7 +37,9 @@ T random_sample(std::mt19937& rng, T threshold) {
     } else {
         std::uniform_int_distribution<long long> any(std::numeric_limits<T>::lowest(), std::numeric_limits<T>::max());
         if (rng() % 4 == 0) return threshold;
-        if (rng() % 4 == 0) return static_cast<T>(threshold + static_cast<T>(rng() % 2 ? 1 : -1));
+        // One step either side of the threshold, wrapping at the type's ends (in long long:
+        // no overflow in the arithmetic itself).
+        if (rng() % 4 == 0) return static_cast<T>(static_cast<long long>(threshold) + (rng() % 2 ? 1 : -1));
         return static_cast<T>(any(rng));
     }
 }
