@@ -1,10 +1,7 @@
 // Marching cubes over one z-chunk: classify, compact, vertices, triangles.
 // (The prefix sums in between are scan.cl.)
 //
-// Build options chosen by the host:
-//   -DVOXEL_T=<uchar|char|ushort|short|uint|int|float|double>  the sample type, read in place
-//   -DVOXEL_INTEGER   integer samples (differences taken exactly in long)
-//   -DUSE_FP64        the device has cl_khr_fp64: interpolate in double like the CPU engine
+// The host builds it behind edge_vertex.cl (types, build options, the vertex formula), with
 //   -DGROUP=n         meta samples per classify / compact work-item
 //
 // Index spaces (all chunk-local, uint; the host keeps them below 2^29):
@@ -22,31 +19,10 @@
 // Samples are classified in groups of GROUP (-DGROUP=n) consecutive meta samples; the scans
 // run over per-group counts.
 
-#pragma OPENCL FP_CONTRACT OFF
-
-#ifdef USE_FP64
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
-typedef double real;
-#else
-typedef float real;
-#endif
-
-typedef VOXEL_T voxel;
-
 #ifdef VOXEL_INTEGER
-#define DIFF(hi, lo) ((real)((long)(hi) - (long)(lo)))
 #define IS_NAN(v) 0
 #else
-#define DIFF(hi, lo) ((real)(hi) - (real)(lo))
 #define IS_NAN(v) (!isfinite(v)) /* NaN or infinite: refused like the CPU engine */
-#endif
-
-// iso - v0. Without fp64, integer samples subtract from iso's integer part exactly and add
-// its fraction, so that large integers keep their precision.
-#if defined(USE_FP64) || !defined(VOXEL_INTEGER)
-#define ISO_MINUS(v) (iso - (real)(v))
-#else
-#define ISO_MINUS(v) ((float)(iso_int - (long)(v)) + iso_frac)
 #endif
 
 // Inside bits of rows (y, z), (y+1, z), (y, z+1), (y+1, z+1) at one x, in bits 0..3 (the
@@ -130,14 +106,6 @@ __kernel void compact(__global const uchar* codes, __global const uchar* cases, 
     }
 }
 
-// Central differences, one-sided at the volume border, divided by spacing (as the CPU).
-inline real axis_diff(__global const voxel* data, uint idx, uint pos, uint n, uint stride, real inv) {
-    const voxel hi = data[pos + 1 < n ? idx + stride : idx];
-    const voxel lo = data[pos > 0 ? idx - stride : idx];
-    const real step = (pos > 0 && pos + 1 < n) ? (real)0.5 : (real)1.0;
-    return DIFF(hi, lo) * step * inv;
-}
-
 __kernel void vertices(__global const voxel* data, const voxel thr, const real iso, const long iso_int,
                        const float iso_frac, const uint nx, const uint ny, const uint nz, const uint begin,
                        const uint zlo, const uint count, __global const uint* vowner, const real ox,
@@ -156,40 +124,8 @@ __kernel void vertices(__global const voxel* data, const voxel thr, const real i
     const uint x = rest - y * nx;
     const uint z = begin + zl;
     const uint idx = l + (begin - zlo) * plane;
-    const uint stride = axis == 0 ? 1u : axis == 1 ? nx : plane;
-    const uint idx1 = idx + stride;
-
-    const voxel v0 = data[idx];
-    const voxel v1 = data[idx1];
-    const real t = ISO_MINUS(v0) / DIFF(v1, v0);
-    positions[3 * v + 0] = (float)(ox + ((real)x + (axis == 0 ? t : (real)0)) * sx);
-    positions[3 * v + 1] = (float)(oy + ((real)y + (axis == 1 ? t : (real)0)) * sy);
-    positions[3 * v + 2] = (float)(oz + ((real)z + (axis == 2 ? t : (real)0)) * sz);
-    if (!want_normals) return;
-
-    const uint x1 = x + (axis == 0), y1 = y + (axis == 1), z1 = z + (axis == 2);
-    const real g0x = axis_diff(data, idx, x, nx, 1, ix), g1x = axis_diff(data, idx1, x1, nx, 1, ix);
-    const real g0y = axis_diff(data, idx, y, ny, nx, iy), g1y = axis_diff(data, idx1, y1, ny, nx, iy);
-    const real g0z = axis_diff(data, idx, z, nz, plane, iz), g1z = axis_diff(data, idx1, z1, nz, plane, iz);
-    // Outward is toward decreasing values: the negated gradient (flipped for inside_below).
-    const real sign = inside_below ? (real)1 : (real)-1;
-    const real n0 = sign * (g0x + t * (g1x - g0x));
-    const real n1 = sign * (g0y + t * (g1y - g0y));
-    const real n2 = sign * (g0z + t * (g1z - g0z));
-    const real len2 = n0 * n0 + n1 * n1 + n2 * n2;
-    if (len2 > 0 && isfinite(len2)) {
-        const real inv = (real)1 / sqrt(len2);
-        normals[3 * v + 0] = (float)(n0 * inv);
-        normals[3 * v + 1] = (float)(n1 * inv);
-        normals[3 * v + 2] = (float)(n2 * inv);
-    } else {
-        // Flat gradient: along the edge, from its inside end to its outside end.
-        const int first_inside = (v0 >= thr) != (inside_below != 0);
-        const float s = first_inside ? 1.f : -1.f;
-        normals[3 * v + 0] = axis == 0 ? s : 0.f;
-        normals[3 * v + 1] = axis == 1 ? s : 0.f;
-        normals[3 * v + 2] = axis == 2 ? s : 0.f;
-    }
+    edge_vertex(data, idx, x, y, z, axis, nx, plane, nx, ny, nz, thr, iso, iso_int, iso_frac, ox, oy, oz, sx, sy, sz,
+                ix, iy, iz, inside_below, want_normals, positions + 3 * v, normals + 3 * v);
 }
 
 __kernel void triangles(__global const uchar* codes, __global const uchar* cases, __global const uint* vbase,

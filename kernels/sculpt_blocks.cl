@@ -3,11 +3,9 @@
 // sample order then axis, triangles in local cell order then table order, vertex ids local
 // to the block.
 //
-// Build options chosen by the host (src/cl/cl_blocks.cpp):
-//   -DVOXEL_T=<uchar|ushort|float>  the sample type
-//   -DVOXEL_INTEGER                 integer samples (differences taken exactly in long)
-//   -DUSE_FP64                      the device has cl_khr_fp64: vertices computed in double,
-//                                   bit-identical to the CPU's EdgeVertex
+// The host (src/cl/cl_blocks.cpp) builds it behind edge_vertex.cl (types, build options,
+// the vertex formula) with -DVOXEL_T=<uchar|ushort|float>; with -DUSE_FP64 vertices are
+// computed in double, bit-identical to the CPU's EdgeVertex.
 //
 // Staging: the host copies each block's samples plus a one-sample margin (clamped at the
 // volume border: what central-difference normals read) into one buffer. Block b is
@@ -16,31 +14,6 @@
 // get_global_id(1) = the block's place in the batch. Rows of all blocks are numbered
 // contiguously (row_base), so one scan over per-row counts gives every block's vertices and
 // triangles a contiguous range, in canonical order.
-
-#pragma OPENCL FP_CONTRACT OFF
-
-#ifdef USE_FP64
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
-typedef double real;
-#else
-typedef float real;
-#endif
-
-typedef VOXEL_T voxel;
-
-#ifdef VOXEL_INTEGER
-#define DIFF(hi, lo) ((real)((long)(hi) - (long)(lo)))
-#else
-#define DIFF(hi, lo) ((real)(hi) - (real)(lo))
-#endif
-
-// iso - v0. Without fp64, integer samples subtract from iso's integer part exactly and add
-// its fraction, as marching_cubes.cl does.
-#if defined(USE_FP64) || !defined(VOXEL_INTEGER)
-#define ISO_MINUS(v) (iso - (real)(v))
-#else
-#define ISO_MINUS(v) ((float)(iso_int - (long)(v)) + iso_frac)
-#endif
 
 // meta words of one block
 #define M_STAGE 0       // first staged sample
@@ -131,15 +104,6 @@ __kernel void block_classify(__global const voxel* data, __global const uint* me
     tcount[k.row + r] = tsum;
 }
 
-// Central differences, one-sided at the volume border, divided by spacing (as the CPU).
-// g: the global coordinate on this axis, i: the staged index, stride: the staged stride.
-inline real axis_diff(__global const voxel* data, uint i, uint g, uint n, uint stride, real inv) {
-    const voxel hi = data[g + 1 < n ? i + stride : i];
-    const voxel lo = data[g > 0 ? i - stride : i];
-    const real step = (g > 0 && g + 1 < n) ? (real)0.5 : (real)1.0;
-    return DIFF(hi, lo) * step * inv;
-}
-
 // After the scans (vbase: exclusive sums of vcount): each sample's first vertex id (batch-
 // global) into vid, and the row's vertex positions and normals.
 __kernel void block_vertices(__global const voxel* data, __global const uint* meta, const voxel thr,
@@ -165,39 +129,8 @@ __kernel void block_vertices(__global const voxel* data, __global const uint* me
         const uint idx = staged(&k, x, y, z);
         for (uint axis = 0; axis < 3; ++axis) {
             if (!(code >> axis & 1)) continue;
-            const uint stride = axis == 0 ? 1u : axis == 1 ? k.sx : k.splane;
-            const uint idx1 = idx + stride;
-            const voxel v0 = data[idx];
-            const voxel v1 = data[idx1];
-            const real t = ISO_MINUS(v0) / DIFF(v1, v0);
-            positions[3 * v + 0] = (float)(ox + ((real)gx + (axis == 0 ? t : (real)0)) * sx);
-            positions[3 * v + 1] = (float)(oy + ((real)gy + (axis == 1 ? t : (real)0)) * sy);
-            positions[3 * v + 2] = (float)(oz + ((real)gz + (axis == 2 ? t : (real)0)) * sz);
-            if (want_normals) {
-                const uint x1 = gx + (axis == 0), y1 = gy + (axis == 1), z1 = gz + (axis == 2);
-                const real g0x = axis_diff(data, idx, gx, nx, 1, ix), g1x = axis_diff(data, idx1, x1, nx, 1, ix);
-                const real g0y = axis_diff(data, idx, gy, ny, k.sx, iy), g1y = axis_diff(data, idx1, y1, ny, k.sx, iy);
-                const real g0z = axis_diff(data, idx, gz, nz, k.splane, iz),
-                           g1z = axis_diff(data, idx1, z1, nz, k.splane, iz);
-                // Outward is toward decreasing values: the negated gradient (flipped for inside_below).
-                const real sign = inside_below ? (real)1 : (real)-1;
-                const real n0 = sign * (g0x + t * (g1x - g0x));
-                const real n1 = sign * (g0y + t * (g1y - g0y));
-                const real n2 = sign * (g0z + t * (g1z - g0z));
-                const real len2 = n0 * n0 + n1 * n1 + n2 * n2;
-                if (len2 > 0 && isfinite(len2)) {
-                    const real inv = (real)1 / sqrt(len2);
-                    normals[3 * v + 0] = (float)(n0 * inv);
-                    normals[3 * v + 1] = (float)(n1 * inv);
-                    normals[3 * v + 2] = (float)(n2 * inv);
-                } else {
-                    // Flat gradient: along the edge, from its inside end to its outside end.
-                    const float s = ((v0 >= thr) != (inside_below != 0)) ? 1.f : -1.f;
-                    normals[3 * v + 0] = axis == 0 ? s : 0.f;
-                    normals[3 * v + 1] = axis == 1 ? s : 0.f;
-                    normals[3 * v + 2] = axis == 2 ? s : 0.f;
-                }
-            }
+            edge_vertex(data, idx, gx, gy, gz, axis, k.sx, k.splane, nx, ny, nz, thr, iso, iso_int, iso_frac, ox, oy,
+                        oz, sx, sy, sz, ix, iy, iz, inside_below, want_normals, positions + 3 * v, normals + 3 * v);
             ++v;
         }
     }

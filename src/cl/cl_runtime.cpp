@@ -138,8 +138,12 @@ cl::Kernel& Device::kernel(const unsigned char* source, const std::string& optio
     const char* file = source == kKernel_scan ? "scan " : source == kKernel_sculpt_blocks ? "sculpt " : "mc ";
     const std::string key = file + options;
     auto it = programs_.find(key);
-    if (it == programs_.end())
-        it = programs_.emplace(key, Program{build(reinterpret_cast<const char*>(source), options), {}}).first;
+    if (it == programs_.end()) {
+        // The marching-cubes programs share the types and the vertex formula of edge_vertex.cl.
+        std::string text = source == kKernel_scan ? "" : reinterpret_cast<const char*>(kKernel_edge_vertex);
+        text += reinterpret_cast<const char*>(source);
+        it = programs_.emplace(key, Program{build(text, options), {}}).first;
+    }
     auto& kernels = it->second.kernels;
     auto k = kernels.find(name);
     if (k == kernels.end()) k = kernels.emplace(name, cl::Kernel(it->second.program, name)).first;

@@ -16,6 +16,7 @@
 
 namespace voxmesh::detail {
 
+extern const unsigned char kKernel_edge_vertex[];  // put in front of marching_cubes and sculpt_blocks
 extern const unsigned char kKernel_marching_cubes[];
 extern const unsigned char kKernel_scan[];
 extern const unsigned char kKernel_sculpt_blocks[];  // sculpting's batched block mesher
