@@ -3,6 +3,8 @@
 
 #include <voxmesh/sculpt.hpp>
 
+#include "support/sculpt_fields.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -122,28 +124,9 @@ void require_blocks_match_fresh(const Sculpt& s) {
     }
 }
 
-// A field high inside: a few balls (value = radius - distance, in samples), scaled and
-// offset for integer types.
-std::function<double(double, double, double)> balls(Dims d, double scale, double offset) {
-    const double cx = 0.5 * double(d[0] - 1), cy = 0.5 * double(d[1] - 1), cz = 0.5 * double(d[2] - 1);
-    const double r = 0.3 * double(std::min({d[0], d[1], d[2]}));
-    return [=](double x, double y, double z) {
-        const double a = r - std::sqrt((x - cx) * (x - cx) + (y - cy) * (y - cy) + (z - cz) * (z - cz));
-        const double b = 0.4 * r - std::sqrt((x - cx - 0.8 * r) * (x - cx - 0.8 * r) + (y - cy) * (y - cy) +
-                                             (z - cz + 0.7 * r) * (z - cz + 0.7 * r));
-        return offset + scale * std::max(a, b);
-    };
-}
-
-struct TypeSetup {
-    ScalarType type;
-    double scale, offset, iso;
-};
-const TypeSetup kTypes[] = {
-    {ScalarType::F32, 1.0, 0.0, 0.0},
-    {ScalarType::U8, 20.0, 128.0, 127.5},
-    {ScalarType::U16, 900.0, 30000.0, 30000.5},
-};
+using sculpt_test::balls;
+using sculpt_test::kTypes;
+using sculpt_test::TypeSetup;
 
 Sculpt make(const TypeSetup& ts, Dims d, std::size_t block, unsigned threads = 2) {
     SculptOptions o;
