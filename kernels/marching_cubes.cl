@@ -1,155 +1,284 @@
-// Marching cubes over one z-chunk: classify, compact, vertices, triangles.
-// (The prefix sums in between are scan.cl.)
+// Marching cubes over one z-chunk on packed bit rows, the CPU engine's layout on the device:
+//   pack       samples -> inside bits, 32 to a word (the only pass that reads every sample)
+//   count_rows per row: crossed edges it owns, triangles of the cell row it starts
+//   (scan.cl: exclusive prefix sums over rows give every vertex and triangle its index)
+//   vertices   per row with crossings: its vertices, in x then axis order
+//   triangles  per cell row with triangles: its triangles, corner ids found by popcounts
+// No per-sample bytes are stored: later passes re-derive edges and cases from the bits.
 //
-// The host builds it behind edge_vertex.cl (types, build options, the vertex formula), with
-//   -DGROUP=n         meta samples per classify / compact work-item
+// The host builds it behind edge_vertex.cl (types, build options, the vertex formula).
 //
-// Index spaces (all chunk-local, uint; the host keeps them below 2^29):
-//   meta sample l = x + nx*(y + ny*(z - begin)) for z in [begin, meta_end): the chunk's own
-//   planes [begin, end) plus plane `end` when it exists, whose vertex ids the chunk's last
-//   cell plane refers to. Cell (x, y, z) shares index l with its corner-0 sample.
-//   The sample buffer holds planes [zlo, zhi) = [max(begin,1)-1, min(end+2, nz)).
+// Index spaces (chunk-local, uint; the host keeps the data below 2^31 samples):
+//   row r = j + ny * p is sample row (y = j, z = begin + p); the chunk's meta rows are planes
+//   p in [0, meta) = [begin, min(end+1, nz)): its own planes plus plane `end`, whose vertex
+//   ids the chunk's last cell plane refers to. The bits cover planes [begin, zhi) with
+//   zhi = min(end+2, nz) (the edges of plane `end` look one plane up); the samples cover
+//   [zlo, zhi) with zlo = max(begin,1)-1 (gradients look one plane down).
+//   bits[r * words + q] bit b is sample x = 32 q + b of row r; bits past nx are 0.
 //
 // "Inside" is sample >= thr, with thr made by the host exactly as the CPU engine makes it,
-// so every case index is identical. The case tables come from the host's single copy
+// so every case index is identical. Tables come from the host's single copy
 // (src/core/case_tables.cpp) as __constant buffers:
 //   case_table: 16 bytes per case, triangle count then 15 signed edge numbers;
-//   cell_edge:  4 bytes per edge (dx, dy, dz, axis);
-//   pair_to_case: case index from the column codes at x and x+1 (kColumnPairToCase).
-// Samples are classified in groups of GROUP (-DGROUP=n) consecutive meta samples; the scans
-// run over per-group counts.
+//   cell_edge:  4 bytes per edge (dx, dy, dz, axis).
+
+#define CAT2(a, b) a##b
+#define CAT(a, b) CAT2(a, b)
+typedef CAT(VOXEL_T, 8) voxel8;
 
 #ifdef VOXEL_INTEGER
-#define IS_NAN(v) 0
+#define ANY_NONFINITE8(v) 0
+#define NONFINITE(v) 0
 #else
-#define IS_NAN(v) (!isfinite(v)) /* NaN or infinite: refused like the CPU engine */
+#define ANY_NONFINITE8(v) any(isfinite(v) == 0) /* NaN or infinite: refused like the CPU engine */
+#define NONFINITE(v) (!isfinite(v))
 #endif
 
-// Inside bits of rows (y, z), (y+1, z), (y, z+1), (y+1, z+1) at one x, in bits 0..3 (the
-// CPU engine's column code); bits of rows outside the volume are 0.
-inline uint column(__global const voxel* data, uint idx, uint y, uint z, uint nx, uint ny, uint nz, uint plane,
-                   voxel thr) {
-    uint c = (uint)(data[idx] >= thr);
-    if (y + 1 < ny) c |= (uint)(data[idx + nx] >= thr) << 1;
-    if (z + 1 < nz) {
-        c |= (uint)(data[idx + plane] >= thr) << 2;
-        if (y + 1 < ny) c |= (uint)(data[idx + plane + nx] >= thr) << 3;
+// Bits of word q that stand for x < limit.
+inline uint bits_below(uint q, uint limit) {
+    const uint first = 32 * q;
+    if (limit >= first + 32) return 0xffffffffu;
+    if (limit <= first) return 0u;
+    return (1u << (limit - first)) - 1u;
+}
+
+// Index of the lowest set bit of w != 0 (ctz is OpenCL 2.0).
+inline uint lowest_bit(uint w) { return 31u - clz(w & (0u - w)); }
+
+// Inside bits of 8 consecutive samples, bit k for sample k.
+inline uint inside8(const voxel8 v, const voxel thr) {
+    const int8 in = convert_int8(v >= (voxel8)(thr)) & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+    return (uint)(in.s0 + in.s1 + in.s2 + in.s3 + in.s4 + in.s5 + in.s6 + in.s7);
+}
+
+// One work-item per word of bits: 32 samples of one row.
+__kernel void pack(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint words,
+                   const uint begin, const uint first_sample, const uint count, __global uint* bits,
+                   __global int* nan_plane) {
+    const uint g = (uint)get_global_id(0);
+    if (g >= count) return;
+    const uint r = g / words;
+    const uint q = g - r * words;
+    const uint x0 = 32 * q;
+    __global const voxel* s = data + first_sample + r * nx + x0;
+    uint w = 0;
+    int bad = 0;
+    if (x0 + 32 <= nx) {
+        for (uint k = 0; k < 4; ++k) {
+            const voxel8 v = vload8(k, s);
+            bad |= ANY_NONFINITE8(v);
+            w |= inside8(v, thr) << (8 * k);
+        }
+    } else {
+        for (uint k = 0; k < nx - x0; ++k) {
+            const voxel v = s[k];
+            bad |= NONFINITE(v);
+            w |= (uint)(v >= thr) << k;
+        }
     }
+    bits[g] = w;
+    if (bad) atomic_min(nan_plane, (int)(begin + r / ny));
+}
+
+// Crossed owned edges of word q of a row (sample x owns x->x+1, y->y+1, z->z+1); ny_row /
+// nz_row are the neighbouring rows, or null at the volume's border.
+typedef struct {
+    uint x, y, z;
+} EdgeMasks;
+
+inline EdgeMasks edge_masks(__global const uint* row, __global const uint* ny_row, __global const uint* nz_row,
+                            uint q, uint words, uint nx) {
+    EdgeMasks m;
+    const uint w = row[q];
+    const uint right = w >> 1 | (q + 1 < words ? row[q + 1] << 31 : 0u);
+    m.x = (w ^ right) & bits_below(q, nx - 1);
+    m.y = ny_row ? w ^ ny_row[q] : 0u;
+    m.z = nz_row ? w ^ nz_row[q] : 0u;
+    return m;
+}
+
+inline uint edge_count(EdgeMasks m) { return popcount(m.x) + popcount(m.y) + popcount(m.z); }
+
+// Bit k of the result is bit k+1 of the row: the neighbour in +x.
+inline uint next_x(__global const uint* row, uint q, uint words) {
+    return row[q] >> 1 | (q + 1 < words ? row[q + 1] << 31 : 0u);
+}
+
+// The eight corner masks of word q of the cell row spanned by rows a = (y, z), b = (y+1, z),
+// c = (y, z+1), d = (y+1, z+1), in case-bit order.
+typedef struct {
+    uint k[8];
+} CellWord;
+
+inline CellWord cell_word(__global const uint* a, __global const uint* b, __global const uint* c,
+                          __global const uint* d, uint q, uint words) {
+    CellWord w;
+    w.k[0] = a[q];
+    w.k[1] = next_x(a, q, words);
+    w.k[2] = next_x(b, q, words);
+    w.k[3] = b[q];
+    w.k[4] = c[q];
+    w.k[5] = next_x(c, q, words);
+    w.k[6] = next_x(d, q, words);
+    w.k[7] = d[q];
+    return w;
+}
+
+inline uint nonuniform(const CellWord* w, uint q, uint nx) {
+    uint diff = 0;
+    for (uint k = 1; k < 8; ++k) diff |= w->k[0] ^ w->k[k];
+    return diff & bits_below(q, nx - 1);
+}
+
+inline uint cell_case(const CellWord* w, uint b) {
+    uint c = 0;
+    for (uint k = 0; k < 8; ++k) c |= (w->k[k] >> b & 1u) << k;
     return c;
 }
 
-// One work-item per GROUP consecutive meta samples: their edge codes and cell cases, and the
-// group's vertex and triangle counts (what the scans sum).
-__kernel void classify(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint nz,
-                       const uint begin, const uint cell_end, const uint zlo, const uint count, const uint groups,
-                       __constant uchar* pair_to_case, __constant uchar* case_table, __global uchar* codes,
-                       __global uchar* cases, __global uint* vcount, __global uint* tcount,
-                       __global int* nan_plane) {
-    const uint g = (uint)get_global_id(0);
-    if (g >= groups) return;
+// Row r's neighbours in +y and +z among the bit rows, or null at the volume's border.
+inline __global const uint* row_y(__global const uint* bits, uint r, uint j, uint ny, uint words) {
+    return j + 1 < ny ? bits + (r + 1) * words : 0;
+}
+inline __global const uint* row_z(__global const uint* bits, uint r, uint z, uint ny, uint nz, uint words) {
+    return z + 1 < nz ? bits + (r + ny) * words : 0;
+}
+
+// One work-item per meta row: the vertices it owns and the triangles of the cell row it
+// starts (cell planes below cell_end, y < ny - 1).
+__kernel void count_rows(__global const uint* bits, const uint nx, const uint ny, const uint nz, const uint words,
+                         const uint begin, const uint cell_end, const uint rows, __constant uchar* case_table,
+                         __global uint* vcount, __global uint* tcount) {
+    const uint r = (uint)get_global_id(0);
+    if (r >= rows) return;
+    const uint p = r / ny;
+    const uint j = r - p * ny;
+    const uint z = begin + p;
+    __global const uint* row = bits + r * words;
+    __global const uint* ry = row_y(bits, r, j, ny, words);
+    __global const uint* rz = row_z(bits, r, z, ny, nz, words);
+    uint v = 0;
+    for (uint q = 0; q < words; ++q) v += edge_count(edge_masks(row, ry, rz, q, words, nx));
+    uint t = 0;
+    if (ry && z < cell_end) {
+        for (uint q = 0; q < words; ++q) {
+            const CellWord w = cell_word(row, ry, rz, rz + words, q, words);
+            for (uint cells = nonuniform(&w, q, nx); cells; cells &= cells - 1)
+                t += case_table[16 * cell_case(&w, lowest_bit(cells))];
+        }
+    }
+    vcount[r] = v;
+    tcount[r] = t;
+}
+
+// One work-item per owned row: its vertices at ids vbase[r]... (vend: the total after the
+// last meta row, for the last row's span).
+__kernel void vertices(__global const voxel* data, __global const uint* bits, const voxel thr, const real iso,
+                       const long iso_int, const float iso_frac, const uint nx, const uint ny, const uint nz,
+                       const uint words, const uint begin, const uint first_sample, const uint owned_rows,
+                       const uint rows, const uint vend, __global const uint* vbase, const real ox, const real oy,
+                       const real oz, const real sx, const real sy, const real sz, const real ix, const real iy,
+                       const real iz, const int inside_below, const int want_normals, __global float* positions,
+                       __global float* normals) {
+    const uint r = (uint)get_global_id(0);
+    if (r >= owned_rows) return;
+    uint id = vbase[r];
+    if (id == (r + 1 < rows ? vbase[r + 1] : vend)) return;
+    const uint p = r / ny;
+    const uint j = r - p * ny;
+    const uint z = begin + p;
     const uint plane = nx * ny;
-    const uint l0 = g * GROUP;
-    const uint zl = l0 / plane;
-    const uint rest = l0 - zl * plane;
-    uint y = rest / nx;
-    uint x = rest - y * nx;
-    uint z = begin + zl;
-    uint idx = l0 + (begin - zlo) * plane;
-    uint vsum = 0, tsum = 0, col = 0, next = 0;
-    for (uint k = 0; k < GROUP; ++k) {
-        const uint l = l0 + k;
-        if (l >= count) break;
-        const voxel v = data[idx];
-        if (IS_NAN(v)) atomic_min(nan_plane, (int)z);
-        col = (k == 0 || x == 0) ? column(data, idx, y, z, nx, ny, nz, plane, thr) : next;
-        next = x + 1 < nx ? column(data, idx + 1, y, z, nx, ny, nz, plane, thr) : 0u;
-        uint code = 0;
-        if (x + 1 < nx) code |= (col ^ next) & 1;
-        if (y + 1 < ny) code |= ((col ^ (col >> 1)) & 1) << 1;
-        if (z + 1 < nz) code |= ((col ^ (col >> 2)) & 1) << 2;
-        codes[l] = (uchar)code;
-        vsum += popcount(code);
-        uint c = 0;
-        if (x + 1 < nx && y + 1 < ny && z < cell_end) c = pair_to_case[col | next << 4];
-        cases[l] = (uchar)c;
-        tsum += case_table[16 * c];
-        ++idx;
-        if (++x == nx) {
-            x = 0;
-            if (++y == ny) {
-                y = 0;
-                ++z;
+    __global const uint* row = bits + r * words;
+    __global const uint* ry = row_y(bits, r, j, ny, words);
+    __global const uint* rz = row_z(bits, r, z, ny, nz, words);
+    const uint row_sample = first_sample + r * nx;
+    for (uint q = 0; q < words; ++q) {
+        const EdgeMasks m = edge_masks(row, ry, rz, q, words, nx);
+        for (uint any = m.x | m.y | m.z; any; any &= any - 1) {
+            const uint b = lowest_bit(any);
+            const uint x = 32 * q + b;
+            const uint axes = (m.x >> b & 1u) | (m.y >> b & 1u) << 1 | (m.z >> b & 1u) << 2;
+            for (uint axis = 0; axis < 3; ++axis) {
+                if (!(axes >> axis & 1u)) continue;
+                edge_vertex(data, row_sample + x, x, j, z, axis, nx, plane, nx, ny, nz, thr, iso, iso_int, iso_frac,
+                            ox, oy, oz, sx, sy, sz, ix, iy, iz, inside_below, want_normals, positions + 3 * id,
+                            normals + 3 * id);
+                ++id;
             }
         }
     }
-    vcount[g] = vsum;
-    tcount[g] = tsum;
 }
 
-// Compaction: after the scans, every crossed edge and every triangle learns its slot, and
-// each slot records its owner (sample << 2 | axis, cell << 3 | triangle), so the generate
-// kernels run over exactly the vertices and triangles there are.
-__kernel void compact(__global const uchar* codes, __global const uchar* cases, __global const uint* vbase,
-                      __global const uint* tbase, const uint count, const uint owned, const uint groups,
-                      __constant uchar* case_table, __global uint* vowner, __global uint* towner) {
-    const uint g = (uint)get_global_id(0);
-    if (g >= groups) return;
-    uint vslot = vbase[g], tslot = tbase[g];
-    for (uint l = g * GROUP; l < (g + 1) * GROUP && l < count; ++l) {
-        if (l < owned) {
-            const uint code = codes[l];
-            for (uint axis = 0; axis < 3; ++axis)
-                if (code >> axis & 1) vowner[vslot++] = l << 2 | axis;
+// The vertex id of the edge along `axis` from sample x = 32 q + b of a row whose masks at
+// word q are m, at word q + 1 next, and whose vertices before word q number base.
+inline uint edge_id(uint base, EdgeMasks m, EdgeMasks next, uint b, uint axis) {
+    if (b == 32) {  // the first sample of the next word
+        base += edge_count(m);
+        m = next;
+        b = 0;
+    }
+    const uint below = (1u << b) - 1u;
+    uint id = base + popcount(m.x & below) + popcount(m.y & below) + popcount(m.z & below);
+    if (axis > 0) id += m.x >> b & 1u;
+    if (axis > 1) id += m.y >> b & 1u;
+    return id;
+}
+
+// One work-item per cell row with triangles: cell row (y, z) is spanned by sample rows
+// (y + dy, z + dz), indexed dy + 2 dz, whose edge masks are kept for words q and q + 1 with
+// the number of vertices before word q.
+__kernel void triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz, const uint words,
+                        const uint begin, const uint cell_rows, const uint rows, const uint tend,
+                        __global const uint* vbase, __global const uint* tbase, __constant uchar* case_table,
+                        __constant uchar* cell_edge, const int inside_below, __global uint* indices) {
+    const uint r = (uint)get_global_id(0);
+    if (r >= cell_rows) return;
+    uint t = tbase[r];
+    if (t == (r + 1 < rows ? tbase[r + 1] : tend)) return;
+    const uint p = r / ny;
+    const uint j = r - p * ny;
+    const uint z = begin + p;
+    __global const uint* row[4];
+    __global const uint* ry[4];
+    __global const uint* rz[4];
+    uint base[4];
+    for (uint k = 0; k < 4; ++k) {
+        const uint rk = r + (k & 1u) + (k >> 1) * ny;
+        const uint jk = j + (k & 1u), zk = z + (k >> 1);
+        row[k] = bits + rk * words;
+        ry[k] = row_y(bits, rk, jk, ny, words);
+        rz[k] = row_z(bits, rk, zk, ny, nz, words);
+        base[k] = vbase[rk];
+    }
+    EdgeMasks m[4], next[4];
+    for (uint k = 0; k < 4; ++k) m[k] = edge_masks(row[k], ry[k], rz[k], 0, words, nx);
+    __global uint* out = indices + 3 * t;
+    for (uint q = 0; q < words; ++q) {
+        for (uint k = 0; k < 4; ++k) {
+            if (q + 1 < words) next[k] = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
+            else next[k].x = next[k].y = next[k].z = 0;
         }
-        const uint n = case_table[16 * cases[l]];
-        for (uint q = 0; q < n; ++q) towner[tslot++] = l << 3 | q;
+        const CellWord w = cell_word(row[0], row[1], row[2], row[3], q, words);
+        for (uint cells = nonuniform(&w, q, nx); cells; cells &= cells - 1) {
+            const uint b = lowest_bit(cells);
+            const uint c = cell_case(&w, b);
+            const uint n = case_table[16 * c];
+            for (uint tri = 0; tri < n; ++tri) {
+                uint id[3];
+                for (uint e = 0; e < 3; ++e) {
+                    __constant uchar* ce = cell_edge + 4 * case_table[16 * c + 1 + 3 * tri + e];
+                    const uint k = ce[1] + 2u * ce[2];
+                    id[e] = edge_id(base[k], m[k], next[k], b + ce[0], ce[3]);
+                }
+                out[0] = id[0];
+                out[1] = inside_below ? id[2] : id[1];
+                out[2] = inside_below ? id[1] : id[2];
+                out += 3;
+            }
+        }
+        for (uint k = 0; k < 4; ++k) {
+            base[k] += edge_count(m[k]);
+            m[k] = next[k];
+        }
     }
-}
-
-__kernel void vertices(__global const voxel* data, const voxel thr, const real iso, const long iso_int,
-                       const float iso_frac, const uint nx, const uint ny, const uint nz, const uint begin,
-                       const uint zlo, const uint count, __global const uint* vowner, const real ox,
-                       const real oy, const real oz, const real sx, const real sy, const real sz,
-                       const real ix, const real iy, const real iz, const int inside_below,
-                       const int want_normals, __global float* positions, __global float* normals) {
-    const uint v = (uint)get_global_id(0);
-    if (v >= count) return;
-    const uint owner = vowner[v];
-    const uint l = owner >> 2;
-    const uint axis = owner & 3;
-    const uint plane = nx * ny;
-    const uint zl = l / plane;
-    const uint rest = l - zl * plane;
-    const uint y = rest / nx;
-    const uint x = rest - y * nx;
-    const uint z = begin + zl;
-    const uint idx = l + (begin - zlo) * plane;
-    edge_vertex(data, idx, x, y, z, axis, nx, plane, nx, ny, nz, thr, iso, iso_int, iso_frac, ox, oy, oz, sx, sy, sz,
-                ix, iy, iz, inside_below, want_normals, positions + 3 * v, normals + 3 * v);
-}
-
-__kernel void triangles(__global const uchar* codes, __global const uchar* cases, __global const uint* vbase,
-                        __global const uint* towner, const uint count, const uint nx, const uint plane,
-                        __constant uchar* case_table, __constant uchar* cell_edge, const int inside_below,
-                        __global uint* indices) {
-    const uint t = (uint)get_global_id(0);
-    if (t >= count) return;
-    const uint owner = towner[t];
-    const uint l = owner >> 3;
-    const uint q = owner & 7;
-    const uint c = cases[l];
-    uint id[3];
-    for (uint e = 0; e < 3; ++e) {
-        const uint edge = case_table[16 * c + 1 + 3 * q + e];
-        __constant uchar* ce = cell_edge + 4 * edge;
-        const uint s = l + ce[0] + nx * ce[1] + plane * ce[2];
-        const uint code = codes[s];
-        const uint axis = ce[3];
-        uint vid = vbase[s / GROUP];  // the group's first vertex, then the samples before s
-        for (uint p = s - s % GROUP; p < s; ++p) vid += popcount((uint)codes[p]);
-        id[e] = vid + (axis == 0 ? 0u : axis == 1 ? (code & 1) : (code & 1) + (code >> 1 & 1));
-    }
-    indices[3 * t + 0] = id[0];
-    indices[3 * t + 1] = inside_below ? id[2] : id[1];
-    indices[3 * t + 2] = inside_below ? id[1] : id[2];
 }

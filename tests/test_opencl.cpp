@@ -226,6 +226,27 @@ TEST_CASE("OpenCL matches the CPU engine on random odd-sized volumes", "[opencl]
     }
 }
 
+// The kernels pack rows 32 samples to a word: a cell whose +x corner opens the next word, a
+// last word with 1 or 31 samples, rows of exactly one or two words.
+TEST_CASE("OpenCL matches the CPU engine on rows around 32-bit word lengths", "[opencl]") {
+    if (!have_device()) return;
+    std::mt19937 rng(777);
+    for (std::size_t nx : {31, 32, 33, 63, 64, 65, 95, 97}) {
+        Grid g{{nx, 3 + rng() % 9, 3 + rng() % 9}};
+        INFO("dims " << g.dims[0] << "x" << g.dims[1] << "x" << g.dims[2]);
+        Options o;
+        o.chunk_planes = 1 + rng() % 4;
+        std::vector<float> v(g.size());
+        std::uniform_real_distribution<float> u(-1, 1);
+        for (auto& x : v) x = u(rng);
+        compare(view_of(v.data(), ScalarType::F32, g), o);
+        std::vector<std::uint8_t> b(g.size());
+        for (auto& x : b) x = static_cast<std::uint8_t>(rng() % 3);
+        o.iso = 1;
+        compare(view_of(b.data(), ScalarType::U8, g), o);
+    }
+}
+
 TEST_CASE("OpenCL matches the CPU engine on all 256 cube cases", "[opencl]") {
     if (!have_device()) return;
     // Each case in a 4x3x3 volume: the cube at (1,1,1)..(2,2,2) set by the case bits, the

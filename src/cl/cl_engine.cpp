@@ -38,14 +38,22 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // Buffer slots of a device.
-enum : unsigned { kData, kCodes, kCases, kVBase, kTBase, kVOwner, kTOwner, kPositions, kNormals, kIndices, kNan };
+enum : unsigned { kData, kBits, kVBase, kTBase, kPositions, kNormals, kIndices, kNan };
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
 
-constexpr std::size_t kMaxChunkSamples = std::size_t(1) << 29;  // owner ids pack l << 3 in a uint
+// The kernels index samples with uint: a chunk's samples stay below 2^31.
+constexpr std::size_t kMaxChunkSamples = std::size_t(1) << 31;
 
 // Thrown inside a worker when a chunk does not fit the device: cut it smaller.
 struct TooBig {};
+
+struct ChunkShape {
+    std::size_t planes, zlo, zhi, cell_end;  // cell_end: first cell plane the chunk does not own
+    std::size_t rows, owned_rows, cell_rows;  // meta rows; rows of owned sample planes; cell rows
+    std::size_t words, bit_words;             // words per bit row; words of all bit rows
+    std::size_t data_samples;
+};
 
 struct Piece {  // one meshed z-range, with chunk-local vertex ids
     ZRange range;
@@ -72,6 +80,8 @@ bool is_integer(ScalarType type) { return type != ScalarType::F32 && type != Sca
 
 std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
 
+constexpr std::size_t kLocalSize = 64;  // work-group size of marching_cubes.cl launches, where allowed
+
 // What one call needs to know about a device: how samples reach it and the kernel arguments
 // that do not change from chunk to chunk.
 struct DeviceJob {
@@ -83,6 +93,7 @@ struct DeviceJob {
     std::string options;
     std::vector<unsigned char> threshold;      // bytes of a device_type value
     std::size_t limit = 0;                     // bytes one chunk may use
+    std::size_t local = kLocalSize;            // work-group size of every launch
     DeviceStats stats;
     double pass_seconds[3] = {0, 0, 0};
 };
@@ -103,8 +114,13 @@ public:
 private:
     std::vector<std::shared_ptr<Device>> select_devices() const;
     void prepare(DeviceJob& job);
-    std::size_t fixed_bytes(const DeviceJob& job, std::size_t planes) const;
-    bool fits(const DeviceJob& job, std::size_t planes) const;
+    ChunkShape shape(ZRange range) const;
+    // A chunk of `planes` planes with the most samples (one below and two above).
+    ZRange worst_range(std::size_t planes) const {
+        return planes >= nz_ ? ZRange{0, nz_} : ZRange{1, std::min(1 + planes, nz_)};
+    }
+    std::size_t fixed_bytes(const DeviceJob& job, const ChunkShape& s) const;
+    bool fits(const DeviceJob& job, const ChunkShape& s) const;
     std::vector<ZRange> make_chunks(const std::vector<DeviceJob>& jobs) const;
     void device_worker(DeviceJob& job);
     void process(DeviceJob& job, ZRange range, std::vector<Piece>& out);
@@ -167,7 +183,7 @@ void Engine::prepare(DeviceJob& job) {
     job.fp64 = info.fp64 && !g_pretend_no_fp64;
     job.convert = volume_.type == ScalarType::F64 && !job.fp64;
     job.device_type = job.convert ? ScalarType::F32 : volume_.type;
-    job.options = "-cl-std=CL1.2 -DGROUP=" + std::to_string(kGroup) + " -DVOXEL_T=" + cl_type_name(job.device_type);
+    job.options = std::string("-cl-std=CL1.2 -DVOXEL_T=") + cl_type_name(job.device_type);
     if (is_integer(job.device_type)) job.options += " -DVOXEL_INTEGER";
     if (job.fp64) job.options += " -DUSE_FP64";
     dispatch_scalar(job.device_type, [&](auto tag) {
@@ -188,26 +204,44 @@ void Engine::prepare(DeviceJob& job) {
     const auto t0 = Clock::now();
     std::lock_guard<std::mutex> lock(job.device->mutex);
     const std::size_t built = job.device->programs_built;
-    for (const char* name : {"classify", "compact", "vertices", "triangles"}) job.device->mc_kernel(job.options, name);
+    for (const char* name : {"pack", "count_rows", "vertices", "triangles"}) {
+        const std::size_t most =
+            job.device->mc_kernel(job.options, name).getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(job.device->device);
+        while (job.local > most && job.local > 1) job.local /= 2;
+    }
     job.device->scan_local_size();
     job.stats.programs_built = job.device->programs_built - built;
     job.stats.setup_s = seconds_since(t0);
 }
 
-// Device bytes of a chunk of `planes` planes, outputs excluded.
-std::size_t Engine::fixed_bytes(const DeviceJob& job, std::size_t planes) const {
-    const std::size_t data = std::min(planes + 3, nz_) * plane_ * scalar_size(job.device_type);
-    const std::size_t meta = std::min(planes + 1, nz_) * plane_;
-    return data + meta * 2 + (meta / kGroup + 1) * 8 + meta / 256 + 64;
+// The index spaces of a chunk (kernels/marching_cubes.cl): sample planes [zlo, zhi) reach
+// the device, bit rows cover planes [begin, zhi), the scans run over the meta rows.
+ChunkShape Engine::shape(ZRange range) const {
+    ChunkShape s;
+    s.planes = range.end - range.begin;
+    s.zlo = range.begin > 0 ? range.begin - 1 : 0;
+    s.zhi = std::min(range.end + 2, nz_);
+    s.cell_end = std::min(range.end, nz_ - 1);
+    s.rows = (std::min(range.end + 1, nz_) - range.begin) * ny_;
+    s.owned_rows = s.planes * ny_;
+    s.cell_rows = (s.cell_end > range.begin ? s.cell_end - range.begin : 0) * ny_;
+    s.words = (nx_ + 31) / 32;
+    s.bit_words = (s.zhi - range.begin) * ny_ * s.words;
+    s.data_samples = (s.zhi - s.zlo) * plane_;
+    return s;
 }
 
-// Whether a chunk of `planes` planes can fit the device before its outputs are known: the
-// fixed part must leave at least as much again for vertices and triangles.
-bool Engine::fits(const DeviceJob& job, std::size_t planes) const {
-    const std::size_t data = std::min(planes + 3, nz_) * plane_ * scalar_size(job.device_type);
-    const std::size_t meta = std::min(planes + 1, nz_) * plane_;
-    return meta <= kMaxChunkSamples && data <= job.device->info.max_allocation &&
-           meta * 4 <= job.device->info.max_allocation && 2 * fixed_bytes(job, planes) <= job.limit;
+// Device bytes of a chunk, outputs excluded: samples, bits, two counts per row (+ scan sums).
+std::size_t Engine::fixed_bytes(const DeviceJob& job, const ChunkShape& s) const {
+    return s.data_samples * scalar_size(job.device_type) + s.bit_words * 4 + s.rows * 8 + s.rows / 128 + 64;
+}
+
+// Whether a chunk can fit the device before its outputs are known: the fixed part must
+// leave at least as much again for vertices and triangles.
+bool Engine::fits(const DeviceJob& job, const ChunkShape& s) const {
+    const std::size_t max_allocation = job.device->info.max_allocation;
+    return s.data_samples <= kMaxChunkSamples && s.data_samples * scalar_size(job.device_type) <= max_allocation &&
+           s.bit_words * 4 <= max_allocation && s.rows * 4 <= max_allocation && 2 * fixed_bytes(job, s) <= job.limit;
 }
 
 std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) const {
@@ -221,7 +255,7 @@ std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) cons
             std::size_t lo = 1, hi = nz_;
             while (lo < hi) {
                 const std::size_t mid = (lo + hi + 1) / 2;
-                if (fits(job, mid)) lo = mid; else hi = mid - 1;
+                if (fits(job, shape(worst_range(mid)))) lo = mid; else hi = mid - 1;
             }
             planes = std::min(planes, lo);
         }
@@ -256,40 +290,40 @@ Piece Engine::run_on_cpu(ZRange range, unsigned threads) {
 
 Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
     Device& d = *job.device;
-    const std::size_t planes = range.end - range.begin;
-    if (!fits(job, planes) && planes > 1) throw TooBig{};
-
-    const std::size_t meta_end = std::min(range.end + 1, nz_);
-    const std::size_t cell_end = std::min(range.end, nz_ - 1);
-    const std::size_t zlo = range.begin > 0 ? range.begin - 1 : 0;
-    const std::size_t zhi = std::min(range.end + 2, nz_);
-    const std::size_t count = (meta_end - range.begin) * plane_;
-    const std::size_t owned = planes * plane_;
-    const std::size_t data_samples = (zhi - zlo) * plane_;
-    const std::size_t groups = (count + kGroup - 1) / kGroup;
-    const std::size_t sample_bytes = scalar_size(job.device_type);
+    const ChunkShape s = shape(range);
     const DeviceInfo& info = d.info;
-    if (count > kMaxChunkSamples || data_samples * sample_bytes > info.max_allocation ||
-        count * 4 > info.max_allocation || fixed_bytes(job, planes) > job.limit)
-        throw TooBig{};
+    if (!fits(job, s)) {
+        if (s.planes > 1) throw TooBig{};
+        if (s.data_samples > kMaxChunkSamples || s.data_samples * scalar_size(job.device_type) > info.max_allocation ||
+            fixed_bytes(job, s) > job.limit)
+            throw TooBig{};
+    }
+    const std::size_t sample_bytes = scalar_size(job.device_type);
+    const std::size_t first_sample = (range.begin - s.zlo) * plane_;  // of plane `begin` in the device's samples
 
     EventLog log;
     std::vector<float> converted;
     Piece piece;
     piece.range = range;
+    const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
+    // Fixed work-group size: PoCL compiles a kernel once per local size it is launched with.
+    const auto launch = [&](cl::Kernel& k, std::size_t n, Pass pass) {
+        d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(round_up(n, job.local)), cl::NDRange(job.local),
+                                     nullptr, &log.add(pass));
+    };
     try {
         // Upload the planes, in place (or converted from f64 keeping every inside bit). A device
         // that shares the host's memory reads the caller's samples where they are.
         const bool zero_copy = info.host_memory && !job.convert;
         cl::Buffer in_place;
-        cl::Buffer& data = zero_copy ? in_place : d.buffer(kData, data_samples * sample_bytes);
-        const auto* bytes = static_cast<const unsigned char*>(volume_.data) + zlo * plane_ * scalar_size(volume_.type);
+        cl::Buffer& data = zero_copy ? in_place : d.buffer(kData, s.data_samples * sample_bytes);
+        const auto* bytes = static_cast<const unsigned char*>(volume_.data) + s.zlo * plane_ * scalar_size(volume_.type);
         if (job.convert) {
             const double* src = reinterpret_cast<const double*>(bytes);
             float thr;
             std::memcpy(&thr, job.threshold.data(), sizeof(thr));
-            converted.resize(data_samples);
-            for (std::size_t i = 0; i < data_samples; ++i) {
+            converted.resize(s.data_samples);
+            for (std::size_t i = 0; i < s.data_samples; ++i) {
                 const double v = src[i];
                 float f = static_cast<float>(std::clamp(v, -static_cast<double>(FLT_MAX), static_cast<double>(FLT_MAX)));
                 if (!std::isfinite(v)) f = std::numeric_limits<float>::quiet_NaN();  // refused in the kernel
@@ -300,152 +334,151 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             bytes = reinterpret_cast<const unsigned char*>(converted.data());
         }
         if (zero_copy)
-            in_place = cl::Buffer(d.context, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, data_samples * sample_bytes,
+            in_place = cl::Buffer(d.context, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, s.data_samples * sample_bytes,
                                   const_cast<unsigned char*>(bytes));  // read only: the kernels never write it
         else
-            d.queue.enqueueWriteBuffer(data, CL_FALSE, 0, data_samples * sample_bytes, bytes, nullptr,
+            d.queue.enqueueWriteBuffer(data, CL_FALSE, 0, s.data_samples * sample_bytes, bytes, nullptr,
                                        &log.add(Pass::Transfer));
-        cl::Buffer& codes = d.buffer(kCodes, count);
-        cl::Buffer& cases = d.buffer(kCases, count);
-        cl::Buffer& vbase = d.buffer(kVBase, groups * 4);  // per group: counts, then their prefix sums
-        cl::Buffer& tbase = d.buffer(kTBase, groups * 4);
+        cl::Buffer& bits = d.buffer(kBits, s.bit_words * 4);
+        cl::Buffer& vbase = d.buffer(kVBase, s.rows * 4);  // per row: counts, then their prefix sums
+        cl::Buffer& tbase = d.buffer(kTBase, s.rows * 4);
         cl::Buffer& nan = d.buffer(kNan, sizeof(cl_int));
         const cl_int no_nan = INT_MAX;
         d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
 
-        const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
-        cl::Kernel& classify = d.mc_kernel(job.options, "classify");
-        classify.setArg(0, data);
-        classify.setArg(1, job.threshold.size(), job.threshold.data());
-        classify.setArg(2, u(nx_));
-        classify.setArg(3, u(ny_));
-        classify.setArg(4, u(nz_));
-        classify.setArg(5, u(range.begin));
-        classify.setArg(6, u(cell_end));
-        classify.setArg(7, u(zlo));
-        classify.setArg(8, u(count));
-        classify.setArg(9, u(groups));
-        classify.setArg(10, d.pair_to_case);
-        classify.setArg(11, d.case_table);
-        classify.setArg(12, codes);
-        classify.setArg(13, cases);
-        classify.setArg(14, vbase);
-        classify.setArg(15, tbase);
-        classify.setArg(16, nan);
-        d.queue.enqueueNDRangeKernel(classify, cl::NullRange, cl::NDRange(round_up(groups, 64)), cl::NullRange,
-                                     nullptr, &log.add(Pass::Classify));
+        cl::Kernel& pack = d.mc_kernel(job.options, "pack");
+        pack.setArg(0, data);
+        pack.setArg(1, job.threshold.size(), job.threshold.data());
+        pack.setArg(2, u(nx_));
+        pack.setArg(3, u(ny_));
+        pack.setArg(4, u(s.words));
+        pack.setArg(5, u(range.begin));
+        pack.setArg(6, u(first_sample));
+        pack.setArg(7, u(s.bit_words));
+        pack.setArg(8, bits);
+        pack.setArg(9, nan);
+        launch(pack, s.bit_words, Pass::Classify);
 
-        const std::uint64_t all_vertices = scan(d, vbase, groups, log);
-        const std::uint64_t triangles = scan(d, tbase, groups, log);
+        cl::Kernel& count = d.mc_kernel(job.options, "count_rows");
+        count.setArg(0, bits);
+        count.setArg(1, u(nx_));
+        count.setArg(2, u(ny_));
+        count.setArg(3, u(nz_));
+        count.setArg(4, u(s.words));
+        count.setArg(5, u(range.begin));
+        count.setArg(6, u(s.cell_end));
+        count.setArg(7, u(s.rows));
+        count.setArg(8, d.case_table);
+        count.setArg(9, vbase);
+        count.setArg(10, tbase);
+        launch(count, s.rows, Pass::Classify);
+
+        const std::uint64_t all_vertices = scan(d, vbase, s.rows, log);
+        const std::uint64_t triangles = scan(d, tbase, s.rows, log);
         cl_int nan_plane = INT_MAX;
         d.queue.enqueueReadBuffer(nan, CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr, &log.add(Pass::Transfer));
         if (nan_plane != INT_MAX)
             throw Error("volume has NaN or infinite samples (first seen in z-plane " + std::to_string(nan_plane) +
                         "); replace them with finite values before meshing");
-        std::uint64_t vertices = all_vertices;
-        if (owned < count) {  // the first vertex id of plane `end`: its group's base + the samples before
-            const std::size_t g = owned / kGroup;
-            cl_uint v = 0;
-            d.queue.enqueueReadBuffer(vbase, CL_TRUE, g * 4, sizeof(v), &v, nullptr, &log.add(Pass::Transfer));
-            unsigned char before[kGroup] = {};
-            if (owned > g * kGroup)
-                d.queue.enqueueReadBuffer(codes, CL_TRUE, g * kGroup, owned - g * kGroup, before, nullptr,
-                                          &log.add(Pass::Transfer));
-            vertices = v;
-            for (std::size_t i = 0; i < owned - g * kGroup; ++i) vertices += std::popcount(unsigned(before[i]));
-        }
         if (all_vertices > std::numeric_limits<std::uint32_t>::max() ||
             triangles > std::numeric_limits<std::uint32_t>::max())
             throw TooBig{};
+        std::uint64_t vertices = all_vertices;
+        if (s.owned_rows < s.rows) {  // plane `end`'s first vertex id: its first row's base
+            cl_uint v = 0;
+            d.queue.enqueueReadBuffer(vbase, CL_TRUE, s.owned_rows * 4, sizeof(v), &v, nullptr,
+                                      &log.add(Pass::Transfer));
+            vertices = v;
+        }
         // Outputs, sized by the scan totals.
-        const std::size_t out_bytes = vertices * (12 + (options_.normals ? 12 : 0) + 4) + triangles * 16;
+        const std::size_t out_bytes = vertices * (12 + (options_.normals ? 12 : 0)) + triangles * 12;
         if (vertices * 12 > info.max_allocation || triangles * 12 > info.max_allocation ||
-            fixed_bytes(job, planes) + out_bytes > job.limit) {
-            if (planes > 1) throw TooBig{};
+            fixed_bytes(job, s) + out_bytes > job.limit) {
+            if (s.planes > 1) throw TooBig{};
         }
         piece.vertices = vertices;
         piece.positions.resize(3 * vertices);
         if (options_.normals) piece.normals.resize(3 * vertices);
         piece.indices.resize(3 * triangles);
-        if (vertices > 0 || triangles > 0) {
-            cl::Buffer& vowner = d.buffer(kVOwner, vertices * 4);
-            cl::Buffer& towner = d.buffer(kTOwner, triangles * 4);
-            cl::Kernel& compact = d.mc_kernel(job.options, "compact");
-            compact.setArg(0, codes);
-            compact.setArg(1, cases);
-            compact.setArg(2, vbase);
-            compact.setArg(3, tbase);
-            compact.setArg(4, u(count));
-            compact.setArg(5, u(owned));
-            compact.setArg(6, u(groups));
-            compact.setArg(7, d.case_table);
-            compact.setArg(8, vowner);
-            compact.setArg(9, towner);
-            d.queue.enqueueNDRangeKernel(compact, cl::NullRange, cl::NDRange(round_up(groups, 64)), cl::NullRange,
-                                         nullptr, &log.add(Pass::Generate));
-            if (vertices > 0) {
-                cl::Buffer& positions = d.buffer(kPositions, vertices * 12);
-                cl::Buffer& normals = d.buffer(kNormals, options_.normals ? vertices * 12 : 16);
-                cl::Kernel& k = d.mc_kernel(job.options, "vertices");
-                k.setArg(0, data);
-                k.setArg(1, job.threshold.size(), job.threshold.data());
-                const double fl = std::floor(options_.iso);
-                const cl_long iso_int =
-                    is_integer(job.device_type) ? static_cast<cl_long>(fl) : 0;  // in range: the threshold is mixed
-                const cl_float iso_frac = is_integer(job.device_type) ? static_cast<float>(options_.iso - fl) : 0.f;
-                auto real = [&](unsigned index, double value) {
-                    if (job.fp64) {
-                        k.setArg(index, value);
-                    } else {
-                        k.setArg(index, static_cast<cl_float>(value));
-                    }
-                };
-                real(2, options_.iso);
-                k.setArg(3, iso_int);
-                k.setArg(4, iso_frac);
-                k.setArg(5, u(nx_));
-                k.setArg(6, u(ny_));
-                k.setArg(7, u(nz_));
-                k.setArg(8, u(range.begin));
-                k.setArg(9, u(zlo));
-                k.setArg(10, u(vertices));
-                k.setArg(11, vowner);
-                for (unsigned a = 0; a < 3; ++a) {
-                    real(12 + a, volume_.origin[a]);
-                    real(15 + a, volume_.spacing[a]);
-                    real(18 + a, 1 / volume_.spacing[a]);
+        // Where the device shares host memory, the kernels write the mesh where it will stay.
+        const auto output = [&](unsigned slot, auto& host, std::size_t bytes) -> cl::Buffer {
+            if (info.host_memory)
+                return cl::Buffer(d.context, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, host.data());
+            return d.buffer(slot, bytes);
+        };
+        const auto fetch = [&](const cl::Buffer& buffer, auto& host, std::size_t bytes) {
+            if (info.host_memory) {  // a mapped USE_HOST_PTR buffer is the host array, up to date
+                void* p = d.queue.enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_READ, 0, bytes);
+                d.queue.enqueueUnmapMemObject(buffer, p, nullptr, &log.add(Pass::Transfer));
+            } else {
+                d.queue.enqueueReadBuffer(buffer, CL_FALSE, 0, bytes, host.data(), nullptr, &log.add(Pass::Transfer));
+            }
+        };
+        if (vertices > 0) {
+            cl::Buffer positions = output(kPositions, piece.positions, vertices * 12);
+            cl::Buffer normals = options_.normals ? output(kNormals, piece.normals, vertices * 12)
+                                                  : d.buffer(kNormals, 16);
+            cl::Kernel& k = d.mc_kernel(job.options, "vertices");
+            k.setArg(0, data);
+            k.setArg(1, bits);
+            k.setArg(2, job.threshold.size(), job.threshold.data());
+            const double fl = std::floor(options_.iso);
+            const cl_long iso_int =
+                is_integer(job.device_type) ? static_cast<cl_long>(fl) : 0;  // in range: the threshold is mixed
+            const cl_float iso_frac = is_integer(job.device_type) ? static_cast<float>(options_.iso - fl) : 0.f;
+            auto real = [&](unsigned index, double value) {
+                if (job.fp64) {
+                    k.setArg(index, value);
+                } else {
+                    k.setArg(index, static_cast<cl_float>(value));
                 }
-                k.setArg(21, static_cast<cl_int>(options_.inside_below));
-                k.setArg(22, static_cast<cl_int>(options_.normals));
-                k.setArg(23, positions);
-                k.setArg(24, normals);
-                d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(round_up(vertices, 64)), cl::NullRange,
-                                             nullptr, &log.add(Pass::Generate));
-                d.queue.enqueueReadBuffer(positions, CL_FALSE, 0, vertices * 12, piece.positions.data(), nullptr,
-                                          &log.add(Pass::Transfer));
-                if (options_.normals)
-                    d.queue.enqueueReadBuffer(normals, CL_FALSE, 0, vertices * 12, piece.normals.data(), nullptr,
-                                              &log.add(Pass::Transfer));
+            };
+            real(3, options_.iso);
+            k.setArg(4, iso_int);
+            k.setArg(5, iso_frac);
+            k.setArg(6, u(nx_));
+            k.setArg(7, u(ny_));
+            k.setArg(8, u(nz_));
+            k.setArg(9, u(s.words));
+            k.setArg(10, u(range.begin));
+            k.setArg(11, u(first_sample));
+            k.setArg(12, u(s.owned_rows));
+            k.setArg(13, u(s.rows));
+            k.setArg(14, u(all_vertices));
+            k.setArg(15, vbase);
+            for (unsigned a = 0; a < 3; ++a) {
+                real(16 + a, volume_.origin[a]);
+                real(19 + a, volume_.spacing[a]);
+                real(22 + a, 1 / volume_.spacing[a]);
             }
-            if (triangles > 0) {
-                cl::Buffer& indices = d.buffer(kIndices, triangles * 12);
-                cl::Kernel& k = d.mc_kernel(job.options, "triangles");
-                k.setArg(0, codes);
-                k.setArg(1, cases);
-                k.setArg(2, vbase);
-                k.setArg(3, towner);
-                k.setArg(4, u(triangles));
-                k.setArg(5, u(nx_));
-                k.setArg(6, u(plane_));
-                k.setArg(7, d.case_table);
-                k.setArg(8, d.cell_edge);
-                k.setArg(9, static_cast<cl_int>(options_.inside_below));
-                k.setArg(10, indices);
-                d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(round_up(triangles, 64)), cl::NullRange,
-                                             nullptr, &log.add(Pass::Generate));
-                d.queue.enqueueReadBuffer(indices, CL_FALSE, 0, triangles * 12, piece.indices.data(), nullptr,
-                                          &log.add(Pass::Transfer));
-            }
+            k.setArg(25, static_cast<cl_int>(options_.inside_below));
+            k.setArg(26, static_cast<cl_int>(options_.normals));
+            k.setArg(27, positions);
+            k.setArg(28, normals);
+            launch(k, s.owned_rows, Pass::Generate);
+            fetch(positions, piece.positions, vertices * 12);
+            if (options_.normals) fetch(normals, piece.normals, vertices * 12);
+        }
+        if (triangles > 0) {
+            cl::Buffer indices = output(kIndices, piece.indices, triangles * 12);
+            cl::Kernel& k = d.mc_kernel(job.options, "triangles");
+            k.setArg(0, bits);
+            k.setArg(1, u(nx_));
+            k.setArg(2, u(ny_));
+            k.setArg(3, u(nz_));
+            k.setArg(4, u(s.words));
+            k.setArg(5, u(range.begin));
+            k.setArg(6, u(s.cell_rows));
+            k.setArg(7, u(s.rows));
+            k.setArg(8, u(triangles));
+            k.setArg(9, vbase);
+            k.setArg(10, tbase);
+            k.setArg(11, d.case_table);
+            k.setArg(12, d.cell_edge);
+            k.setArg(13, static_cast<cl_int>(options_.inside_below));
+            k.setArg(14, indices);
+            launch(k, s.cell_rows, Pass::Generate);
+            fetch(indices, piece.indices, triangles * 12);
         }
         d.queue.finish();
     } catch (...) {

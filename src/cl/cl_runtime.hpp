@@ -24,7 +24,7 @@ extern const unsigned char kKernel_sculpt_blocks[];  // sculpting's batched bloc
 namespace cl_engine {
 
 constexpr unsigned kScanItems = 8;  // elements per work-item in scan.cl (passed as -DSCAN_ITEMS)
-constexpr unsigned kGroup = 8;      // samples per classify work-item in marching_cubes.cl (-DGROUP)
+
 
 enum class Pass { Classify, Scan, Generate, Transfer };
 
