@@ -61,9 +61,24 @@ inline void edge_vertex(__global const voxel* data, const uint idx, const uint x
     if (!want_normals) return;
 
     const uint x1 = x + (axis == 0), y1 = y + (axis == 1), z1 = z + (axis == 2);
-    const real g0x = axis_diff(data, idx, x, nx, 1, ix), g1x = axis_diff(data, idx1, x1, nx, 1, ix);
-    const real g0y = axis_diff(data, idx, y, ny, stride_y, iy), g1y = axis_diff(data, idx1, y1, ny, stride_y, iy);
-    const real g0z = axis_diff(data, idx, z, nz, stride_z, iz), g1z = axis_diff(data, idx1, z1, nz, stride_z, iz);
+    real g0x, g0y, g0z, g1x, g1y, g1z;
+    // Most vertices lie away from the border: there both gradients are plain central
+    // differences, taken without the per-axis border tests (the same arithmetic).
+    if (x - 1 < nx - 2 && y - 1 < ny - 2 && z - 1 < nz - 2 && x1 + 1 < nx && y1 + 1 < ny && z1 + 1 < nz) {
+        g0x = DIFF(data[idx + 1], data[idx - 1]) * (real)0.5 * ix;
+        g1x = DIFF(data[idx1 + 1], data[idx1 - 1]) * (real)0.5 * ix;
+        g0y = DIFF(data[idx + stride_y], data[idx - stride_y]) * (real)0.5 * iy;
+        g1y = DIFF(data[idx1 + stride_y], data[idx1 - stride_y]) * (real)0.5 * iy;
+        g0z = DIFF(data[idx + stride_z], data[idx - stride_z]) * (real)0.5 * iz;
+        g1z = DIFF(data[idx1 + stride_z], data[idx1 - stride_z]) * (real)0.5 * iz;
+    } else {
+        g0x = axis_diff(data, idx, x, nx, 1, ix);
+        g1x = axis_diff(data, idx1, x1, nx, 1, ix);
+        g0y = axis_diff(data, idx, y, ny, stride_y, iy);
+        g1y = axis_diff(data, idx1, y1, ny, stride_y, iy);
+        g0z = axis_diff(data, idx, z, nz, stride_z, iz);
+        g1z = axis_diff(data, idx1, z1, nz, stride_z, iz);
+    }
     // Outward is toward decreasing values: the negated gradient (flipped for inside_below).
     const real sign = inside_below ? (real)1 : (real)-1;
     const real n0 = sign * (g0x + t * (g1x - g0x));

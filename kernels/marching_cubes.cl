@@ -27,11 +27,9 @@
 typedef CAT(VOXEL_T, 8) voxel8;
 
 #ifdef VOXEL_INTEGER
-#define ANY_NONFINITE8(v) 0
 #define NONFINITE(v) 0
 #else
-#define ANY_NONFINITE8(v) any(isfinite(v) == 0) /* NaN or infinite: refused like the CPU engine */
-#define NONFINITE(v) (!isfinite(v))
+#define NONFINITE(v) (!isfinite(v)) /* NaN or infinite: refused like the CPU engine */
 #endif
 
 // Bits of word q that stand for x < limit.
@@ -45,39 +43,51 @@ inline uint bits_below(uint q, uint limit) {
 // Index of the lowest set bit of w != 0 (ctz is OpenCL 2.0).
 inline uint lowest_bit(uint w) { return 31u - clz(w & (0u - w)); }
 
-// Inside bits of 8 consecutive samples, bit k for sample k.
-inline uint inside8(const voxel8 v, const voxel thr) {
-    const int8 in = convert_int8(v >= (voxel8)(thr)) & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
-    return (uint)(in.s0 + in.s1 + in.s2 + in.s3 + in.s4 + in.s5 + in.s6 + in.s7);
+// Inside bits of the 32 samples at s, and in *finite whether they are all finite. The lanes
+// of four 8-sample compares are masked to their bit and or-ed together before one
+// horizontal or (OpenCL has no movemask).
+inline uint pack_word(__global const voxel* s, const voxel thr, int* finite) {
+    const int8 lane = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+    int8 acc = (int8)(0);
+#ifndef VOXEL_INTEGER
+    int8 ok = (int8)(-1);
+#endif
+    for (uint k = 0; k < 4; ++k) {
+        const voxel8 v = vload8(k, s);
+        acc |= convert_int8(v >= (voxel8)(thr)) & (lane << (int)(8 * k));
+#ifndef VOXEL_INTEGER
+        ok &= convert_int8(isfinite(v));
+#endif
+    }
+#ifndef VOXEL_INTEGER
+    if (!all(ok)) *finite = 0;
+#endif
+    const int4 a = acc.lo | acc.hi;
+    const int2 b = a.lo | a.hi;
+    return (uint)(b.x | b.y);
 }
 
-// One work-item per word of bits: 32 samples of one row.
+// One work-item per bit row: its nx samples into `words` words.
 __kernel void pack(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint words,
-                   const uint begin, const uint first_sample, const uint count, __global uint* bits,
+                   const uint begin, const uint first_sample, const uint rows, __global uint* bits,
                    __global int* nan_plane) {
-    const uint g = (uint)get_global_id(0);
-    if (g >= count) return;
-    const uint r = g / words;
-    const uint q = g - r * words;
-    const uint x0 = 32 * q;
-    __global const voxel* s = data + first_sample + r * nx + x0;
-    uint w = 0;
-    int bad = 0;
-    if (x0 + 32 <= nx) {
-        for (uint k = 0; k < 4; ++k) {
-            const voxel8 v = vload8(k, s);
-            bad |= ANY_NONFINITE8(v);
-            w |= inside8(v, thr) << (8 * k);
+    const uint r = (uint)get_global_id(0);
+    if (r >= rows) return;
+    __global const voxel* s = data + first_sample + r * nx;
+    __global uint* out = bits + r * words;
+    int finite = 1;
+    const uint full = nx / 32;
+    for (uint q = 0; q < full; ++q) out[q] = pack_word(s + 32 * q, thr, &finite);
+    if (full < words) {
+        uint w = 0;
+        for (uint x = 32 * full; x < nx; ++x) {
+            const voxel v = s[x];
+            if (NONFINITE(v)) finite = 0;
+            w |= (uint)(v >= thr) << (x - 32 * full);
         }
-    } else {
-        for (uint k = 0; k < nx - x0; ++k) {
-            const voxel v = s[k];
-            bad |= NONFINITE(v);
-            w |= (uint)(v >= thr) << k;
-        }
+        out[full] = w;
     }
-    bits[g] = w;
-    if (bad) atomic_min(nan_plane, (int)(begin + r / ny));
+    if (!finite) atomic_min(nan_plane, (int)(begin + r / ny));
 }
 
 // Crossed owned edges of word q of a row (sample x owns x->x+1, y->y+1, z->z+1); ny_row /
@@ -145,7 +155,9 @@ inline __global const uint* row_z(__global const uint* bits, uint r, uint z, uin
 }
 
 // One work-item per meta row: the vertices it owns and the triangles of the cell row it
-// starts (cell planes below cell_end, y < ny - 1).
+// starts (cell planes below cell_end, y < ny - 1). A cell that is not uniform has a crossed
+// edge among row a's edges and row b's x- and z-edges (they join all 8 corners), so cell
+// rows without one are skipped.
 __kernel void count_rows(__global const uint* bits, const uint nx, const uint ny, const uint nz, const uint words,
                          const uint begin, const uint cell_end, const uint rows, __constant uchar* case_table,
                          __global uint* vcount, __global uint* tcount) {
@@ -154,15 +166,22 @@ __kernel void count_rows(__global const uint* bits, const uint nx, const uint ny
     const uint p = r / ny;
     const uint j = r - p * ny;
     const uint z = begin + p;
-    __global const uint* row = bits + r * words;
-    __global const uint* ry = row_y(bits, r, j, ny, words);
-    __global const uint* rz = row_z(bits, r, z, ny, nz, words);
-    uint v = 0;
-    for (uint q = 0; q < words; ++q) v += edge_count(edge_masks(row, ry, rz, q, words, nx));
+    __global const uint* a = bits + r * words;
+    __global const uint* b = row_y(bits, r, j, ny, words);
+    __global const uint* c = row_z(bits, r, z, ny, nz, words);
+    const int cells_here = b && z < cell_end;
+    __global const uint* d = cells_here ? c + words : 0;
+    uint v = 0, crossed = 0;
+    for (uint q = 0; q < words; ++q) {
+        const EdgeMasks m = edge_masks(a, b, c, q, words, nx);
+        v += edge_count(m);
+        crossed |= m.x | m.y | m.z;
+        if (cells_here) crossed |= ((b[q] ^ next_x(b, q, words)) & bits_below(q, nx - 1)) | (b[q] ^ d[q]);
+    }
     uint t = 0;
-    if (ry && z < cell_end) {
+    if (cells_here && crossed) {
         for (uint q = 0; q < words; ++q) {
-            const CellWord w = cell_word(row, ry, rz, rz + words, q, words);
+            const CellWord w = cell_word(a, b, c, d, q, words);
             for (uint cells = nonuniform(&w, q, nx); cells; cells &= cells - 1)
                 t += case_table[16 * cell_case(&w, lowest_bit(cells))];
         }
@@ -171,17 +190,19 @@ __kernel void count_rows(__global const uint* bits, const uint nx, const uint ny
     tcount[r] = t;
 }
 
-// One work-item per owned row: its vertices at ids vbase[r]... (vend: the total after the
-// last meta row, for the last row's span).
+// One work-item per meta row with crossings: the vertex id of the first edge of each of its
+// words into wbase (what the triangles look up), and for owned rows its vertices at ids
+// vbase[r]... (vend: the total after the last meta row, for the last row's span). Rows
+// without crossings leave wbase unwritten: no triangle refers to them.
 __kernel void vertices(__global const voxel* data, __global const uint* bits, const voxel thr, const real iso,
                        const long iso_int, const float iso_frac, const uint nx, const uint ny, const uint nz,
                        const uint words, const uint begin, const uint first_sample, const uint owned_rows,
                        const uint rows, const uint vend, __global const uint* vbase, const real ox, const real oy,
                        const real oz, const real sx, const real sy, const real sz, const real ix, const real iy,
                        const real iz, const int inside_below, const int want_normals, __global float* positions,
-                       __global float* normals) {
+                       __global float* normals, __global uint* wbase) {
     const uint r = (uint)get_global_id(0);
-    if (r >= owned_rows) return;
+    if (r >= rows) return;
     uint id = vbase[r];
     if (id == (r + 1 < rows ? vbase[r + 1] : vend)) return;
     const uint p = r / ny;
@@ -191,8 +212,17 @@ __kernel void vertices(__global const voxel* data, __global const uint* bits, co
     __global const uint* row = bits + r * words;
     __global const uint* ry = row_y(bits, r, j, ny, words);
     __global const uint* rz = row_z(bits, r, z, ny, nz, words);
+    __global uint* word_base = wbase + r * words;
+    if (r >= owned_rows) {  // plane `end`: ids only, its vertices belong to the next chunk
+        for (uint q = 0; q < words; ++q) {
+            word_base[q] = id;
+            id += edge_count(edge_masks(row, ry, rz, q, words, nx));
+        }
+        return;
+    }
     const uint row_sample = first_sample + r * nx;
     for (uint q = 0; q < words; ++q) {
+        word_base[q] = id;
         const EdgeMasks m = edge_masks(row, ry, rz, q, words, nx);
         for (uint any = m.x | m.y | m.z; any; any &= any - 1) {
             const uint b = lowest_bit(any);
@@ -209,14 +239,9 @@ __kernel void vertices(__global const voxel* data, __global const uint* bits, co
     }
 }
 
-// The vertex id of the edge along `axis` from sample x = 32 q + b of a row whose masks at
-// word q are m, at word q + 1 next, and whose vertices before word q number base.
-inline uint edge_id(uint base, EdgeMasks m, EdgeMasks next, uint b, uint axis) {
-    if (b == 32) {  // the first sample of the next word
-        base += edge_count(m);
-        m = next;
-        b = 0;
-    }
+// The id of the vertex on the edge along `axis` from bit b of a word whose masks are m and
+// whose first vertex is base.
+inline uint edge_id(uint base, EdgeMasks m, uint b, uint axis) {
     const uint below = (1u << b) - 1u;
     uint id = base + popcount(m.x & below) + popcount(m.y & below) + popcount(m.z & below);
     if (axis > 0) id += m.x >> b & 1u;
@@ -224,12 +249,13 @@ inline uint edge_id(uint base, EdgeMasks m, EdgeMasks next, uint b, uint axis) {
     return id;
 }
 
-// One work-item per cell row with triangles: cell row (y, z) is spanned by sample rows
-// (y + dy, z + dz), indexed dy + 2 dz, whose edge masks are kept for words q and q + 1 with
-// the number of vertices before word q.
+// One work-item per cell row with triangles. Cell row (y, z) is spanned by sample rows
+// (y + dy, z + dz), indexed k = dy + 2 dz; a triangle corner on the edge from sample
+// x = 32 q + b + dx of row k has the id of its word's first vertex plus the crossed edges
+// before it in that word. Words without a non-uniform cell are skipped.
 __kernel void triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz, const uint words,
                         const uint begin, const uint cell_rows, const uint rows, const uint tend,
-                        __global const uint* vbase, __global const uint* tbase, __constant uchar* case_table,
+                        __global const uint* tbase, __global const uint* wbase, __constant uchar* case_table,
                         __constant uchar* cell_edge, const int inside_below, __global uint* indices) {
     const uint r = (uint)get_global_id(0);
     if (r >= cell_rows) return;
@@ -241,25 +267,22 @@ __kernel void triangles(__global const uint* bits, const uint nx, const uint ny,
     __global const uint* row[4];
     __global const uint* ry[4];
     __global const uint* rz[4];
-    uint base[4];
+    __global const uint* word_base[4];
     for (uint k = 0; k < 4; ++k) {
         const uint rk = r + (k & 1u) + (k >> 1) * ny;
-        const uint jk = j + (k & 1u), zk = z + (k >> 1);
         row[k] = bits + rk * words;
-        ry[k] = row_y(bits, rk, jk, ny, words);
-        rz[k] = row_z(bits, rk, zk, ny, nz, words);
-        base[k] = vbase[rk];
+        ry[k] = row_y(bits, rk, j + (k & 1u), ny, words);
+        rz[k] = row_z(bits, rk, z + (k >> 1), ny, nz, words);
+        word_base[k] = wbase + rk * words;
     }
-    EdgeMasks m[4], next[4];
-    for (uint k = 0; k < 4; ++k) m[k] = edge_masks(row[k], ry[k], rz[k], 0, words, nx);
     __global uint* out = indices + 3 * t;
     for (uint q = 0; q < words; ++q) {
-        for (uint k = 0; k < 4; ++k) {
-            if (q + 1 < words) next[k] = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
-            else next[k].x = next[k].y = next[k].z = 0;
-        }
         const CellWord w = cell_word(row[0], row[1], row[2], row[3], q, words);
-        for (uint cells = nonuniform(&w, q, nx); cells; cells &= cells - 1) {
+        uint cells = nonuniform(&w, q, nx);
+        if (!cells) continue;
+        EdgeMasks m[4];
+        for (uint k = 0; k < 4; ++k) m[k] = edge_masks(row[k], ry[k], rz[k], q, words, nx);
+        for (; cells; cells &= cells - 1) {
             const uint b = lowest_bit(cells);
             const uint c = cell_case(&w, b);
             const uint n = case_table[16 * c];
@@ -268,17 +291,18 @@ __kernel void triangles(__global const uint* bits, const uint nx, const uint ny,
                 for (uint e = 0; e < 3; ++e) {
                     __constant uchar* ce = cell_edge + 4 * case_table[16 * c + 1 + 3 * tri + e];
                     const uint k = ce[1] + 2u * ce[2];
-                    id[e] = edge_id(base[k], m[k], next[k], b + ce[0], ce[3]);
+                    if (b + ce[0] < 32) {
+                        id[e] = edge_id(word_base[k][q], m[k], b + ce[0], ce[3]);
+                    } else {  // the first sample of the next word
+                        const EdgeMasks next = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
+                        id[e] = edge_id(word_base[k][q + 1], next, 0, ce[3]);
+                    }
                 }
                 out[0] = id[0];
                 out[1] = inside_below ? id[2] : id[1];
                 out[2] = inside_below ? id[1] : id[2];
                 out += 3;
             }
-        }
-        for (uint k = 0; k < 4; ++k) {
-            base[k] += edge_count(m[k]);
-            m[k] = next[k];
         }
     }
 }

@@ -38,7 +38,7 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // Buffer slots of a device.
-enum : unsigned { kData, kBits, kVBase, kTBase, kPositions, kNormals, kIndices, kNan };
+enum : unsigned { kData, kBits, kVBase, kTBase, kWordBase, kPositions, kNormals, kIndices, kNan };
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
 
@@ -57,9 +57,8 @@ struct ChunkShape {
 
 struct Piece {  // one meshed z-range, with chunk-local vertex ids
     ZRange range;
-    std::uint64_t vertices = 0;
-    std::vector<float> positions, normals;
-    std::vector<std::uint32_t> indices;
+    std::uint64_t vertices = 0;  // owned; indices may refer to the next chunk's first plane too
+    Mesh mesh;
 };
 
 const char* cl_type_name(ScalarType type) {
@@ -80,7 +79,7 @@ bool is_integer(ScalarType type) { return type != ScalarType::F32 && type != Sca
 
 std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
 
-constexpr std::size_t kLocalSize = 64;  // work-group size of marching_cubes.cl launches, where allowed
+constexpr std::size_t kLocalSize = 256;  // work-group size of marching_cubes.cl launches, where allowed
 
 // What one call needs to know about a device: how samples reach it and the kernel arguments
 // that do not change from chunk to chunk.
@@ -231,9 +230,11 @@ ChunkShape Engine::shape(ZRange range) const {
     return s;
 }
 
-// Device bytes of a chunk, outputs excluded: samples, bits, two counts per row (+ scan sums).
+// Device bytes of a chunk, outputs excluded: samples, bits, a vertex id per row word, two
+// counts per row (+ the scan's block sums).
 std::size_t Engine::fixed_bytes(const DeviceJob& job, const ChunkShape& s) const {
-    return s.data_samples * scalar_size(job.device_type) + s.bit_words * 4 + s.rows * 8 + s.rows / 128 + 64;
+    return s.data_samples * scalar_size(job.device_type) + s.bit_words * 4 + s.rows * s.words * 4 + s.rows * 8 +
+           s.rows / 128 + 64;
 }
 
 // Whether a chunk can fit the device before its outputs are known: the fixed part must
@@ -241,7 +242,8 @@ std::size_t Engine::fixed_bytes(const DeviceJob& job, const ChunkShape& s) const
 bool Engine::fits(const DeviceJob& job, const ChunkShape& s) const {
     const std::size_t max_allocation = job.device->info.max_allocation;
     return s.data_samples <= kMaxChunkSamples && s.data_samples * scalar_size(job.device_type) <= max_allocation &&
-           s.bit_words * 4 <= max_allocation && s.rows * 4 <= max_allocation && 2 * fixed_bytes(job, s) <= job.limit;
+           s.bit_words * 4 <= max_allocation && s.rows * s.words * 4 <= max_allocation &&
+           2 * fixed_bytes(job, s) <= job.limit;
 }
 
 std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) const {
@@ -279,12 +281,10 @@ Piece Engine::run_on_cpu(ZRange range, unsigned threads) {
     piece.range = range;
     CpuChunkPlan plan = cpu_classify(volume_, options_, range, threads);
     piece.vertices = plan.vertices;
-    piece.positions.resize(3 * plan.vertices);
-    if (options_.normals) piece.normals.resize(3 * plan.vertices);
-    piece.indices.resize(3 * plan.triangles);
+    allocate_output(piece.mesh, plan.vertices, plan.triangles, options_.normals, threads);
     cpu_generate(plan, volume_, options_, threads,
-                 MeshOut{piece.positions.data(), options_.normals ? piece.normals.data() : nullptr,
-                         piece.indices.data(), 0});
+                 MeshOut{piece.mesh.positions.data(), options_.normals ? piece.mesh.normals.data() : nullptr,
+                         piece.mesh.indices.data(), 0});
     return piece;
 }
 
@@ -302,6 +302,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
     const std::size_t first_sample = (range.begin - s.zlo) * plane_;  // of plane `begin` in the device's samples
 
     EventLog log;
+    const auto T0 = Clock::now();
     std::vector<float> converted;
     Piece piece;
     piece.range = range;
@@ -336,6 +337,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         if (zero_copy)
             in_place = cl::Buffer(d.context, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, s.data_samples * sample_bytes,
                                   const_cast<unsigned char*>(bytes));  // read only: the kernels never write it
+        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[buf %.2f] ", 1e3*seconds_since(T0));
         else
             d.queue.enqueueWriteBuffer(data, CL_FALSE, 0, s.data_samples * sample_bytes, bytes, nullptr,
                                        &log.add(Pass::Transfer));
@@ -354,10 +356,11 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         pack.setArg(4, u(s.words));
         pack.setArg(5, u(range.begin));
         pack.setArg(6, u(first_sample));
-        pack.setArg(7, u(s.bit_words));
+        pack.setArg(7, u(s.bit_words / s.words));
         pack.setArg(8, bits);
         pack.setArg(9, nan);
-        launch(pack, s.bit_words, Pass::Classify);
+        launch(pack, s.bit_words / s.words, Pass::Classify);
+        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[pack %.2f] ", 1e3*seconds_since(T0));
 
         cl::Kernel& count = d.mc_kernel(job.options, "count_rows");
         count.setArg(0, bits);
@@ -372,8 +375,10 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         count.setArg(9, vbase);
         count.setArg(10, tbase);
         launch(count, s.rows, Pass::Classify);
+        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[count %.2f] ", 1e3*seconds_since(T0));
 
         const std::uint64_t all_vertices = scan(d, vbase, s.rows, log);
+        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[scan %.2f] ", 1e3*seconds_since(T0));
         const std::uint64_t triangles = scan(d, tbase, s.rows, log);
         cl_int nan_plane = INT_MAX;
         d.queue.enqueueReadBuffer(nan, CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr, &log.add(Pass::Transfer));
@@ -397,9 +402,8 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             if (s.planes > 1) throw TooBig{};
         }
         piece.vertices = vertices;
-        piece.positions.resize(3 * vertices);
-        if (options_.normals) piece.normals.resize(3 * vertices);
-        piece.indices.resize(3 * triangles);
+        allocate_output(piece.mesh, vertices, triangles, options_.normals, threads_);
+        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[alloc %.2f] ", 1e3*seconds_since(T0));
         // Where the device shares host memory, the kernels write the mesh where it will stay.
         const auto output = [&](unsigned slot, auto& host, std::size_t bytes) -> cl::Buffer {
             if (info.host_memory)
@@ -414,10 +418,14 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
                 d.queue.enqueueReadBuffer(buffer, CL_FALSE, 0, bytes, host.data(), nullptr, &log.add(Pass::Transfer));
             }
         };
-        if (vertices > 0) {
-            cl::Buffer positions = output(kPositions, piece.positions, vertices * 12);
-            cl::Buffer normals = options_.normals ? output(kNormals, piece.normals, vertices * 12)
-                                                  : d.buffer(kNormals, 16);
+        // Per meta row and word, the id of the word's first vertex: written with the vertices.
+        cl::Buffer& word_base = d.buffer(kWordBase, s.rows * s.words * 4);
+        if (all_vertices > 0) {
+            cl::Buffer positions = vertices > 0 ? output(kPositions, piece.mesh.positions, vertices * 12)
+                                                : d.buffer(kPositions, 16);
+            cl::Buffer normals = options_.normals && vertices > 0
+                                     ? output(kNormals, piece.mesh.normals, vertices * 12)
+                                     : d.buffer(kNormals, 16);
             cl::Kernel& k = d.mc_kernel(job.options, "vertices");
             k.setArg(0, data);
             k.setArg(1, bits);
@@ -455,12 +463,14 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             k.setArg(26, static_cast<cl_int>(options_.normals));
             k.setArg(27, positions);
             k.setArg(28, normals);
-            launch(k, s.owned_rows, Pass::Generate);
-            fetch(positions, piece.positions, vertices * 12);
-            if (options_.normals) fetch(normals, piece.normals, vertices * 12);
+            k.setArg(29, word_base);
+            launch(k, s.rows, Pass::Generate);
+        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[vert %.2f] ", 1e3*seconds_since(T0));
+            if (vertices > 0) fetch(positions, piece.mesh.positions, vertices * 12);
+            if (options_.normals && vertices > 0) fetch(normals, piece.mesh.normals, vertices * 12);
         }
         if (triangles > 0) {
-            cl::Buffer indices = output(kIndices, piece.indices, triangles * 12);
+            cl::Buffer indices = output(kIndices, piece.mesh.indices, triangles * 12);
             cl::Kernel& k = d.mc_kernel(job.options, "triangles");
             k.setArg(0, bits);
             k.setArg(1, u(nx_));
@@ -471,16 +481,18 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             k.setArg(6, u(s.cell_rows));
             k.setArg(7, u(s.rows));
             k.setArg(8, u(triangles));
-            k.setArg(9, vbase);
-            k.setArg(10, tbase);
+            k.setArg(9, tbase);
+            k.setArg(10, word_base);
             k.setArg(11, d.case_table);
             k.setArg(12, d.cell_edge);
             k.setArg(13, static_cast<cl_int>(options_.inside_below));
             k.setArg(14, indices);
             launch(k, s.cell_rows, Pass::Generate);
-            fetch(indices, piece.indices, triangles * 12);
+        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[tri %.2f] ", 1e3*seconds_since(T0));
+            fetch(indices, piece.mesh.indices, triangles * 12);
         }
         d.queue.finish();
+        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[finish %.2f] ", 1e3*seconds_since(T0));
     } catch (...) {
         // Nothing may still read from or write into host memory we are about to free.
         try {
@@ -489,6 +501,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         }
         throw;
     }
+    if (getenv("VOXMESH_CL_TRACE")) { for (const auto& [pass, event] : log.events) fprintf(stderr, "%d:%.2f ", int(pass), 1e3*event_seconds(event)); fprintf(stderr, "\n"); }
     for (const auto& [pass, event] : log.events) {
         const double s = event_seconds(event);
         if (pass == Pass::Transfer) {
@@ -565,11 +578,7 @@ Mesh Engine::assemble(std::vector<std::vector<Piece>>& results) {
     for (auto& chunk : results)
         for (Piece& p : chunk) pieces.push_back(&p);
     if (pieces.size() == 1) {  // one chunk: its ids are already global, nothing to copy
-        Mesh mesh;
-        mesh.positions = std::move(pieces[0]->positions);
-        mesh.normals = std::move(pieces[0]->normals);
-        mesh.indices = std::move(pieces[0]->indices);
-        return mesh;
+        return std::move(pieces[0]->mesh);
     }
     std::vector<std::uint64_t> vbase(pieces.size()), tbase(pieces.size());
     std::uint64_t vertices = 0, triangles = 0;
@@ -577,23 +586,21 @@ Mesh Engine::assemble(std::vector<std::vector<Piece>>& results) {
         vbase[i] = vertices;
         tbase[i] = triangles;
         vertices += pieces[i]->vertices;
-        triangles += pieces[i]->indices.size() / 3;
+        triangles += pieces[i]->mesh.indices.size() / 3;
     }
     if (vertices > std::numeric_limits<std::uint32_t>::max())
         throw Error("the mesh would have more than 2^32-1 vertices; 32-bit indices cannot address it "
                     "(mesh a sub-volume or a coarser volume)");
     Mesh mesh;
-    mesh.positions.resize(3 * vertices);
-    if (options_.normals) mesh.normals.resize(3 * vertices);
-    mesh.indices.resize(3 * triangles);
+    allocate_output(mesh, vertices, triangles, options_.normals, threads_);
     const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(threads_, std::max<std::size_t>(pieces.size(), 1)));
     run_workers(workers, [&](unsigned w) {
         for (std::size_t i = w; i < pieces.size(); i += workers) {
             const Piece& p = *pieces[i];
-            std::copy(p.positions.begin(), p.positions.end(), mesh.positions.begin() + 3 * vbase[i]);
-            if (options_.normals) std::copy(p.normals.begin(), p.normals.end(), mesh.normals.begin() + 3 * vbase[i]);
+            std::copy(p.mesh.positions.begin(), p.mesh.positions.end(), mesh.positions.begin() + 3 * vbase[i]);
+            if (options_.normals) std::copy(p.mesh.normals.begin(), p.mesh.normals.end(), mesh.normals.begin() + 3 * vbase[i]);
             const auto base = static_cast<std::uint32_t>(vbase[i]);
-            std::transform(p.indices.begin(), p.indices.end(), mesh.indices.begin() + 3 * tbase[i],
+            std::transform(p.mesh.indices.begin(), p.mesh.indices.end(), mesh.indices.begin() + 3 * tbase[i],
                            [base](std::uint32_t id) { return id + base; });
         }
     });

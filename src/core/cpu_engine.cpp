@@ -354,9 +354,9 @@ std::vector<std::size_t> even_split(std::size_t n, unsigned parts) {
     return cuts;
 }
 
-// std::vector zero-fills on resize, and for a large mesh that first touch of every page is
-// a pass of its own: spread the three arrays over the workers (largest first, each to the
-// least loaded worker) instead of filling them one after another.
+}  // namespace
+
+// Spread the three arrays over the workers, largest first, each to the least loaded one.
 void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads) {
     struct Job {
         std::size_t bytes;
@@ -382,8 +382,6 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
             if (owner[i] == w) jobs[i].fill();
     });
 }
-
-}  // namespace
 
 void validate_volume(const VolumeView& volume) {
     for (int d = 0; d < 3; ++d)

@@ -63,6 +63,11 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
 void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Options& options, unsigned threads,
                   const MeshOut& out);
 
+// Sizes the mesh's arrays (normals only when asked for). std::vector zero-fills on resize,
+// and for a large mesh that first touch of every page is a pass of its own: the arrays are
+// filled on up to `threads` workers at once.
+void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads);
+
 // Whole-volume extraction written straight into the mesh (no merge copy).
 Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats);
 
