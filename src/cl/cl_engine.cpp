@@ -302,7 +302,6 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
     const std::size_t first_sample = (range.begin - s.zlo) * plane_;  // of plane `begin` in the device's samples
 
     EventLog log;
-    const auto T0 = Clock::now();
     std::vector<float> converted;
     Piece piece;
     piece.range = range;
@@ -337,7 +336,6 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         if (zero_copy)
             in_place = cl::Buffer(d.context, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, s.data_samples * sample_bytes,
                                   const_cast<unsigned char*>(bytes));  // read only: the kernels never write it
-        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[buf %.2f] ", 1e3*seconds_since(T0));
         else
             d.queue.enqueueWriteBuffer(data, CL_FALSE, 0, s.data_samples * sample_bytes, bytes, nullptr,
                                        &log.add(Pass::Transfer));
@@ -360,7 +358,6 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         pack.setArg(8, bits);
         pack.setArg(9, nan);
         launch(pack, s.bit_words / s.words, Pass::Classify);
-        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[pack %.2f] ", 1e3*seconds_since(T0));
 
         cl::Kernel& count = d.mc_kernel(job.options, "count_rows");
         count.setArg(0, bits);
@@ -375,10 +372,8 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         count.setArg(9, vbase);
         count.setArg(10, tbase);
         launch(count, s.rows, Pass::Classify);
-        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[count %.2f] ", 1e3*seconds_since(T0));
 
         const std::uint64_t all_vertices = scan(d, vbase, s.rows, log);
-        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[scan %.2f] ", 1e3*seconds_since(T0));
         const std::uint64_t triangles = scan(d, tbase, s.rows, log);
         cl_int nan_plane = INT_MAX;
         d.queue.enqueueReadBuffer(nan, CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr, &log.add(Pass::Transfer));
@@ -403,7 +398,6 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         }
         piece.vertices = vertices;
         allocate_output(piece.mesh, vertices, triangles, options_.normals, threads_);
-        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[alloc %.2f] ", 1e3*seconds_since(T0));
         // Where the device shares host memory, the kernels write the mesh where it will stay.
         const auto output = [&](unsigned slot, auto& host, std::size_t bytes) -> cl::Buffer {
             if (info.host_memory)
@@ -465,7 +459,6 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             k.setArg(28, normals);
             k.setArg(29, word_base);
             launch(k, s.rows, Pass::Generate);
-        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[vert %.2f] ", 1e3*seconds_since(T0));
             if (vertices > 0) fetch(positions, piece.mesh.positions, vertices * 12);
             if (options_.normals && vertices > 0) fetch(normals, piece.mesh.normals, vertices * 12);
         }
@@ -488,11 +481,9 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             k.setArg(13, static_cast<cl_int>(options_.inside_below));
             k.setArg(14, indices);
             launch(k, s.cell_rows, Pass::Generate);
-        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[tri %.2f] ", 1e3*seconds_since(T0));
             fetch(indices, piece.mesh.indices, triangles * 12);
         }
         d.queue.finish();
-        if (getenv("VOXMESH_CL_TRACE")) fprintf(stderr, "[finish %.2f] ", 1e3*seconds_since(T0));
     } catch (...) {
         // Nothing may still read from or write into host memory we are about to free.
         try {
@@ -501,7 +492,6 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         }
         throw;
     }
-    if (getenv("VOXMESH_CL_TRACE")) { for (const auto& [pass, event] : log.events) fprintf(stderr, "%d:%.2f ", int(pass), 1e3*event_seconds(event)); fprintf(stderr, "\n"); }
     for (const auto& [pass, event] : log.events) {
         const double s = event_seconds(event);
         if (pass == Pass::Transfer) {
