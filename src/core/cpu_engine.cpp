@@ -414,7 +414,7 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
         if (sizeof(T) >= 2) plan.plane_bits.resize(plan.meta_planes);
         const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(std::max(threads, 1u), plan.meta_planes));
         const auto cuts = even_split(plan.meta_planes, workers);
-        run_slabs(workers, workers, [&](unsigned w) {
+        run_slabs(workers, workers, [&](unsigned w, unsigned) {
             classify_planes<T>(plan, volume, threshold.value, range.begin + cuts[w], range.begin + cuts[w + 1],
                                plan.rows.data(), plan.plane_bits.empty() ? nullptr : plan.plane_bits.data());
         });
@@ -469,10 +469,14 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
     dispatch_scalar(volume.type, [&](auto tag) {
         using T = decltype(tag);
         const T threshold = make_threshold<T>(options.iso).value;
-        run_slabs(slabs, threads, [&](unsigned w) {
-            if (cuts[w] == cuts[w + 1]) return;
-            Generator<T> generator(plan, volume, options, out, threshold);
-            generator.run(plan.range.begin + cuts[w], plan.range.begin + cuts[w + 1]);
+        // One generator per thread, reused for its slabs: its scratch planes are touched
+        // (page-faulted) once, not once per slab.
+        std::vector<std::unique_ptr<Generator<T>>> generators(std::min(slabs, resolve_threads(0)));
+        run_slabs(slabs, threads, [&](unsigned slab, unsigned worker) {
+            if (cuts[slab] == cuts[slab + 1]) return;
+            auto& generator = generators[worker];
+            if (!generator) generator = std::make_unique<Generator<T>>(plan, volume, options, out, threshold);
+            generator->run(plan.range.begin + cuts[slab], plan.range.begin + cuts[slab + 1]);
         });
     });
 }

@@ -42,16 +42,14 @@ unsigned resolve_threads(unsigned requested);
 // at most as many as the machine runs at once: more threads than that only take turns on the same cores, and a slab
 // whose thread is descheduled holds up the rest. Threads pull slabs in order; the partition,
 // and so the output, is the caller's and does not depend on the cap.
+// f(slab, worker): worker < the number of threads used, so per-thread scratch can be kept
+// from one slab to the next.
 template <class F>
 void run_slabs(unsigned n, unsigned max_threads, F&& f) {
     const unsigned threads = std::min({n, std::max(max_threads, 1u), resolve_threads(0)});
-    if (threads >= n) {
-        run_workers(n, f);
-        return;
-    }
     std::atomic<unsigned> next{0};
-    run_workers(threads, [&](unsigned) {
-        for (unsigned slab = next++; slab < n; slab = next++) f(slab);
+    run_workers(threads, [&](unsigned worker) {
+        for (unsigned slab = next++; slab < n; slab = next++) f(slab, worker);
     });
 }
 
