@@ -1,9 +1,9 @@
 // Marching cubes over one z-chunk on packed bit rows, the CPU engine's layout on the device:
-//   pack       samples -> inside bits, 32 to a word (the only pass that reads every sample)
-//   count_rows per row: crossed edges it owns, triangles of the cell row it starts
-//   (scan.cl: exclusive prefix sums over rows give every vertex and triangle its index)
-//   vertices   per row with crossings: its vertices, in x then axis order
-//   triangles  per cell row with triangles: its triangles, corner ids found by popcounts
+//   classify_pack       samples -> inside bits, 32 to a word (the only pass over every sample)
+//   classify_rows       per row: crossed edges it owns, triangles of the cell row it starts
+//   (scan.cl)           exclusive prefix sums over rows: every vertex and triangle its index
+//   generate_vertices   per row with crossings: its vertices, in x then axis order
+//   generate_triangles  per cell row with triangles: its triangles, corner ids by popcounts
 // No per-sample bytes are stored: later passes re-derive edges and cases from the bits.
 //
 // The host builds it behind edge_vertex.cl (types, build options, the vertex formula).
@@ -68,9 +68,9 @@ inline uint pack_word(__global const voxel* s, const voxel thr, int* finite) {
 }
 
 // One work-item per bit row: its nx samples into `words` words.
-__kernel void pack(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint words,
-                   const uint begin, const uint first_sample, const uint rows, __global uint* bits,
-                   __global int* nan_plane) {
+__kernel void classify_pack(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint words,
+                            const uint begin, const uint first_sample, const uint rows, __global uint* bits,
+                            __global int* nan_plane) {
     const uint r = (uint)get_global_id(0);
     if (r >= rows) return;
     __global const voxel* s = data + first_sample + r * nx;
@@ -158,9 +158,9 @@ inline __global const uint* row_z(__global const uint* bits, uint r, uint z, uin
 // starts (cell planes below cell_end, y < ny - 1). A cell that is not uniform has a crossed
 // edge among row a's edges and row b's x- and z-edges (they join all 8 corners), so cell
 // rows without one are skipped.
-__kernel void count_rows(__global const uint* bits, const uint nx, const uint ny, const uint nz, const uint words,
-                         const uint begin, const uint cell_end, const uint rows, __constant uchar* case_table,
-                         __global uint* vcount, __global uint* tcount) {
+__kernel void classify_rows(__global const uint* bits, const uint nx, const uint ny, const uint nz, const uint words,
+                            const uint begin, const uint cell_end, const uint rows, __constant uchar* case_table,
+                            __global uint* vcount, __global uint* tcount) {
     const uint r = (uint)get_global_id(0);
     if (r >= rows) return;
     const uint p = r / ny;
@@ -194,13 +194,14 @@ __kernel void count_rows(__global const uint* bits, const uint nx, const uint ny
 // words into wbase (what the triangles look up), and for owned rows its vertices at ids
 // vbase[r]... (vend: the total after the last meta row, for the last row's span). Rows
 // without crossings leave wbase unwritten: no triangle refers to them.
-__kernel void vertices(__global const voxel* data, __global const uint* bits, const voxel thr, const real iso,
-                       const long iso_int, const float iso_frac, const uint nx, const uint ny, const uint nz,
-                       const uint words, const uint begin, const uint first_sample, const uint owned_rows,
-                       const uint rows, const uint vend, __global const uint* vbase, const real ox, const real oy,
-                       const real oz, const real sx, const real sy, const real sz, const real ix, const real iy,
-                       const real iz, const int inside_below, const int want_normals, __global float* positions,
-                       __global float* normals, __global uint* wbase) {
+__kernel void generate_vertices(__global const voxel* data, __global const uint* bits, const voxel thr, const real iso,
+                                const long iso_int, const float iso_frac, const uint nx, const uint ny, const uint nz,
+                                const uint words, const uint begin, const uint first_sample, const uint owned_rows,
+                                const uint rows, const uint vend, __global const uint* vbase, const real ox,
+                                const real oy, const real oz, const real sx, const real sy, const real sz,
+                                const real ix, const real iy, const real iz, const int inside_below,
+                                const int want_normals, __global float* positions, __global float* normals,
+                                __global uint* wbase) {
     const uint r = (uint)get_global_id(0);
     if (r >= rows) return;
     uint id = vbase[r];
@@ -253,10 +254,11 @@ inline uint edge_id(uint base, EdgeMasks m, uint b, uint axis) {
 // (y + dy, z + dz), indexed k = dy + 2 dz; a triangle corner on the edge from sample
 // x = 32 q + b + dx of row k has the id of its word's first vertex plus the crossed edges
 // before it in that word. Words without a non-uniform cell are skipped.
-__kernel void triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz, const uint words,
-                        const uint begin, const uint cell_rows, const uint rows, const uint tend,
-                        __global const uint* tbase, __global const uint* wbase, __constant uchar* case_table,
-                        __constant uchar* cell_edge, const int inside_below, __global uint* indices) {
+__kernel void generate_triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz,
+                                 const uint words, const uint begin, const uint cell_rows, const uint rows,
+                                 const uint tend, __global const uint* tbase, __global const uint* wbase,
+                                 __constant uchar* case_table, __constant uchar* cell_edge, const int inside_below,
+                                 __global uint* indices) {
     const uint r = (uint)get_global_id(0);
     if (r >= cell_rows) return;
     uint t = tbase[r];

@@ -1,12 +1,16 @@
 // The OpenCL engine: z-chunks from one shared queue, pulled by every selected device (and by
-// the CPU engine in Hybrid), each chunk meshed with classify -> scan -> compact -> generate,
-// and the chunks assembled into the canonical mesh.
+// the CPU engine in Hybrid), each chunk meshed by the bit-row kernels of marching_cubes.cl
+// (classify: pack + per-row counts, scan over rows, generate: vertices + triangles), and the
+// chunks assembled into the canonical mesh.
 //
 // A chunk is a z-range [begin, end) with the CPU engine's ownership rule (cpu_engine.hpp):
 // it owns the vertices of sample planes [begin, end) and the triangles of cell planes
 // [begin, min(end, nz-1)); its local vertex ids continue into plane `end`. So its device
 // buffers hold sample planes [begin-1, end+2) (clamped): one plane below and two above for
-// the gradients at the chunk's faces and the edge codes of plane `end`.
+// the gradients at the chunk's faces and the crossed edges of plane `end`.
+//
+// Where the device shares host memory (PoCL, integrated GPUs) nothing is copied: the kernels
+// read the caller's samples and write the mesh's arrays in place (CL_MEM_USE_HOST_PTR).
 
 #include "cl_runtime.hpp"
 
@@ -203,7 +207,7 @@ void Engine::prepare(DeviceJob& job) {
     const auto t0 = Clock::now();
     std::lock_guard<std::mutex> lock(job.device->mutex);
     const std::size_t built = job.device->programs_built;
-    for (const char* name : {"pack", "count_rows", "vertices", "triangles"}) {
+    for (const char* name : {"classify_pack", "classify_rows", "vertices", "triangles"}) {
         const std::size_t most =
             job.device->mc_kernel(job.options, name).getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(job.device->device);
         while (job.local > most && job.local > 1) job.local /= 2;
@@ -346,7 +350,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         const cl_int no_nan = INT_MAX;
         d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
 
-        cl::Kernel& pack = d.mc_kernel(job.options, "pack");
+        cl::Kernel& pack = d.mc_kernel(job.options, "classify_pack");
         pack.setArg(0, data);
         pack.setArg(1, job.threshold.size(), job.threshold.data());
         pack.setArg(2, u(nx_));
@@ -359,7 +363,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         pack.setArg(9, nan);
         launch(pack, s.bit_words / s.words, Pass::Classify);
 
-        cl::Kernel& count = d.mc_kernel(job.options, "count_rows");
+        cl::Kernel& count = d.mc_kernel(job.options, "classify_rows");
         count.setArg(0, bits);
         count.setArg(1, u(nx_));
         count.setArg(2, u(ny_));
@@ -420,7 +424,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             cl::Buffer normals = options_.normals && vertices > 0
                                      ? output(kNormals, piece.mesh.normals, vertices * 12)
                                      : d.buffer(kNormals, 16);
-            cl::Kernel& k = d.mc_kernel(job.options, "vertices");
+            cl::Kernel& k = d.mc_kernel(job.options, "generate_vertices");
             k.setArg(0, data);
             k.setArg(1, bits);
             k.setArg(2, job.threshold.size(), job.threshold.data());
@@ -464,7 +468,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         }
         if (triangles > 0) {
             cl::Buffer indices = output(kIndices, piece.mesh.indices, triangles * 12);
-            cl::Kernel& k = d.mc_kernel(job.options, "triangles");
+            cl::Kernel& k = d.mc_kernel(job.options, "generate_triangles");
             k.setArg(0, bits);
             k.setArg(1, u(nx_));
             k.setArg(2, u(ny_));

@@ -349,6 +349,19 @@ private:
     EdgePlane edges_[2];
 };
 
+// Slabs per thread, pulled in order: a thread that finishes early (the cost model is an
+// estimate, and on a VM a core can stall) takes the next slab instead of waiting for the
+// slowest one. Each slab re-reads a plane or two at its start, so not too many.
+constexpr unsigned kClassifySlabsPerThread = 8, kGenerateSlabsPerThread = 16;
+
+// Slabs for `threads` requested threads over `planes` planes: one for a single thread, else
+// `per_thread` for each thread that actually runs (run_slabs caps them at the hardware's).
+unsigned slab_count(unsigned threads, std::size_t planes, unsigned per_thread) {
+    const unsigned running = std::min(std::max(threads, 1u), resolve_threads(0));
+    const std::size_t slabs = running > 1 ? std::size_t{per_thread} * running : 1;
+    return static_cast<unsigned>(std::max<std::size_t>(1, std::min(slabs, planes)));
+}
+
 std::vector<std::size_t> even_split(std::size_t n, unsigned parts) {
     std::vector<std::size_t> cuts(parts + 1);
     for (unsigned p = 0; p <= parts; ++p) cuts[p] = n * p / parts;
@@ -412,9 +425,9 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
         plan.meta_planes = std::min(range.end + 1, nz) - range.begin;
         assign_huge(plan.rows, plan.meta_planes * ny, RowInfo{});
         if (sizeof(T) >= 2) plan.plane_bits.resize(plan.meta_planes);
-        const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(std::max(threads, 1u), plan.meta_planes));
-        const auto cuts = even_split(plan.meta_planes, workers);
-        run_slabs(workers, workers, [&](unsigned w, unsigned) {
+        const unsigned slabs = slab_count(threads, plan.meta_planes, kClassifySlabsPerThread);
+        const auto cuts = even_split(plan.meta_planes, slabs);
+        run_slabs(slabs, threads, [&](unsigned w, unsigned) {
             classify_planes<T>(plan, volume, threshold.value, range.begin + cuts[w], range.begin + cuts[w + 1],
                                plan.rows.data(), plan.plane_bits.empty() ? nullptr : plan.plane_bits.data());
         });
@@ -461,10 +474,8 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
         }
         cost[p] = c;
     }
-    // Four slabs per thread, pulled in order: the cost model is an estimate, and a thread
-    // that finishes early takes the next slab instead of waiting for the slowest one.
     threads = std::max(threads, 1u);
-    const unsigned slabs = static_cast<unsigned>(std::min<std::size_t>(threads > 1 ? 4 * threads : 1, planes));
+    const unsigned slabs = slab_count(threads, planes, kGenerateSlabsPerThread);
     const auto cuts = balanced_split(cost, slabs);
     dispatch_scalar(volume.type, [&](auto tag) {
         using T = decltype(tag);
