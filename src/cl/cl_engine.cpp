@@ -207,7 +207,7 @@ void Engine::prepare(DeviceJob& job) {
     const auto t0 = Clock::now();
     std::lock_guard<std::mutex> lock(job.device->mutex);
     const std::size_t built = job.device->programs_built;
-    for (const char* name : {"classify_pack", "classify_rows", "vertices", "triangles"}) {
+    for (const char* name : {"classify_pack", "classify_rows", "generate_vertices", "generate_triangles"}) {
         const std::size_t most =
             job.device->mc_kernel(job.options, name).getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(job.device->device);
         while (job.local > most && job.local > 1) job.local /= 2;
