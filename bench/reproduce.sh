@@ -2,7 +2,7 @@
 # Reruns every measurement in bench/RESULTS.md and writes the raw outputs and plots to OUT.
 #   cmake -S . -B build-bench -DVOXMESH_WERROR=ON && cmake --build build-bench -j2
 #   bench/reproduce.sh [BUILD_DIR] [OUT]        (defaults: build-bench, bench-out)
-# Takes ~10 minutes on 2 cores and ~2 GB of /tmp for the 512^3 volume files.
+# Takes ~25 minutes on 2 cores and ~2 GB of /tmp for the 512^3 volume files.
 set -eu
 BUILD=${1:-build-bench}
 OUT=${2:-bench-out}
@@ -18,9 +18,20 @@ trap 'rm -rf "$TMP"' EXIT
 # 1. Table 1 of the paper (sphere f32, 64..512 x 1,2,4,6,16 threads).
 "$BENCH" --paper --repeat "$REPEAT" --save "$OUT/paper.jsonl" > "$OUT/paper.txt"
 
-# 2. CPU vs OpenCL (PoCL on this CPU) vs hybrid.
-"$BENCH" --field sphere,gyroid --sizes 128,256 --threads 1,"$THREADS" --backends cpu,opencl,hybrid \
+# 2. CPU vs OpenCL (PoCL on this CPU) vs hybrid, and thread scaling.
+"$BENCH" --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads "$THREADS" --backends cpu,opencl,hybrid \
     --repeat "$REPEAT" --save "$OUT/backends.jsonl" > "$OUT/backends.txt"
+"$BENCH" --field sphere,gyroid --sizes 256,512 --threads 1,2,4,6,16 --repeat "$REPEAT" \
+    --save "$OUT/scaling.jsonl" > "$OUT/scaling.txt"
+"$BENCH" --field sphere,gyroid --type u8 --sizes 256,512 --threads 1,2 --repeat "$REPEAT" \
+    --save "$OUT/scaling_u8.jsonl" > "$OUT/scaling_u8.txt"
+
+# 2b. Memory: one extract per fresh process (over%: beyond the mesh, in % of volume + mesh).
+: > "$OUT/memory.txt"
+for field in sphere gyroid; do for type in f32 u8; do for backend in cpu opencl; do
+    "$BENCH" --field "$field" --type "$type" --sizes 512 --threads "$THREADS" --backends "$backend" \
+        --repeat 1 --warmup 0 --no-floor -q >> "$OUT/memory.txt"
+done; done; done
 
 # 3. Peers on the very same samples: vtkFlyingEdges3D, vtkMarchingCubes, scikit-image.
 : > "$OUT/peers.txt"
