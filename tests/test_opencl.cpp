@@ -202,6 +202,27 @@ TEST_CASE("OpenCL without fp64 (float interpolation, f64 converted per chunk) ma
     o.iso = 0.25;
     compare(view_of(f64.data(), ScalarType::F64, g), o);
 }
+
+TEST_CASE("OpenCL with copies in and out (a discrete GPU's path) matches the CPU engine", "[opencl]") {
+    if (!have_device()) return;
+    struct Restore {
+        ~Restore() { detail::opencl_pretend_discrete(false); }
+    } restore;
+    detail::opencl_pretend_discrete(true);
+    Grid g{{45, 38, 41}, {1, 0.75, 1.25}, {2, -3, 1}};
+    const std::vector<float> f = torus(g);
+    for (std::size_t planes : {0, 6}) {  // one chunk; chunks whose pieces are assembled
+        INFO("chunk_planes " << planes);
+        Options o;
+        o.chunk_planes = planes;
+        compare(view_of(f.data(), ScalarType::F32, g), o);
+        const auto u16 = to_type<std::uint16_t>(f, 3000, 1000);
+        o.iso = 1100.5;
+        compare(view_of(u16.data(), ScalarType::U16, g), o);
+        o.normals = false;
+        compare(view_of(u16.data(), ScalarType::U16, g), o);
+    }
+}
 #endif  // VOXMESH_HAS_OPENCL
 
 TEST_CASE("OpenCL matches the CPU engine on random odd-sized volumes", "[opencl]") {

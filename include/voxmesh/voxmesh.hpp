@@ -135,7 +135,7 @@ struct DeviceInfo {
     unsigned compute_units = 0;
     std::uint64_t global_memory = 0, max_allocation = 0;
     bool fp64 = false;
-    bool host_memory = false;  // shares the host's memory: volumes are read in place (zero-copy)
+    bool host_memory = false;  // shares the host's memory: volume read and mesh written in place (zero-copy)
 };
 std::vector<DeviceInfo> list_devices();
 bool opencl_available();  // built with OpenCL and at least one usable device

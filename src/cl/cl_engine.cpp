@@ -45,6 +45,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 enum : unsigned { kData, kBits, kVBase, kTBase, kWordBase, kPositions, kNormals, kIndices, kNan };
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
+std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
 
 // The kernels index samples with uint: a chunk's samples stay below 2^31.
 constexpr std::size_t kMaxChunkSamples = std::size_t(1) << 31;
@@ -318,7 +319,8 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
     try {
         // Upload the planes, in place (or converted from f64 keeping every inside bit). A device
         // that shares the host's memory reads the caller's samples where they are.
-        const bool zero_copy = info.host_memory && !job.convert;
+        const bool host_memory = info.host_memory && !g_pretend_discrete;
+        const bool zero_copy = host_memory && !job.convert;
         cl::Buffer in_place;
         cl::Buffer& data = zero_copy ? in_place : d.buffer(kData, s.data_samples * sample_bytes);
         const auto* bytes = static_cast<const unsigned char*>(volume_.data) + s.zlo * plane_ * scalar_size(volume_.type);
@@ -404,12 +406,12 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         allocate_output(piece.mesh, vertices, triangles, options_.normals, threads_);
         // Where the device shares host memory, the kernels write the mesh where it will stay.
         const auto output = [&](unsigned slot, auto& host, std::size_t bytes) -> cl::Buffer {
-            if (info.host_memory)
+            if (host_memory)
                 return cl::Buffer(d.context, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, host.data());
             return d.buffer(slot, bytes);
         };
         const auto fetch = [&](const cl::Buffer& buffer, auto& host, std::size_t bytes) {
-            if (info.host_memory) {  // a mapped USE_HOST_PTR buffer is the host array, up to date
+            if (host_memory) {  // a mapped USE_HOST_PTR buffer is the host array, up to date
                 void* p = d.queue.enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_READ, 0, bytes);
                 d.queue.enqueueUnmapMemObject(buffer, p, nullptr, &log.add(Pass::Transfer));
             } else {
@@ -716,5 +718,7 @@ void opencl_build_program(const std::string& source, const std::string& options,
 }
 
 void opencl_pretend_no_fp64(bool pretend) { g_pretend_no_fp64 = pretend; }
+
+void opencl_pretend_discrete(bool pretend) { g_pretend_discrete = pretend; }
 
 }  // namespace voxmesh::detail

@@ -30,6 +30,9 @@ void opencl_split_devices(bool split);
 // Treats every device as lacking cl_khr_fp64 (float interpolation, f64 volumes converted per
 // chunk), so that the code path of most GPUs runs on PoCL too.
 void opencl_pretend_no_fp64(bool pretend);
+// Treats every device as not sharing host memory: samples are copied in and the mesh read
+// back, the code path of discrete GPUs, on PoCL too.
+void opencl_pretend_discrete(bool pretend);
 // Builds an OpenCL C program on device `device` the way the engine builds its kernels:
 // a failure throws Error with the device name and the build log.
 void opencl_build_program(const std::string& source, const std::string& options, int device = 0);
