@@ -90,6 +90,11 @@ __kernel void classify_pack(__global const voxel* data, const voxel thr, const u
     if (!finite) atomic_min(nan_plane, (int)(begin + r / ny));
 }
 
+// Bit k of the result is bit k+1 of the row: the neighbour in +x.
+inline uint next_x(__global const uint* row, uint q, uint words) {
+    return row[q] >> 1 | (q + 1 < words ? row[q + 1] << 31 : 0u);
+}
+
 // Crossed owned edges of word q of a row (sample x owns x->x+1, y->y+1, z->z+1); ny_row /
 // nz_row are the neighbouring rows, or null at the volume's border.
 typedef struct {
@@ -100,19 +105,13 @@ inline EdgeMasks edge_masks(__global const uint* row, __global const uint* ny_ro
                             uint q, uint words, uint nx) {
     EdgeMasks m;
     const uint w = row[q];
-    const uint right = w >> 1 | (q + 1 < words ? row[q + 1] << 31 : 0u);
-    m.x = (w ^ right) & bits_below(q, nx - 1);
+    m.x = (w ^ next_x(row, q, words)) & bits_below(q, nx - 1);
     m.y = ny_row ? w ^ ny_row[q] : 0u;
     m.z = nz_row ? w ^ nz_row[q] : 0u;
     return m;
 }
 
 inline uint edge_count(EdgeMasks m) { return popcount(m.x) + popcount(m.y) + popcount(m.z); }
-
-// Bit k of the result is bit k+1 of the row: the neighbour in +x.
-inline uint next_x(__global const uint* row, uint q, uint words) {
-    return row[q] >> 1 | (q + 1 < words ? row[q + 1] << 31 : 0u);
-}
 
 // The eight corner masks of word q of the cell row spanned by rows a = (y, z), b = (y+1, z),
 // c = (y, z+1), d = (y+1, z+1), in case-bit order.
@@ -176,7 +175,10 @@ __kernel void classify_rows(__global const uint* bits, const uint nx, const uint
         const EdgeMasks m = edge_masks(a, b, c, q, words, nx);
         v += edge_count(m);
         crossed |= m.x | m.y | m.z;
-        if (cells_here) crossed |= ((b[q] ^ next_x(b, q, words)) & bits_below(q, nx - 1)) | (b[q] ^ d[q]);
+        if (cells_here) {
+            const EdgeMasks mb = edge_masks(b, 0, d, q, words, nx);  // b's y-edges leave the cell row
+            crossed |= mb.x | mb.z;
+        }
     }
     uint t = 0;
     if (cells_here && crossed) {
@@ -195,11 +197,11 @@ __kernel void classify_rows(__global const uint* bits, const uint nx, const uint
 // vbase[r]... (vend: the total after the last meta row, for the last row's span). Rows
 // without crossings leave wbase unwritten: no triangle refers to them.
 __kernel void generate_vertices(__global const voxel* data, __global const uint* bits, const voxel thr, const real iso,
-                                const long iso_int, const float iso_frac, const uint nx, const uint ny, const uint nz,
-                                const uint words, const uint begin, const uint first_sample, const uint owned_rows,
-                                const uint rows, const uint vend, __global const uint* vbase, const real ox,
-                                const real oy, const real oz, const real sx, const real sy, const real sz,
-                                const real ix, const real iy, const real iz, const int inside_below,
+                                const long iso_int, const float iso_frac, const real ox, const real oy, const real oz,
+                                const real sx, const real sy, const real sz, const real ix, const real iy,
+                                const real iz, const uint nx, const uint ny, const uint nz, const uint words,
+                                const uint begin, const uint first_sample, const uint owned_rows, const uint rows,
+                                const uint vend, __global const uint* vbase, const int inside_below,
                                 const int want_normals, __global float* positions, __global float* normals,
                                 __global uint* wbase) {
     const uint r = (uint)get_global_id(0);
@@ -214,17 +216,15 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
     __global const uint* ry = row_y(bits, r, j, ny, words);
     __global const uint* rz = row_z(bits, r, z, ny, nz, words);
     __global uint* word_base = wbase + r * words;
-    if (r >= owned_rows) {  // plane `end`: ids only, its vertices belong to the next chunk
-        for (uint q = 0; q < words; ++q) {
-            word_base[q] = id;
-            id += edge_count(edge_masks(row, ry, rz, q, words, nx));
-        }
-        return;
-    }
+    const int owned = r < owned_rows;  // plane `end`: ids only, its vertices belong to the next chunk
     const uint row_sample = first_sample + r * nx;
     for (uint q = 0; q < words; ++q) {
         word_base[q] = id;
         const EdgeMasks m = edge_masks(row, ry, rz, q, words, nx);
+        if (!owned) {
+            id += edge_count(m);
+            continue;
+        }
         for (uint any = m.x | m.y | m.z; any; any &= any - 1) {
             const uint b = lowest_bit(any);
             const uint x = 32 * q + b;

@@ -107,10 +107,10 @@ __kernel void block_classify(__global const voxel* data, __global const uint* me
 // After the scans (vbase: exclusive sums of vcount): each sample's first vertex id (batch-
 // global) into vid, and the row's vertex positions and normals.
 __kernel void block_vertices(__global const voxel* data, __global const uint* meta, const voxel thr,
-                             const real iso, const long iso_int, const float iso_frac, const uint nx,
-                             const uint ny, const uint nz, const real ox, const real oy, const real oz,
-                             const real sx, const real sy, const real sz, const real ix, const real iy,
-                             const real iz, const int inside_below, const int want_normals,
+                             const real iso, const long iso_int, const float iso_frac, const real ox,
+                             const real oy, const real oz, const real sx, const real sy, const real sz,
+                             const real ix, const real iy, const real iz, const uint nx, const uint ny,
+                             const uint nz, const int inside_below, const int want_normals,
                              __global const uchar* codes, __global const uint* vbase, __global uint* vid,
                              __global float* positions, __global float* normals) {
     const uint b = (uint)get_global_id(1);

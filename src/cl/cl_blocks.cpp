@@ -216,14 +216,7 @@ void OpenclBlockMesher::run_batch(std::span<const BlockBox> boxes, std::size_t f
 
     const cl::NDRange global(round_up(max_rows, local_), boxes.size()), local(local_, 1);
     cl::Kernel& classify = d.sculpt_kernel(options_, "block_classify");
-    classify.setArg(0, staged);
-    classify.setArg(1, meta);
-    classify.setArg(2, threshold_.size(), threshold_.data());
-    classify.setArg(3, d.pair_to_case);
-    classify.setArg(4, d.case_table);
-    classify.setArg(5, codes);
-    classify.setArg(6, vcount);
-    classify.setArg(7, tcount);
+    set_args(classify, staged, meta, ArgBytes{threshold_}, d.pair_to_case, d.case_table, codes, vcount, tcount);
     d.queue.enqueueNDRangeKernel(classify, cl::NullRange, global, local);
 
     // In place: vcount/tcount become every row's first vertex/triangle in the batch.
@@ -244,33 +237,11 @@ void OpenclBlockMesher::run_batch(std::span<const BlockBox> boxes, std::size_t f
         cl::Buffer& positions = d.buffer(kPositions, vertices * 12);
         cl::Buffer& normals = d.buffer(kNormals, setup_.normals ? vertices * 12 : 16);
         cl::Kernel& k = d.sculpt_kernel(options_, "block_vertices");
-        const auto real = [&](unsigned index, double value) {
-            if (fp64_) k.setArg(index, value);
-            else k.setArg(index, static_cast<cl_float>(value));
-        };
-        const bool integer = vol.type != ScalarType::F32;
-        const double fl = std::floor(setup_.iso);
-        k.setArg(0, staged);
-        k.setArg(1, meta);
-        k.setArg(2, threshold_.size(), threshold_.data());
-        real(3, setup_.iso);
-        k.setArg(4, static_cast<cl_long>(integer ? fl : 0));  // in range: the sculpt has a surface
-        k.setArg(5, static_cast<cl_float>(integer ? setup_.iso - fl : 0));
-        k.setArg(6, static_cast<cl_uint>(nx));
-        k.setArg(7, static_cast<cl_uint>(ny));
-        k.setArg(8, static_cast<cl_uint>(nz));
-        for (unsigned a = 0; a < 3; ++a) {
-            real(9 + a, vol.origin[a]);
-            real(12 + a, vol.spacing[a]);
-            real(15 + a, 1 / vol.spacing[a]);
-        }
-        k.setArg(18, static_cast<cl_int>(setup_.inside_below));
-        k.setArg(19, static_cast<cl_int>(setup_.normals));
-        k.setArg(20, codes);
-        k.setArg(21, vcount);
-        k.setArg(22, vid);
-        k.setArg(23, positions);
-        k.setArg(24, normals);
+        set_args(k, staged, meta, ArgBytes{threshold_},
+                 ArgVertexFormula{setup_.iso, vol.type != ScalarType::F32, fp64_, vol.origin, vol.spacing},
+                 static_cast<cl_uint>(nx), static_cast<cl_uint>(ny), static_cast<cl_uint>(nz),
+                 static_cast<cl_int>(setup_.inside_below), static_cast<cl_int>(setup_.normals), codes, vcount, vid,
+                 positions, normals);
         d.queue.enqueueNDRangeKernel(k, cl::NullRange, global, local);
         d.queue.enqueueReadBuffer(positions, CL_FALSE, 0, vertices * 12, positions_.data());
         if (setup_.normals) d.queue.enqueueReadBuffer(normals, CL_FALSE, 0, vertices * 12, normals_.data());
@@ -278,18 +249,8 @@ void OpenclBlockMesher::run_batch(std::span<const BlockBox> boxes, std::size_t f
         if (triangles > 0) {
             cl::Buffer& indices = d.buffer(kIndices, triangles * 12);
             cl::Kernel& t = d.sculpt_kernel(options_, "block_triangles");
-            t.setArg(0, staged);
-            t.setArg(1, meta);
-            t.setArg(2, threshold_.size(), threshold_.data());
-            t.setArg(3, d.pair_to_case);
-            t.setArg(4, d.case_table);
-            t.setArg(5, d.cell_edge);
-            t.setArg(6, static_cast<cl_int>(setup_.inside_below));
-            t.setArg(7, codes);
-            t.setArg(8, vid);
-            t.setArg(9, vcount);
-            t.setArg(10, tcount);
-            t.setArg(11, indices);
+            set_args(t, staged, meta, ArgBytes{threshold_}, d.pair_to_case, d.case_table, d.cell_edge,
+                     static_cast<cl_int>(setup_.inside_below), codes, vid, vcount, tcount, indices);
             d.queue.enqueueNDRangeKernel(t, cl::NullRange, global, local);
             d.queue.enqueueReadBuffer(indices, CL_FALSE, 0, triangles * 12, indices_.data());
         }

@@ -22,7 +22,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <bit>
 #include <cfloat>
 #include <cstring>
 #include <chrono>
@@ -56,7 +55,7 @@ struct TooBig {};
 struct ChunkShape {
     std::size_t planes, zlo, zhi, cell_end;  // cell_end: first cell plane the chunk does not own
     std::size_t rows, owned_rows, cell_rows;  // meta rows; rows of owned sample planes; cell rows
-    std::size_t words, bit_words;             // words per bit row; words of all bit rows
+    std::size_t words, bit_rows, bit_words;   // words per bit row; bit rows; their words
     std::size_t data_samples;
 };
 
@@ -230,7 +229,8 @@ ChunkShape Engine::shape(ZRange range) const {
     s.owned_rows = s.planes * ny_;
     s.cell_rows = (s.cell_end > range.begin ? s.cell_end - range.begin : 0) * ny_;
     s.words = (nx_ + 31) / 32;
-    s.bit_words = (s.zhi - range.begin) * ny_ * s.words;
+    s.bit_rows = (s.zhi - range.begin) * ny_;
+    s.bit_words = s.bit_rows * s.words;
     s.data_samples = (s.zhi - s.zlo) * plane_;
     return s;
 }
@@ -323,7 +323,8 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         const bool zero_copy = host_memory && !job.convert;
         cl::Buffer in_place;
         cl::Buffer& data = zero_copy ? in_place : d.buffer(kData, s.data_samples * sample_bytes);
-        const auto* bytes = static_cast<const unsigned char*>(volume_.data) + s.zlo * plane_ * scalar_size(volume_.type);
+        const auto* bytes =
+            static_cast<const unsigned char*>(volume_.data) + s.zlo * plane_ * scalar_size(volume_.type);
         if (job.convert) {
             const double* src = reinterpret_cast<const double*>(bytes);
             float thr;
@@ -353,30 +354,13 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
 
         cl::Kernel& pack = d.mc_kernel(job.options, "classify_pack");
-        pack.setArg(0, data);
-        pack.setArg(1, job.threshold.size(), job.threshold.data());
-        pack.setArg(2, u(nx_));
-        pack.setArg(3, u(ny_));
-        pack.setArg(4, u(s.words));
-        pack.setArg(5, u(range.begin));
-        pack.setArg(6, u(first_sample));
-        pack.setArg(7, u(s.bit_words / s.words));
-        pack.setArg(8, bits);
-        pack.setArg(9, nan);
-        launch(pack, s.bit_words / s.words, Pass::Classify);
+        set_args(pack, data, ArgBytes{job.threshold}, u(nx_), u(ny_), u(s.words), u(range.begin), u(first_sample),
+                 u(s.bit_rows), bits, nan);
+        launch(pack, s.bit_rows, Pass::Classify);
 
         cl::Kernel& count = d.mc_kernel(job.options, "classify_rows");
-        count.setArg(0, bits);
-        count.setArg(1, u(nx_));
-        count.setArg(2, u(ny_));
-        count.setArg(3, u(nz_));
-        count.setArg(4, u(s.words));
-        count.setArg(5, u(range.begin));
-        count.setArg(6, u(s.cell_end));
-        count.setArg(7, u(s.rows));
-        count.setArg(8, d.case_table);
-        count.setArg(9, vbase);
-        count.setArg(10, tbase);
+        set_args(count, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin), u(s.cell_end), u(s.rows),
+                 d.case_table, vbase, tbase);
         launch(count, s.rows, Pass::Classify);
 
         const std::uint64_t all_vertices = scan(d, vbase, s.rows, log);
@@ -427,43 +411,12 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
                                      ? output(kNormals, piece.mesh.normals, vertices * 12)
                                      : d.buffer(kNormals, 16);
             cl::Kernel& k = d.mc_kernel(job.options, "generate_vertices");
-            k.setArg(0, data);
-            k.setArg(1, bits);
-            k.setArg(2, job.threshold.size(), job.threshold.data());
-            const double fl = std::floor(options_.iso);
-            const cl_long iso_int =
-                is_integer(job.device_type) ? static_cast<cl_long>(fl) : 0;  // in range: the threshold is mixed
-            const cl_float iso_frac = is_integer(job.device_type) ? static_cast<float>(options_.iso - fl) : 0.f;
-            auto real = [&](unsigned index, double value) {
-                if (job.fp64) {
-                    k.setArg(index, value);
-                } else {
-                    k.setArg(index, static_cast<cl_float>(value));
-                }
-            };
-            real(3, options_.iso);
-            k.setArg(4, iso_int);
-            k.setArg(5, iso_frac);
-            k.setArg(6, u(nx_));
-            k.setArg(7, u(ny_));
-            k.setArg(8, u(nz_));
-            k.setArg(9, u(s.words));
-            k.setArg(10, u(range.begin));
-            k.setArg(11, u(first_sample));
-            k.setArg(12, u(s.owned_rows));
-            k.setArg(13, u(s.rows));
-            k.setArg(14, u(all_vertices));
-            k.setArg(15, vbase);
-            for (unsigned a = 0; a < 3; ++a) {
-                real(16 + a, volume_.origin[a]);
-                real(19 + a, volume_.spacing[a]);
-                real(22 + a, 1 / volume_.spacing[a]);
-            }
-            k.setArg(25, static_cast<cl_int>(options_.inside_below));
-            k.setArg(26, static_cast<cl_int>(options_.normals));
-            k.setArg(27, positions);
-            k.setArg(28, normals);
-            k.setArg(29, word_base);
+            set_args(k, data, bits, ArgBytes{job.threshold},
+                     ArgVertexFormula{options_.iso, is_integer(job.device_type), job.fp64, volume_.origin,
+                                      volume_.spacing},
+                     u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin), u(first_sample), u(s.owned_rows), u(s.rows),
+                     u(all_vertices), vbase, static_cast<cl_int>(options_.inside_below),
+                     static_cast<cl_int>(options_.normals), positions, normals, word_base);
             launch(k, s.rows, Pass::Generate);
             if (vertices > 0) fetch(positions, piece.mesh.positions, vertices * 12);
             if (options_.normals && vertices > 0) fetch(normals, piece.mesh.normals, vertices * 12);
@@ -471,21 +424,9 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         if (triangles > 0) {
             cl::Buffer indices = output(kIndices, piece.mesh.indices, triangles * 12);
             cl::Kernel& k = d.mc_kernel(job.options, "generate_triangles");
-            k.setArg(0, bits);
-            k.setArg(1, u(nx_));
-            k.setArg(2, u(ny_));
-            k.setArg(3, u(nz_));
-            k.setArg(4, u(s.words));
-            k.setArg(5, u(range.begin));
-            k.setArg(6, u(s.cell_rows));
-            k.setArg(7, u(s.rows));
-            k.setArg(8, u(triangles));
-            k.setArg(9, tbase);
-            k.setArg(10, word_base);
-            k.setArg(11, d.case_table);
-            k.setArg(12, d.cell_edge);
-            k.setArg(13, static_cast<cl_int>(options_.inside_below));
-            k.setArg(14, indices);
+            set_args(k, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin), u(s.cell_rows), u(s.rows),
+                     u(triangles), tbase, word_base, d.case_table, d.cell_edge,
+                     static_cast<cl_int>(options_.inside_below), indices);
             launch(k, s.cell_rows, Pass::Generate);
             fetch(indices, piece.mesh.indices, triangles * 12);
         }
@@ -592,11 +533,12 @@ Mesh Engine::assemble(std::vector<std::vector<Piece>>& results) {
     const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(threads_, std::max<std::size_t>(pieces.size(), 1)));
     run_workers(workers, [&](unsigned w) {
         for (std::size_t i = w; i < pieces.size(); i += workers) {
-            const Piece& p = *pieces[i];
-            std::copy(p.mesh.positions.begin(), p.mesh.positions.end(), mesh.positions.begin() + 3 * vbase[i]);
-            if (options_.normals) std::copy(p.mesh.normals.begin(), p.mesh.normals.end(), mesh.normals.begin() + 3 * vbase[i]);
+            const Mesh& piece = pieces[i]->mesh;
+            std::copy(piece.positions.begin(), piece.positions.end(), mesh.positions.begin() + 3 * vbase[i]);
+            if (options_.normals)
+                std::copy(piece.normals.begin(), piece.normals.end(), mesh.normals.begin() + 3 * vbase[i]);
             const auto base = static_cast<std::uint32_t>(vbase[i]);
-            std::transform(p.mesh.indices.begin(), p.mesh.indices.end(), mesh.indices.begin() + 3 * tbase[i],
+            std::transform(piece.indices.begin(), piece.indices.end(), mesh.indices.begin() + 3 * tbase[i],
                            [base](std::uint32_t id) { return id + base; });
         }
     });

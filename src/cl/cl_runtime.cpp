@@ -3,6 +3,7 @@
 #include "core/case_tables.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace voxmesh::detail::cl_engine {
@@ -224,10 +225,7 @@ std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& l
     cl::Buffer& sums = d.buffer(kScanBufferBase + level, blocks * sizeof(cl_uint));
 
     cl::Kernel& scan_blocks = d.scan_kernel("scan_blocks");
-    scan_blocks.setArg(0, data);
-    scan_blocks.setArg(1, static_cast<cl_uint>(n));
-    scan_blocks.setArg(2, sums);
-    scan_blocks.setArg(3, cl::Local(local * sizeof(cl_uint)));
+    set_args(scan_blocks, data, static_cast<cl_uint>(n), sums, cl::Local(local * sizeof(cl_uint)));
     d.queue.enqueueNDRangeKernel(scan_blocks, cl::NullRange, cl::NDRange(blocks * local), cl::NDRange(local),
                                  nullptr, &log.add(Pass::Scan));
     std::uint64_t total = 0;
@@ -238,13 +236,28 @@ std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& l
     } else {
         total = scan(d, sums, blocks, log, level + 1);
         cl::Kernel& add = d.scan_kernel("scan_add");
-        add.setArg(0, data);
-        add.setArg(1, static_cast<cl_uint>(n));
-        add.setArg(2, sums);
+        set_args(add, data, static_cast<cl_uint>(n), sums);
         d.queue.enqueueNDRangeKernel(add, cl::NullRange, cl::NDRange(blocks * local), cl::NDRange(local), nullptr,
                                      &log.add(Pass::Scan));
     }
     return total;
+}
+
+cl_uint set_arg(cl::Kernel& k, cl_uint i, const ArgVertexFormula& a) {
+    const auto real = [&](double value) {
+        if (a.fp64) k.setArg(i++, value);
+        else k.setArg(i++, static_cast<cl_float>(value));
+    };
+    real(a.iso);
+    // iso - v without fp64: integer samples subtract from iso's integer part exactly (in
+    // range: only a threshold some sample crosses reaches the kernels).
+    const double whole = std::floor(a.iso);
+    k.setArg(i++, static_cast<cl_long>(a.integer_samples ? whole : 0));
+    k.setArg(i++, static_cast<cl_float>(a.integer_samples ? a.iso - whole : 0));
+    for (const auto* values : {&a.origin, &a.spacing})
+        for (double v : *values) real(v);
+    for (double v : a.spacing) real(1 / v);
+    return i;
 }
 
 bool is_out_of_memory(cl_int code) {

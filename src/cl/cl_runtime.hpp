@@ -6,6 +6,7 @@
 #include <CL/opencl.hpp>
 #include <voxmesh/voxmesh.hpp>
 
+#include <array>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -86,6 +87,37 @@ void split_devices(bool split);
 // Blocking (reads the total back). Buffer ids >= kScanBufferBase are used for block sums.
 constexpr unsigned kScanBufferBase = 100;
 std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& log, unsigned level = 0);
+
+// Kernel arguments in declaration order from index 0, so that no call site numbers them:
+//   set_args(kernel, buffer, cl_uint{n}, ArgBytes{threshold}, ArgVertexFormula{...}, ...)
+// ArgBytes: a value passed as raw bytes (a sample-typed threshold).
+struct ArgBytes {
+    const std::vector<unsigned char>& bytes;
+};
+// The scalar arguments of edge_vertex.cl's formula, in its order: iso (real), iso's integer
+// part (long) and fraction (float) for integer samples without fp64, then origin, spacing and
+// 1 / spacing (real) per axis. real is double where the kernels interpolate in double.
+struct ArgVertexFormula {
+    double iso;
+    bool integer_samples, fp64;
+    std::array<double, 3> origin, spacing;
+};
+
+inline cl_uint set_arg(cl::Kernel& k, cl_uint i, const ArgBytes& a) {
+    k.setArg(i, a.bytes.size(), a.bytes.data());
+    return i + 1;
+}
+cl_uint set_arg(cl::Kernel& k, cl_uint i, const ArgVertexFormula& a);
+template <class T>
+cl_uint set_arg(cl::Kernel& k, cl_uint i, const T& value) {
+    k.setArg(i, value);
+    return i + 1;
+}
+template <class... Args>
+void set_args(cl::Kernel& k, const Args&... args) {
+    cl_uint i = 0;
+    ((i = set_arg(k, i, args)), ...);
+}
 
 // True for errors that mean "this did not fit" (allocation failures, out of resources).
 bool is_out_of_memory(cl_int code);
