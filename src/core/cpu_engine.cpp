@@ -376,9 +376,13 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
         std::size_t bytes;
         std::function<void()> fill;
     };
-    std::vector<Job> jobs{{12 * triangles, [&] { resize_huge(mesh.indices, 3 * triangles); }},
-                          {12 * vertices, [&] { resize_huge(mesh.positions, 3 * vertices); }}};
-    if (normals) jobs.push_back({12 * vertices, [&] { resize_huge(mesh.normals, 3 * vertices); }});
+    const auto fill = [](auto& array, std::size_t n) {
+        reserve_huge(array, n);
+        array.resize(n);
+    };
+    std::vector<Job> jobs{{12 * triangles, [&] { fill(mesh.indices, 3 * triangles); }},
+                          {12 * vertices, [&] { fill(mesh.positions, 3 * vertices); }}};
+    if (normals) jobs.push_back({12 * vertices, [&] { fill(mesh.normals, 3 * vertices); }});
     std::size_t total = 0;
     for (const Job& job : jobs) total += job.bytes;
     constexpr std::size_t kWorthThreads = std::size_t{8} << 20;
@@ -423,7 +427,8 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
             return;
         }
         plan.meta_planes = std::min(range.end + 1, nz) - range.begin;
-        assign_huge(plan.rows, plan.meta_planes * ny, RowInfo{});
+        reserve_huge(plan.rows, plan.meta_planes * ny);
+        plan.rows.assign(plan.meta_planes * ny, RowInfo{});
         if (sizeof(T) >= 2) plan.plane_bits.resize(plan.meta_planes);
         const unsigned slabs = slab_count(threads, plan.meta_planes, kClassifySlabsPerThread);
         const auto cuts = even_split(plan.meta_planes, slabs);
@@ -437,8 +442,10 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
     plan.classify_seconds = std::chrono::duration<double>(t1 - t0).count();
 
     // Scan: exclusive prefix sums of the row counts give every vertex and triangle its index.
-    resize_huge(plan.vertex_base, plan.rows.size());
-    resize_huge(plan.triangle_base, plan.rows.size());
+    reserve_huge(plan.vertex_base, plan.rows.size());
+    reserve_huge(plan.triangle_base, plan.rows.size());
+    plan.vertex_base.resize(plan.rows.size());
+    plan.triangle_base.resize(plan.rows.size());
     std::uint64_t vertices = 0, triangles = 0;
     const std::size_t owned_rows = (range.end - range.begin) * ny;
     for (std::size_t r = 0; r < plan.rows.size(); ++r) {

@@ -14,23 +14,12 @@ namespace voxmesh::detail {
 // left alone.
 void advise_huge_pages(const void* data, std::size_t bytes);
 
-// v.resize(n) (value-initialised), with the new storage advised first when it is large.
+// v.reserve(n), with new storage advised before anything touches it; then resize or assign.
 template <class T>
-void resize_huge(std::vector<T>& v, std::size_t n) {
-    if (n > v.capacity()) {
-        v.reserve(n);
-        advise_huge_pages(v.data(), v.capacity() * sizeof(T));
-    }
-    v.resize(n);
-}
-
-template <class T>
-void assign_huge(std::vector<T>& v, std::size_t n, const T& value) {
-    if (n > v.capacity()) {
-        v.reserve(n);
-        advise_huge_pages(v.data(), v.capacity() * sizeof(T));
-    }
-    v.assign(n, value);
+void reserve_huge(std::vector<T>& v, std::size_t n) {
+    if (n <= v.capacity()) return;
+    v.reserve(n);
+    advise_huge_pages(v.data(), v.capacity() * sizeof(T));
 }
 
 }  // namespace voxmesh::detail
