@@ -178,13 +178,22 @@ TEST_CASE("OpenCL matches the CPU engine for every scalar type", "[opencl]") {
     CHECK(empty.positions.empty());
 }
 
-#ifdef VOXMESH_HAS_OPENCL  // uses a test hook of the OpenCL build
+#ifdef VOXMESH_HAS_OPENCL  // uses test hooks of the OpenCL build
+// Turns one of the engine's pretend_* test hooks on for a scope.
+class Pretend {
+public:
+    explicit Pretend(void (*hook)(bool)) : hook_(hook) { hook_(true); }
+    ~Pretend() { hook_(false); }
+    Pretend(const Pretend&) = delete;
+    Pretend& operator=(const Pretend&) = delete;
+
+private:
+    void (*hook_)(bool);
+};
+
 TEST_CASE("OpenCL without fp64 (float interpolation, f64 converted per chunk) matches the CPU engine", "[opencl]") {
     if (!have_device()) return;
-    struct Restore {
-        ~Restore() { detail::opencl_pretend_no_fp64(false); }
-    } restore;
-    detail::opencl_pretend_no_fp64(true);
+    const Pretend no_fp64(detail::opencl_pretend_no_fp64);
     Grid g{{27, 23, 25}, {0.5, 1, 1.5}, {-10, 5, 2}};
     const std::vector<float> f = gyroid(g);
     Options o;
@@ -205,10 +214,7 @@ TEST_CASE("OpenCL without fp64 (float interpolation, f64 converted per chunk) ma
 
 TEST_CASE("OpenCL with copies in and out (a discrete GPU's path) matches the CPU engine", "[opencl]") {
     if (!have_device()) return;
-    struct Restore {
-        ~Restore() { detail::opencl_pretend_discrete(false); }
-    } restore;
-    detail::opencl_pretend_discrete(true);
+    const Pretend discrete(detail::opencl_pretend_discrete);
     Grid g{{45, 38, 41}, {1, 0.75, 1.25}, {2, -3, 1}};
     const std::vector<float> f = torus(g);
     for (std::size_t planes : {0, 6}) {  // one chunk; chunks whose pieces are assembled

@@ -126,6 +126,8 @@ void require_blocks_match_fresh(const Sculpt& s) {
 
 using sculpt_test::balls;
 using sculpt_test::kTypes;
+using sculpt_test::random_op;
+using sculpt_test::random_strength;
 using sculpt_test::TypeSetup;
 
 Sculpt make(const TypeSetup& ts, Dims d, std::size_t block, unsigned threads = 2) {
@@ -140,22 +142,13 @@ Sculpt make(const TypeSetup& ts, Dims d, std::size_t block, unsigned threads = 2
 Dab random_dab(std::mt19937& rng, Dims d, double margin, double max_radius, double set_scale, double set_offset) {
     std::uniform_real_distribution<double> u01(0, 1);
     Dab dab;
-    const int op = static_cast<int>(u01(rng) * 10);
-    dab.op = op < 4 ? BrushOp::Add : op < 7 ? BrushOp::Subtract : op < 9 ? BrushOp::Smooth : BrushOp::Set;
+    dab.op = random_op(rng);
     dab.radius = 1 + u01(rng) * (max_radius - 1);
     for (int k = 0; k < 3; ++k) {
         const double lo = margin >= 0 ? margin + dab.radius : margin, hi = double(d[k] - 1) - lo;
         dab.center[k] = lo + u01(rng) * (hi - lo);
     }
-    switch (dab.op) {
-        case BrushOp::Add:
-        case BrushOp::Subtract: dab.strength = 0.3 + 2.5 * u01(rng); break;
-        case BrushOp::Smooth: dab.strength = 0.2 + 0.8 * u01(rng); break;
-        case BrushOp::Set:
-            dab.radius = std::min(dab.radius, 4.0);
-            dab.strength = set_offset + set_scale * (u01(rng) * 6 - 3.1);
-            break;
-    }
+    random_strength(dab, rng, set_scale, set_offset, 4.0);
     return dab;
 }
 

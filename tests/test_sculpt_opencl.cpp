@@ -114,6 +114,8 @@ void require_mesh_equals_extract(Sculpt& s, bool closed, const Tolerance& tol, W
 
 using sculpt_test::balls;
 using sculpt_test::kTypes;
+using sculpt_test::random_op;
+using sculpt_test::random_strength;
 using sculpt_test::TypeSetup;
 
 Sculpt make(const TypeSetup& ts, Dims d, std::size_t block, Backend backend) {
@@ -130,8 +132,7 @@ Sculpt make(const TypeSetup& ts, Dims d, std::size_t block, Backend backend) {
 Dab random_dab(std::mt19937& rng, Dims d, std::size_t block, double scale, double offset) {
     std::uniform_real_distribution<double> u01(0, 1);
     Dab dab;
-    const int op = static_cast<int>(u01(rng) * 10);
-    dab.op = op < 4 ? BrushOp::Add : op < 7 ? BrushOp::Subtract : op < 9 ? BrushOp::Smooth : BrushOp::Set;
+    dab.op = random_op(rng);
     dab.radius = 1 + u01(rng) * 6;
     const int where = static_cast<int>(u01(rng) * 3);
     for (int k = 0; k < 3; ++k) {
@@ -145,15 +146,7 @@ Dab random_dab(std::mt19937& rng, Dims d, std::size_t block, double scale, doubl
             dab.center[k] = u01(rng) < 0.5 ? -u01(rng) * 3 : n + u01(rng) * 3;
         }
     }
-    switch (dab.op) {
-        case BrushOp::Add:
-        case BrushOp::Subtract: dab.strength = 0.3 + 2.5 * u01(rng); break;
-        case BrushOp::Smooth: dab.strength = 0.2 + 0.8 * u01(rng); break;
-        case BrushOp::Set:
-            dab.radius = std::min(dab.radius, 3.0);
-            dab.strength = offset + scale * (u01(rng) * 6 - 3.1);
-            break;
-    }
+    random_strength(dab, rng, scale, offset, 3.0);
     return dab;
 }
 

@@ -1,7 +1,9 @@
 // Volumes the sculpting tests (CPU and OpenCL) edit: two balls, high inside, and the sample
-// types with the scale, offset and iso that put the balls' surface inside each type's range.
+// types with the scale, offset and iso that put the balls' surface inside each type's range;
+// and the random brush ops and strengths of their dabs.
 #pragma once
 
+#include <voxmesh/sculpt.hpp>
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
@@ -9,6 +11,7 @@
 #include <cmath>
 #include <cstddef>
 #include <functional>
+#include <random>
 
 namespace sculpt_test {
 
@@ -35,5 +38,28 @@ inline constexpr TypeSetup kTypes[] = {
     {voxmesh::ScalarType::U8, 20.0, 128.0, 127.5},
     {voxmesh::ScalarType::U16, 900.0, 30000.0, 30000.5},
 };
+
+// A random brush op: add 40 %, subtract 30 %, smooth 20 %, set 10 %.
+inline voxmesh::BrushOp random_op(std::mt19937& rng) {
+    using voxmesh::BrushOp;
+    const int op = static_cast<int>(std::uniform_real_distribution<double>(0, 1)(rng) * 10);
+    return op < 4 ? BrushOp::Add : op < 7 ? BrushOp::Subtract : op < 9 ? BrushOp::Smooth : BrushOp::Set;
+}
+
+// A random strength for dab.op; a set dab gets a value around the surface (scale, offset of
+// the type) and a radius of at most set_radius.
+inline void random_strength(voxmesh::Dab& dab, std::mt19937& rng, double scale, double offset, double set_radius) {
+    using voxmesh::BrushOp;
+    std::uniform_real_distribution<double> u01(0, 1);
+    switch (dab.op) {
+        case BrushOp::Add:
+        case BrushOp::Subtract: dab.strength = 0.3 + 2.5 * u01(rng); break;
+        case BrushOp::Smooth: dab.strength = 0.2 + 0.8 * u01(rng); break;
+        case BrushOp::Set:
+            dab.radius = std::min(dab.radius, set_radius);
+            dab.strength = offset + scale * (u01(rng) * 6 - 3.1);
+            break;
+    }
+}
 
 }  // namespace sculpt_test
