@@ -74,8 +74,8 @@ public:
         bool nan = false;
         for (std::size_t j = 0; j < ny_; ++j) {
             Word* out = plane.words.data() + j * stride_;
-            if (rows && rows[j].first == kEmptyRow) {
-                const Word w = rows[j].uniform_bit ? kAllBits : kNoBits;
+            if (rows && rows[j].empty()) {
+                const Word w = rows[j].uniform_bit() ? kAllBits : kNoBits;
                 for (std::size_t q = 0; q < stride_; ++q) out[q] = w & bits_below(q, nx_);
             } else if (rows && stored) {
                 std::copy_n(stored->data() + rows[j].bits_at, stride_, out);
@@ -100,17 +100,19 @@ private:
 [[gnu::always_inline]] inline void classify_row_body(const Word* row, const Word* next_y, const Word* next_z,
                                                     std::size_t words, std::size_t nx, RowInfo& info) {
     std::uint32_t count = 0;
-    std::size_t first = kEmptyRow;
+    std::size_t first = kEmptyRow, last = row[0] & 1;  // an empty row keeps its inside bit in `last`
     for (std::size_t q = 0; q < words; ++q) {
         const EdgeMasks m = edge_masks(row, next_y, next_z, q, words, nx);
         count += static_cast<std::uint32_t>(__builtin_popcountll(m.x) + __builtin_popcountll(m.y) +
                                             __builtin_popcountll(m.z));
-        if (const Word any = m.any(); any && first == kEmptyRow)
-            first = 64 * q + static_cast<std::size_t>(std::countr_zero(any));
+        if (const Word any = m.any()) {
+            if (first == kEmptyRow) first = 64 * q + static_cast<std::size_t>(std::countr_zero(any));
+            last = 64 * q + 63 - static_cast<std::size_t>(std::countl_zero(any));
+        }
     }
     info.vertices = count;
     info.first = static_cast<std::uint32_t>(first);
-    info.uniform_bit = static_cast<std::uint8_t>(row[0] & 1);
+    info.last = static_cast<std::uint32_t>(last);
 }
 
 using ClassifyRow = void (*)(const Word*, const Word*, const Word*, std::size_t, std::size_t, RowInfo&);
@@ -130,10 +132,24 @@ ClassifyRow pick_classify_row() { return cpu_has_popcnt() ? &classify_row_popcnt
 ClassifyRow pick_classify_row() { return &classify_row_portable; }
 #endif
 
-// A non-uniform cell has a crossed edge owned by rows (y, z) or (y+1, z) (those edges join
-// all 8 corners), so a cell row whose two first rows have no crossing has no triangles.
-inline bool cell_row_active(const RowInfo& a, const RowInfo& b) {
-    return a.first != kEmptyRow || b.first != kEmptyRow;
+// Words [begin, end) of a row: where the surface is (the span of x that rows of the same
+// cell row cross), like Flying Edges' trimmed rows; outside it every word is uniform.
+struct WordSpan {
+    std::size_t begin = 0, end = 0;
+};
+
+inline WordSpan row_words(const RowInfo& row) { return {row.first / 64, std::size_t{row.last} / 64 + 1}; }
+
+// A non-uniform cell x has a crossed edge owned by sample x or x+1 of rows a = (y, z) or
+// b = (y+1, z): its edges in rows (y, z+1) and (y+1, z+1) cross only where a z-edge or an
+// edge of a or b does. So a cell row whose rows a and b have no crossing has no triangles,
+// and its non-uniform cells lie in [first - 1, last] of a and b's crossings.
+inline bool cell_row_active(const RowInfo& a, const RowInfo& b) { return !a.empty() || !b.empty(); }
+
+inline WordSpan cell_row_words(const RowInfo& a, const RowInfo& b) {
+    const std::size_t first = std::min(a.first, b.first);
+    const std::size_t last = std::max(a.empty() ? 0 : a.last, b.empty() ? 0 : b.last);
+    return {(first > 0 ? first - 1 : 0) / 64, last / 64 + 1};
 }
 
 template <class T>
@@ -155,13 +171,13 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
         for (std::size_t j = 0; j < ny; ++j) {
             classify_row(here.row(j, words), j + 1 < ny ? here.row(j + 1, words) : nullptr,
                          has_up ? up.row(j, words) : nullptr, words, nx, info[j]);
-            active += info[j].first != kEmptyRow;
+            active += !info[j].empty();
         }
         if (plane_bits) {
             std::vector<Word>& store = plane_bits[k - plan.range.begin];
             store.reserve(active * words);
             for (std::size_t j = 0; j < ny; ++j)
-                if (info[j].first != kEmptyRow) {
+                if (!info[j].empty()) {
                     info[j].bits_at = static_cast<std::uint32_t>(store.size());
                     store.insert(store.end(), here.row(j, words), here.row(j, words) + words);
                 }
@@ -172,7 +188,8 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
                 const Word *ra = here.row(j, words), *rb = here.row(j + 1, words), *rc = up.row(j, words),
                            *rd = up.row(j + 1, words);
                 std::uint32_t count = 0;
-                for (std::size_t q = 0; q < words; ++q) {
+                const WordSpan span = cell_row_words(info[j], info[j + 1]);
+                for (std::size_t q = span.begin; q < span.end; ++q) {
                     const CellWord cell(ra, rb, rc, rd, q, words);
                     for (Word cells = cell.nonuniform(q, nx); cells; cells &= cells - 1)
                         count += kCaseTable[cell.cell_case(static_cast<unsigned>(std::countr_zero(cells)))].count;
@@ -276,32 +293,28 @@ private:
         const RowInfo* rows = meta_rows(z);
         const std::uint32_t* bases = plan_.vertex_base.data() + (z - plan_.range.begin) * ny_;
         for (std::size_t j = 0; j < ny_; ++j) {
-            if (rows[j].first == kEmptyRow) continue;
+            if (rows[j].empty()) continue;
             const Word* row = plane.row(j, words_);
             const Word* next_y = j + 1 < ny_ ? plane.row(j + 1, words_) : nullptr;
             const Word* next_z = up ? up->row(j, words_) : nullptr;
             std::uint32_t* id = edges.id.get() + 3 * j * nx_;
             std::uint32_t next_id = bases[j];
-            for (std::size_t q = 0; q < words_; ++q) {
+            const WordSpan span = row_words(rows[j]);
+            for (std::size_t q = span.begin; q < span.end; ++q) {
                 const EdgeMasks m = edge_masks(row, next_y, next_z, q, words_, nx_);
                 for (Word any = m.any(); any; any &= any - 1) {
                     const unsigned r = static_cast<unsigned>(std::countr_zero(any));
                     const std::size_t i = 64 * q + r;
                     const unsigned c = static_cast<unsigned>((m.x >> r & 1) | (m.y >> r & 1) << 1 | (m.z >> r & 1) << 2);
-                    for (unsigned axis = 0; axis < 3; ++axis) {
-                        if (!(c >> axis & 1)) continue;
-                        id[3 * i + axis] = next_id;
-                        if (write_vertices) write_vertex(i, j, z, axis, next_id);
-                        ++next_id;
+                    if (write_vertices) {
+                        const std::size_t at = 3 * static_cast<std::size_t>(next_id);
+                        vertex_.sample(i, j, z, c, out_.positions + at, out_.normals ? out_.normals + at : nullptr);
                     }
+                    for (unsigned axis = 0; axis < 3; ++axis)
+                        if (c >> axis & 1) id[3 * i + axis] = next_id++;
                 }
             }
         }
-    }
-
-    void write_vertex(std::size_t i, std::size_t j, std::size_t k, unsigned axis, std::uint32_t id) {
-        const std::size_t at = 3 * static_cast<std::size_t>(id);
-        vertex_(i, j, k, axis, out_.positions + at, out_.normals ? out_.normals + at : nullptr);
     }
 
     void emit_triangles(std::size_t k) {
@@ -317,7 +330,8 @@ private:
             const std::uint32_t* ids[4];
             for (unsigned r = 0; r < 4; ++r) ids[r] = edges_[r >> 1].id.get() + at[r];
             std::uint32_t* out = out_.indices + 3 * tri_base[j];
-            for (std::size_t q = 0; q < words_; ++q) {
+            const WordSpan span = cell_row_words(rows[j], rows[j + 1]);
+            for (std::size_t q = span.begin; q < span.end; ++q) {
                 const CellWord cell(a, b, c, d, q, words_);
                 for (Word cells = cell.nonuniform(q, nx_); cells; cells &= cells - 1) {
                     const unsigned r = static_cast<unsigned>(std::countr_zero(cells));
@@ -477,7 +491,7 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
         double c = static_cast<double>(volume.dims[0] * ny) / 16;
         for (std::size_t j = 0; j < ny; ++j) {
             const RowInfo& r = plan.rows[p * ny + j];
-            c += 24.0 * r.vertices + 4.0 * r.triangles + (r.first == kEmptyRow ? 0 : volume.dims[0] / 4.0);
+            c += 24.0 * r.vertices + 4.0 * r.triangles + (r.empty() ? 0 : volume.dims[0] / 4.0);
         }
         cost[p] = c;
     }

@@ -26,10 +26,13 @@ constexpr std::uint32_t kEmptyRow = std::numeric_limits<std::uint32_t>::max();
 // What the classify pass learns about one sample row (y, z) and the cell row it starts.
 struct RowInfo {
     std::uint32_t first = kEmptyRow;  // first x whose owned edges cross; kEmptyRow if none
+    std::uint32_t last = 0;           // last such x; a row without crossings keeps its inside bit here
     std::uint32_t vertices = 0;       // crossed edges owned by the row
     std::uint32_t triangles = 0;      // triangles of cells (x, y, z) for all x
     std::uint32_t bits_at = 0;        // with crossings: where its inside bits are in the plane's store
-    std::uint8_t uniform_bit = 0;     // the row's inside bit when it has no crossing
+
+    bool empty() const { return first == kEmptyRow; }
+    std::uint32_t uniform_bit() const { return last; }  // only for an empty row
 };
 
 // Classify + scan result for one z-range: per-row counts and their exclusive prefix sums.

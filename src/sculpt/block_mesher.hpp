@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -123,30 +124,36 @@ public:
         return next;
     }
 
-    // Calls f(local sample index, x, y, z (local), axis) for each vertex in local order.
+    // Calls f(local sample index, x, y, z (local), code) for each sample with a crossed owned
+    // edge (bit a of code: the edge along axis a), in local order.
     template <class F>
-    void for_each_vertex(const BlockBox& box, const Scratch& s, F&& f) const {
+    void for_each_crossed_sample(const BlockBox& box, const Scratch& s, F&& f) const {
         const std::size_t lx = box.samples[0], ly = box.samples[1], lz = box.samples[2];
         for (std::size_t z = 0; z < lz; ++z)
             for (std::size_t y = 0; y < ly; ++y) {
                 if (!s.row_active[z * ly + y]) continue;
                 const std::size_t row = (z * ly + y) * lx;
-                for (std::size_t x = 0; x < lx; ++x) {
-                    const unsigned c = s.code[row + x];
-                    if (c == 0) continue;
-                    for (unsigned axis = 0; axis < 3; ++axis)
-                        if (c >> axis & 1u) f(row + x, x, y, z, axis);
-                }
+                for (std::size_t x = 0; x < lx; ++x)
+                    if (const unsigned c = s.code[row + x]) f(row + x, x, y, z, c);
             }
+    }
+
+    // Calls f(local sample index, x, y, z (local), axis) for each vertex in local order.
+    template <class F>
+    void for_each_vertex(const BlockBox& box, const Scratch& s, F&& f) const {
+        for_each_crossed_sample(box, s, [&](std::size_t at, std::size_t x, std::size_t y, std::size_t z, unsigned c) {
+            for (unsigned axis = 0; axis < 3; ++axis)
+                if (c >> axis & 1u) f(at, x, y, z, axis);
+        });
     }
 
     // Writes positions/normals of the `vertices` vertices (after classify) into the arrays.
     void write_vertices(const BlockBox& box, const Scratch& s, float* positions, float* normals) const {
         std::size_t v = 0;
-        for_each_vertex(box, s, [&](std::size_t, std::size_t x, std::size_t y, std::size_t z, unsigned axis) {
-            vertex_(box.c0[0] + x, box.c0[1] + y, box.c0[2] + z, axis, positions + 3 * v,
-                    normals_ ? normals + 3 * v : nullptr);
-            ++v;
+        for_each_crossed_sample(box, s, [&](std::size_t, std::size_t x, std::size_t y, std::size_t z, unsigned c) {
+            vertex_.sample(box.c0[0] + x, box.c0[1] + y, box.c0[2] + z, c, positions + 3 * v,
+                           normals_ ? normals + 3 * v : nullptr);
+            v += static_cast<std::size_t>(std::popcount(c));
         });
     }
 
