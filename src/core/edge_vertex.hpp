@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 
 namespace voxmesh::detail {
 
@@ -35,6 +36,11 @@ public:
         const std::size_t at0[3] = {i, j, k};
         const std::size_t idx0 = i + j * stride_[1] + k * stride_[2];
         const double v0 = static_cast<double>(data_[idx0]);
+        // Coordinates off the edge's axis are the sample's own (index + 0 * t: the same bits).
+        // Indices convert through int64_t: one instruction, where size_t takes several.
+        const double index[3] = {to_double(i), to_double(j), to_double(k)};
+        float on_sample[3];
+        for (unsigned d = 0; d < 3; ++d) on_sample[d] = static_cast<float>(origin_[d] + index[d] * spacing_[d]);
         // Away from the border (both ends of every edge at least one sample in) the gradients
         // are plain central differences, computed without the per-axis border tests.
         const bool interior = away_from_border(i, n_[0]) && away_from_border(j, n_[1]) && away_from_border(k, n_[2]);
@@ -60,14 +66,15 @@ public:
                 write_normal(g0, g1, t, axis, v0 >= iso_, normal);
                 normal += 3;
             }
-            for (unsigned d = 0; d < 3; ++d)
-                position[d] = static_cast<float>(origin_[d] + (static_cast<double>(at0[d]) + (d == axis ? t : 0.0)) *
-                                                                  spacing_[d]);
+            for (unsigned d = 0; d < 3; ++d) position[d] = on_sample[d];
+            position[axis] = static_cast<float>(origin_[axis] + (index[axis] + t) * spacing_[axis]);
             position += 3;
         }
     }
 
 private:
+    static double to_double(std::size_t p) { return static_cast<double>(static_cast<std::int64_t>(p)); }
+
     // 1 <= p and p + 1 <= n - 2: p and its +1 neighbour both have two neighbours along the axis.
     static bool away_from_border(std::size_t p, std::size_t n) { return p >= 1 && p + 3 <= n; }
 
