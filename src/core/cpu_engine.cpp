@@ -47,10 +47,12 @@ void check_finite(const VolumeView& volume, ZRange range) {
     }
 }
 
-// A plane of packed inside bits: ny rows of words_per_row(nx) words.
+// A plane of packed inside bits: ny rows of words_per_row(nx) words. A row is where its bits
+// already are (classify's store, or one shared all-inside / all-outside row), or packed here.
 struct BitPlane {
-    std::vector<Word> words;
-    const Word* row(std::size_t j, std::size_t stride) const { return words.data() + j * stride; }
+    std::vector<const Word*> rows;
+    std::vector<Word> packed;  // ny rows' room, used for the rows packed from the volume
+    const Word* row(std::size_t j) const { return rows[j]; }
 };
 
 template <class T>
@@ -62,25 +64,32 @@ public:
           ny_(volume.dims[1]),
           stride_(words_per_row(volume.dims[0])),
           threshold_(threshold),
-          pack_(row_packer<T>()) {}
+          pack_(row_packer<T>()),
+          uniform_{std::vector<Word>(stride_, kNoBits), std::vector<Word>(stride_)} {
+        for (std::size_t q = 0; q < stride_; ++q) uniform_[1][q] = bits_below(q, nx_);
+    }
 
     std::size_t stride() const { return stride_; }
-    void resize(BitPlane& plane) const { plane.words.assign(ny_ * stride_, 0); }
+    void resize(BitPlane& plane) const {
+        plane.rows.assign(ny_, nullptr);
+        plane.packed.assign(ny_ * stride_, 0);
+    }
 
-    // Packs plane z; with `rows` (classify results), rows without crossings are uniform and
-    // are filled without reading the volume, and rows with crossings are copied from
-    // `stored` (classify's bits). Returns true when a sample is NaN.
+    // Plane z; with `rows` (classify results), rows without crossings are uniform and point
+    // at a shared uniform row, and rows with crossings point into `stored` (classify's bits)
+    // when there is one. Everything else is packed from the volume. Returns true when a
+    // packed sample is NaN.
     bool fill(BitPlane& plane, std::size_t z, const RowInfo* rows, const std::vector<Word>* stored) const {
         bool nan = false;
         for (std::size_t j = 0; j < ny_; ++j) {
-            Word* out = plane.words.data() + j * stride_;
             if (rows && rows[j].empty()) {
-                const Word w = rows[j].uniform_bit() ? kAllBits : kNoBits;
-                for (std::size_t q = 0; q < stride_; ++q) out[q] = w & bits_below(q, nx_);
+                plane.rows[j] = uniform_[rows[j].uniform_bit()].data();
             } else if (rows && stored) {
-                std::copy_n(stored->data() + rows[j].bits_at, stride_, out);
+                plane.rows[j] = stored->data() + rows[j].bits_at;
             } else {
+                Word* out = plane.packed.data() + j * stride_;
                 nan |= pack_(data_ + (z * ny_ + j) * nx_, nx_, threshold_, out);
+                plane.rows[j] = out;
             }
         }
         return nan;
@@ -91,6 +100,7 @@ private:
     std::size_t nx_, ny_, stride_;
     T threshold_;
     RowPacker<T> pack_;
+    std::vector<Word> uniform_[2];  // a row of all-outside and of all-inside samples
 };
 
 // ---------------------------------------------------------------- classify
@@ -169,8 +179,8 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
         RowInfo* info = rows + (k - plan.range.begin) * ny;
         std::size_t active = 0;
         for (std::size_t j = 0; j < ny; ++j) {
-            classify_row(here.row(j, words), j + 1 < ny ? here.row(j + 1, words) : nullptr,
-                         has_up ? up.row(j, words) : nullptr, words, nx, info[j]);
+            classify_row(here.row(j), j + 1 < ny ? here.row(j + 1) : nullptr,
+                         has_up ? up.row(j) : nullptr, words, nx, info[j]);
             active += !info[j].empty();
         }
         if (plane_bits) {
@@ -179,14 +189,14 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
             for (std::size_t j = 0; j < ny; ++j)
                 if (!info[j].empty()) {
                     info[j].bits_at = static_cast<std::uint32_t>(store.size());
-                    store.insert(store.end(), here.row(j, words), here.row(j, words) + words);
+                    store.insert(store.end(), here.row(j), here.row(j) + words);
                 }
         }
         if (has_up && k < plan.range.end) {
             for (std::size_t j = 0; j + 1 < ny; ++j) {
                 if (!cell_row_active(info[j], info[j + 1])) continue;
-                const Word *ra = here.row(j, words), *rb = here.row(j + 1, words), *rc = up.row(j, words),
-                           *rd = up.row(j + 1, words);
+                const Word *ra = here.row(j), *rb = here.row(j + 1), *rc = up.row(j),
+                           *rd = up.row(j + 1);
                 std::uint32_t count = 0;
                 const WordSpan span = cell_row_words(info[j], info[j + 1]);
                 for (std::size_t q = span.begin; q < span.end; ++q) {
@@ -294,9 +304,9 @@ private:
         const std::uint32_t* bases = plan_.vertex_base.data() + (z - plan_.range.begin) * ny_;
         for (std::size_t j = 0; j < ny_; ++j) {
             if (rows[j].empty()) continue;
-            const Word* row = plane.row(j, words_);
-            const Word* next_y = j + 1 < ny_ ? plane.row(j + 1, words_) : nullptr;
-            const Word* next_z = up ? up->row(j, words_) : nullptr;
+            const Word* row = plane.row(j);
+            const Word* next_y = j + 1 < ny_ ? plane.row(j + 1) : nullptr;
+            const Word* next_z = up ? up->row(j) : nullptr;
             std::uint32_t* id = edges.id.get() + 3 * j * nx_;
             std::uint32_t next_id = bases[j];
             const WordSpan span = row_words(rows[j]);
@@ -323,8 +333,8 @@ private:
         const bool flip = options_.inside_below;
         for (std::size_t j = 0; j + 1 < ny_; ++j) {
             if (!cell_row_active(rows[j], rows[j + 1])) continue;
-            const Word *a = planes_[0].row(j, words_), *b = planes_[0].row(j + 1, words_),
-                       *c = planes_[1].row(j, words_), *d = planes_[1].row(j + 1, words_);
+            const Word *a = planes_[0].row(j), *b = planes_[0].row(j + 1),
+                       *c = planes_[1].row(j), *d = planes_[1].row(j + 1);
             // Vertex ids of the four sample rows around the cell row, indexed dy + 2 dz.
             const std::size_t at[4] = {3 * j * nx_, 3 * (j + 1) * nx_, 3 * j * nx_, 3 * (j + 1) * nx_};
             const std::uint32_t* ids[4];
