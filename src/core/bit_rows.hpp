@@ -9,6 +9,14 @@
 #include <cstddef>
 #include <cstdint>
 
+// The per-word helpers below run in the engine's innermost loops; the compiler's inlining
+// heuristics sometimes leave them as calls, which costs more than their bodies.
+#if defined(__GNUC__) || defined(__clang__)
+#define VOXMESH_HOT_INLINE [[gnu::always_inline]] inline
+#else
+#define VOXMESH_HOT_INLINE inline
+#endif
+
 namespace voxmesh::detail {
 
 constexpr Word kNoBits = 0, kAllBits = ~Word{0};
@@ -16,7 +24,7 @@ constexpr Word kNoBits = 0, kAllBits = ~Word{0};
 inline std::size_t words_per_row(std::size_t nx) { return (nx + 63) / 64; }
 
 // Mask of the bits of word q that stand for x < limit.
-inline Word bits_below(std::size_t q, std::size_t limit) {
+VOXMESH_HOT_INLINE Word bits_below(std::size_t q, std::size_t limit) {
     const std::size_t begin = 64 * q;
     if (limit >= begin + 64) return kAllBits;
     if (limit <= begin) return kNoBits;
@@ -24,7 +32,7 @@ inline Word bits_below(std::size_t q, std::size_t limit) {
 }
 
 // Bit r of the result is bit r+1 of the row: the row's neighbour in +x.
-inline Word next_x(const Word* row, std::size_t q, std::size_t words) {
+VOXMESH_HOT_INLINE Word next_x(const Word* row, std::size_t q, std::size_t words) {
     return row[q] >> 1 | (q + 1 < words ? row[q + 1] << 63 : 0);
 }
 
@@ -35,7 +43,7 @@ struct EdgeMasks {
     Word any() const { return x | y | z; }
 };
 
-inline EdgeMasks edge_masks(const Word* row, const Word* next_y, const Word* next_z, std::size_t q,
+VOXMESH_HOT_INLINE EdgeMasks edge_masks(const Word* row, const Word* next_y, const Word* next_z, std::size_t q,
                             std::size_t words, std::size_t nx) {
     return {(row[q] ^ next_x(row, q, words)) & bits_below(q, nx - 1), next_y ? row[q] ^ next_y[q] : 0,
             next_z ? row[q] ^ next_z[q] : 0};
@@ -49,19 +57,19 @@ inline unsigned popcount(Word w) { return static_cast<unsigned>(std::popcount(w)
 struct CellWord {
     Word corner[8];
 
-    CellWord(const Word* a, const Word* b, const Word* c, const Word* d, std::size_t q, std::size_t words)
+    VOXMESH_HOT_INLINE CellWord(const Word* a, const Word* b, const Word* c, const Word* d, std::size_t q, std::size_t words)
         : corner{a[q], next_x(a, q, words), next_x(b, q, words), b[q],
                  c[q], next_x(c, q, words), next_x(d, q, words), d[q]} {}
 
     // Bit set where the cell's 8 corners are not all equal (cells x < nx - 1 only).
-    Word nonuniform(std::size_t q, std::size_t nx) const {
+    VOXMESH_HOT_INLINE Word nonuniform(std::size_t q, std::size_t nx) const {
         Word diff = 0;
         for (unsigned k = 1; k < 8; ++k) diff |= corner[0] ^ corner[k];
         return diff & bits_below(q, nx - 1);
     }
 
     // Case index of cell 64q + r (bit k set where corner k is inside).
-    unsigned cell_case(unsigned r) const {
+    VOXMESH_HOT_INLINE unsigned cell_case(unsigned r) const {
         unsigned c = 0;
         for (unsigned k = 0; k < 8; ++k) c |= static_cast<unsigned>(corner[k] >> r & 1) << k;
         return c;
