@@ -37,17 +37,23 @@ VOXMESH_HOT_INLINE Word next_x(const Word* row, std::size_t q, std::size_t words
 }
 
 // Crossed owned edges of a row (sample x owns x->x+1, y->y+1, z->z+1) as three masks.
-// next_y / next_z are the neighbouring rows, or null at the volume's border.
+// next_y / next_z are the neighbouring rows; at the volume's border pass the row itself
+// (nothing crosses). Only the row's last word needs the next-word and row-end tests.
 struct EdgeMasks {
     Word x, y, z;
     Word any() const { return x | y | z; }
 };
 
 VOXMESH_HOT_INLINE EdgeMasks edge_masks(const Word* row, const Word* next_y, const Word* next_z, std::size_t q,
-                            std::size_t words, std::size_t nx) {
-    return {(row[q] ^ next_x(row, q, words)) & bits_below(q, nx - 1), next_y ? row[q] ^ next_y[q] : 0,
-            next_z ? row[q] ^ next_z[q] : 0};
+                                        std::size_t words, std::size_t nx) {
+    const Word here = row[q];
+    const Word x = q + 1 < words ? here ^ (here >> 1 | row[q + 1] << 63) : (here ^ here >> 1) & bits_below(q, nx - 1);
+    return {x, here ^ next_y[q], here ^ next_z[q]};
 }
+
+// A set of a row's words as one mask: bit q for word q < 63, bit 63 for all words from 63 on
+// (rows of more than 4032 samples share it).
+inline Word word_bit(std::size_t q) { return Word{1} << (q < 63 ? q : 63); }
 
 inline unsigned popcount(Word w) { return static_cast<unsigned>(std::popcount(w)); }
 

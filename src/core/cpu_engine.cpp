@@ -105,12 +105,14 @@ private:
 
 // ---------------------------------------------------------------- classify
 
-// Counts the crossed edges a row owns and where the first and last lie. Compiled twice:
-// without POPCNT the count is a library call, which costs more than the rest of the loop.
-[[gnu::always_inline]] inline void classify_row_body(const Word* row, const Word* next_y, const Word* next_z,
+// Counts the crossed edges a row owns and where the first and last lie; returns the set of
+// words with a crossing (word_bit). Compiled twice: without POPCNT the count is a library
+// call, which costs more than the rest of the loop.
+[[gnu::always_inline]] inline Word classify_row_body(const Word* row, const Word* next_y, const Word* next_z,
                                                     std::size_t words, std::size_t nx, RowInfo& info) {
     std::uint32_t count = 0;
     std::size_t first = kEmptyRow, last = row[0] & 1;  // an empty row keeps its inside bit in `last`
+    Word busy = 0;
     for (std::size_t q = 0; q < words; ++q) {
         const EdgeMasks m = edge_masks(row, next_y, next_z, q, words, nx);
         count += static_cast<std::uint32_t>(__builtin_popcountll(m.x) + __builtin_popcountll(m.y) +
@@ -118,24 +120,26 @@ private:
         if (const Word any = m.any()) {
             if (first == kEmptyRow) first = 64 * q + static_cast<std::size_t>(std::countr_zero(any));
             last = 64 * q + 63 - static_cast<std::size_t>(std::countl_zero(any));
+            busy |= word_bit(q);
         }
     }
     info.vertices = count;
     info.first = static_cast<std::uint32_t>(first);
     info.last = static_cast<std::uint32_t>(last);
+    return busy;
 }
 
-using ClassifyRow = void (*)(const Word*, const Word*, const Word*, std::size_t, std::size_t, RowInfo&);
+using ClassifyRow = Word (*)(const Word*, const Word*, const Word*, std::size_t, std::size_t, RowInfo&);
 
-void classify_row_portable(const Word* row, const Word* next_y, const Word* next_z, std::size_t words,
+Word classify_row_portable(const Word* row, const Word* next_y, const Word* next_z, std::size_t words,
                            std::size_t nx, RowInfo& info) {
-    classify_row_body(row, next_y, next_z, words, nx, info);
+    return classify_row_body(row, next_y, next_z, words, nx, info);
 }
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("popcnt"))) void classify_row_popcnt(const Word* row, const Word* next_y, const Word* next_z,
+__attribute__((target("popcnt"))) Word classify_row_popcnt(const Word* row, const Word* next_y, const Word* next_z,
                                                            std::size_t words, std::size_t nx, RowInfo& info) {
-    classify_row_body(row, next_y, next_z, words, nx, info);
+    return classify_row_body(row, next_y, next_z, words, nx, info);
 }
 ClassifyRow pick_classify_row() { return cpu_has_popcnt() ? &classify_row_popcnt : &classify_row_portable; }
 #else
@@ -153,7 +157,8 @@ inline WordSpan row_words(const RowInfo& row) { return {row.first / 64, std::siz
 // A non-uniform cell x has a crossed edge owned by sample x or x+1 of rows a = (y, z) or
 // b = (y+1, z): its edges in rows (y, z+1) and (y+1, z+1) cross only where a z-edge or an
 // edge of a or b does. So a cell row whose rows a and b have no crossing has no triangles,
-// and its non-uniform cells lie in [first - 1, last] of a and b's crossings.
+// its non-uniform cells lie in [first - 1, last] of a and b's crossings, and in words that
+// hold a crossing of a or b or are followed by one.
 inline bool cell_row_active(const RowInfo& a, const RowInfo& b) { return !a.empty() || !b.empty(); }
 
 inline WordSpan cell_row_words(const RowInfo& a, const RowInfo& b) {
@@ -173,14 +178,15 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
     bits.resize(up);
     if (bits.fill(here, a, nullptr, nullptr)) throw_nan(a);
     const ClassifyRow classify_row = pick_classify_row();
+    std::vector<Word> busy(ny);  // per row of plane k, its words with a crossing
     for (std::size_t k = a; k < b; ++k) {
         const bool has_up = k + 1 < nz;
         if (has_up && bits.fill(up, k + 1, nullptr, nullptr)) throw_nan(k + 1);
         RowInfo* info = rows + (k - plan.range.begin) * ny;
         std::size_t active = 0;
         for (std::size_t j = 0; j < ny; ++j) {
-            classify_row(here.row(j), j + 1 < ny ? here.row(j + 1) : nullptr,
-                         has_up ? up.row(j) : nullptr, words, nx, info[j]);
+            busy[j] = classify_row(here.row(j), here.row(j + 1 < ny ? j + 1 : j), (has_up ? up : here).row(j), words,
+                                   nx, info[j]);
             active += !info[j].empty();
         }
         if (plane_bits) {
@@ -199,7 +205,9 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
                            *rd = up.row(j + 1);
                 std::uint32_t count = 0;
                 const WordSpan span = cell_row_words(info[j], info[j + 1]);
+                const Word nonuniform_words = (busy[j] | busy[j + 1]) | (busy[j] | busy[j + 1]) >> 1;
                 for (std::size_t q = span.begin; q < span.end; ++q) {
+                    if (!(nonuniform_words & word_bit(q))) continue;
                     const CellWord cell(ra, rb, rc, rd, q, words);
                     for (Word cells = cell.nonuniform(q, nx); cells; cells &= cells - 1)
                         count += kCaseTable[cell.cell_case(static_cast<unsigned>(std::countr_zero(cells)))].count;
@@ -305,8 +313,8 @@ private:
         for (std::size_t j = 0; j < ny_; ++j) {
             if (rows[j].empty()) continue;
             const Word* row = plane.row(j);
-            const Word* next_y = j + 1 < ny_ ? plane.row(j + 1) : nullptr;
-            const Word* next_z = up ? up->row(j) : nullptr;
+            const Word* next_y = plane.row(j + 1 < ny_ ? j + 1 : j);  // the row itself: no edge
+            const Word* next_z = (up ? *up : plane).row(j);
             std::uint32_t* id = edges.id.get() + 3 * j * nx_;
             std::uint32_t next_id = bases[j];
             const WordSpan span = row_words(rows[j]);

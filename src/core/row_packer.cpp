@@ -82,15 +82,23 @@ template <class T>
 VOXMESH_AVX2 inline Word pack64_avx2(const T* p, T threshold, unsigned& bad) {
     Word w = 0;
     if constexpr (std::is_same_v<T, float>) {
-        const __m256 t = _mm256_set1_ps(threshold), max = _mm256_set1_ps(std::numeric_limits<float>::max());
-        const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-        __m256 nonfinite = _mm256_setzero_ps();  // lanes where |v| > max or v is NaN, or-ed
-        for (unsigned g = 0; g < 8; ++g) {
-            const __m256 v = _mm256_loadu_ps(p + 8 * g);
-            w |= Word(unsigned(_mm256_movemask_ps(_mm256_cmp_ps(v, t, _CMP_GE_OQ)))) << (8 * g);
-            nonfinite = _mm256_or_ps(nonfinite, _mm256_cmp_ps(_mm256_and_ps(v, abs_mask), max, _CMP_NLE_UQ));
+        // Four compares (32 lanes of 0 / -1) narrow to 32 bytes with two packs; the packs work
+        // within 128-bit halves, so a permute restores sample order before one movemask.
+        const __m256 t = _mm256_set1_ps(threshold);
+        const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+        __m256 nonfinite = _mm256_setzero_ps();  // v - v: +0 when finite, NaN otherwise; or-ed
+        for (unsigned h = 0; h < 2; ++h) {
+            __m256i inside[4];
+            for (unsigned g = 0; g < 4; ++g) {
+                const __m256 v = _mm256_loadu_ps(p + 32 * h + 8 * g);
+                inside[g] = _mm256_castps_si256(_mm256_cmp_ps(v, t, _CMP_GE_OQ));
+                nonfinite = _mm256_or_ps(nonfinite, _mm256_sub_ps(v, v));
+            }
+            const __m256i bytes = _mm256_packs_epi16(_mm256_packs_epi32(inside[0], inside[1]),
+                                                     _mm256_packs_epi32(inside[2], inside[3]));
+            w |= Word(std::uint32_t(_mm256_movemask_epi8(_mm256_permutevar8x32_epi32(bytes, order)))) << (32 * h);
         }
-        bad |= unsigned(_mm256_movemask_ps(nonfinite));
+        bad |= unsigned(!_mm256_testz_si256(_mm256_castps_si256(nonfinite), _mm256_castps_si256(nonfinite)));
     } else if constexpr (std::is_same_v<T, double>) {
         const __m256d t = _mm256_set1_pd(threshold), max = _mm256_set1_pd(std::numeric_limits<double>::max());
         const __m256d abs_mask = _mm256_castsi256_pd(_mm256_set1_epi64x(0x7fffffffffffffffll));
