@@ -328,8 +328,11 @@ private:
                         const std::size_t at = 3 * static_cast<std::size_t>(next_id);
                         vertex_.sample(i, j, z, c, out_.positions + at, out_.normals ? out_.normals + at : nullptr);
                     }
-                    for (unsigned axis = 0; axis < 3; ++axis)
-                        if (c >> axis & 1) id[3 * i + axis] = next_id++;
+                    // All three slots, without branches: a slot whose edge does not cross is never read.
+                    for (unsigned axis = 0; axis < 3; ++axis) {
+                        id[3 * i + axis] = next_id;
+                        next_id += c >> axis & 1;
+                    }
                 }
             }
         }
@@ -339,6 +342,7 @@ private:
         const RowInfo* rows = meta_rows(k);
         const std::uint64_t* tri_base = plan_.triangle_base.data() + (k - plan_.range.begin) * ny_;
         const bool flip = options_.inside_below;
+        const std::uint32_t vertex_base = out_.vertex_base;  // a local: the index stores cannot change it
         for (std::size_t j = 0; j + 1 < ny_; ++j) {
             if (!cell_row_active(rows[j], rows[j + 1])) continue;
             const Word *a = planes_[0].row(j), *b = planes_[0].row(j + 1),
@@ -359,7 +363,7 @@ private:
                         std::uint32_t v[3];
                         for (unsigned e = 0; e < 3; ++e) {
                             const EdgeSlot edge = kEdgeSlot[static_cast<unsigned>(entry.edges[3 * t + e])];
-                            v[e] = out_.vertex_base + ids[edge.row][3 * i + edge.slot];
+                            v[e] = vertex_base + ids[edge.row][3 * i + edge.slot];
                         }
                         out[0] = v[0];
                         out[1] = flip ? v[2] : v[1];
