@@ -3,6 +3,7 @@
 // of word q stands for sample x = 64q + r; bits past the row's end are always 0.
 #pragma once
 
+#include "case_tables.hpp"
 #include "row_packer.hpp"  // Word
 
 #include <bit>
@@ -74,8 +75,12 @@ struct CellWord {
         return diff & bits_below(q, nx - 1);
     }
 
-    // Case index of cell 64q + r (bit k set where corner k is inside).
+    // Case index of cell 64q + r (bit k set where corner k is inside). Below bit 63 a cell's
+    // x and x+1 bits are neighbours in the rows' own words: four 2-bit pairs and a lookup.
     VOXMESH_HOT_INLINE unsigned cell_case(unsigned r) const {
+        if (r < 63)
+            return kRowPairsToCase[(corner[0] >> r & 3) | (corner[3] >> r & 3) << 2 | (corner[4] >> r & 3) << 4 |
+                                   (corner[7] >> r & 3) << 6];
         unsigned c = 0;
         for (unsigned k = 0; k < 8; ++k) c |= static_cast<unsigned>(corner[k] >> r & 1) << k;
         return c;

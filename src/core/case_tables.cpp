@@ -31,8 +31,22 @@ std::array<std::uint8_t, 256> make_column_pair_to_case() {
     }
     return table;
 }
+
+std::array<std::uint8_t, 256> make_row_pairs_to_case() {
+    std::array<std::uint8_t, 256> table{};
+    for (int pairs = 0; pairs < 256; ++pairs) {
+        int code = 0;
+        for (int c = 0; c < 8; ++c) {
+            const int row = kCornerOffset[c][1] + 2 * kCornerOffset[c][2];
+            if (pairs >> (2 * row + kCornerOffset[c][0]) & 1) code |= 1 << c;
+        }
+        table[pairs] = static_cast<std::uint8_t>(code);
+    }
+    return table;
+}
 }  // namespace
 
 const std::array<std::uint8_t, 256> kColumnPairToCase = make_column_pair_to_case();
+const std::array<std::uint8_t, 256> kRowPairsToCase = make_row_pairs_to_case();
 
 }  // namespace voxmesh::detail

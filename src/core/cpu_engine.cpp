@@ -115,13 +115,13 @@ private:
     Word busy = 0;
     for (std::size_t q = 0; q < words; ++q) {
         const EdgeMasks m = edge_masks(row, next_y, next_z, q, words, nx);
+        const Word any = m.any();
+        if (!any) continue;  // most words: nothing crosses
         count += static_cast<std::uint32_t>(__builtin_popcountll(m.x) + __builtin_popcountll(m.y) +
                                             __builtin_popcountll(m.z));
-        if (const Word any = m.any()) {
-            if (first == kEmptyRow) first = 64 * q + static_cast<std::size_t>(std::countr_zero(any));
-            last = 64 * q + 63 - static_cast<std::size_t>(std::countl_zero(any));
-            busy |= word_bit(q);
-        }
+        if (first == kEmptyRow) first = 64 * q + static_cast<std::size_t>(std::countr_zero(any));
+        last = 64 * q + 63 - static_cast<std::size_t>(std::countl_zero(any));
+        busy |= word_bit(q);
     }
     info.vertices = count;
     info.first = static_cast<std::uint32_t>(first);
