@@ -237,28 +237,31 @@ std::vector<std::size_t> balanced_split(const std::vector<double>& cost, unsigne
 
 // ---------------------------------------------------------------- generate
 
-// Per sample of one plane, the local vertex id of each crossed edge it owns (slot 3i + axis).
-// Slots of edges that do not cross are never read, so the array is left uninitialised: a
-// worker touches only the pages of rows with crossings (many workers on few cores, or a
-// sparse surface, do not pay for a full plane).
-struct EdgePlane {
-    std::unique_ptr<std::uint32_t[]> id;
-};
-
-// Per cell edge: which of the four sample rows around a cell row holds it (dy + 2 dz) and its
-// slot relative to the cell's own sample (3 dx + axis).
-struct EdgeSlot {
-    std::uint8_t row, slot;
-};
-std::array<EdgeSlot, 12> make_edge_slots() {
-    std::array<EdgeSlot, 12> slots{};
-    for (unsigned e = 0; e < 12; ++e) {
-        const CellEdge& edge = kCellEdge[e];
-        slots[e] = {static_cast<std::uint8_t>(edge.dy + 2 * edge.dz), static_cast<std::uint8_t>(3 * edge.dx + edge.axis)};
+// Per sample of two planes (k and k+1), the local vertex id of each crossed edge it owns, at
+// slot 3i + axis of its plane; the planes take turns as plane k. Slots of edges that do not
+// cross are never read, so the array is left uninitialised: a worker touches only the pages
+// of rows with crossings (many workers on few cores, or a sparse surface, do not pay for a
+// full plane). One array, so that a cell edge's id is at a fixed offset from its cell's
+// sample slot: `offset[lower][e]`, for the plane k at the lower or upper half.
+class EdgeIds {
+public:
+    EdgeIds(std::size_t nx, std::size_t ny) : plane_(3 * nx * ny), id_(new std::uint32_t[2 * plane_]) {
+        for (unsigned half = 0; half < 2; ++half)
+            for (unsigned e = 0; e < 12; ++e) {
+                const CellEdge& edge = kCellEdge[e];
+                const std::ptrdiff_t z = edge.dz ? (half == 0 ? 1 : -1) * static_cast<std::ptrdiff_t>(plane_) : 0;
+                offset_[half][e] = z + static_cast<std::ptrdiff_t>(3 * nx * edge.dy + 3 * edge.dx + edge.axis);
+            }
     }
-    return slots;
-}
-const std::array<EdgeSlot, 12> kEdgeSlot = make_edge_slots();  // kCellEdge is constant-initialised
+
+    std::uint32_t* plane(unsigned half) { return id_.get() + half * plane_; }
+    const std::ptrdiff_t* offsets(unsigned half) const { return offset_[half]; }
+
+private:
+    std::size_t plane_;
+    std::unique_ptr<std::uint32_t[]> id_;  // default-initialised: no fill
+    std::ptrdiff_t offset_[2][12];
+};
 
 template <class T>
 class Generator {
@@ -273,9 +276,9 @@ public:
           nx_(volume.dims[0]),
           ny_(volume.dims[1]),
           nz_(volume.dims[2]),
-          words_(bits_.stride()) {
+          words_(bits_.stride()),
+          ids_(nx_, ny_) {
         for (auto& b : planes_) bits_.resize(b);
-        for (auto& e : edges_) e.id.reset(new std::uint32_t[3 * nx_ * ny_]);  // default-initialised: no fill
     }
 
     // Meshes planes [a, b) of the range: vertices of sample planes a..b-1 and triangles of
@@ -284,13 +287,13 @@ public:
         fill_bits(a, 0);
         if (a + 1 < nz_) fill_bits(a + 1, 1);
         if (a + 2 < nz_) fill_bits(a + 2, 2);
-        build_edges(a, planes_[0], a + 1 < nz_ ? &planes_[1] : nullptr, edges_[0], true);
+        build_edges(a, planes_[0], a + 1 < nz_ ? &planes_[1] : nullptr, ids_.plane(lower_), true);
         for (std::size_t k = a; k < b; ++k) {
             if (k + 1 < nz_) {
-                build_edges(k + 1, planes_[1], k + 2 < nz_ ? &planes_[2] : nullptr, edges_[1], k + 1 < b);
+                build_edges(k + 1, planes_[1], k + 2 < nz_ ? &planes_[2] : nullptr, ids_.plane(1 - lower_), k + 1 < b);
                 emit_triangles(k);
             }
-            std::swap(edges_[0], edges_[1]);
+            lower_ = 1 - lower_;
             std::rotate(planes_, planes_ + 1, planes_ + 3);
             if (k + 3 < nz_ && k + 1 < b) fill_bits(k + 3, 2);
         }
@@ -307,7 +310,7 @@ private:
         bits_.fill(planes_[slot], z, meta_rows(z), p < plan_.plane_bits.size() ? &plan_.plane_bits[p] : nullptr);
     }
 
-    void build_edges(std::size_t z, const BitPlane& plane, const BitPlane* up, EdgePlane& edges, bool write_vertices) {
+    void build_edges(std::size_t z, const BitPlane& plane, const BitPlane* up, std::uint32_t* ids, bool write_vertices) {
         const RowInfo* rows = meta_rows(z);
         const std::uint32_t* bases = plan_.vertex_base.data() + (z - plan_.range.begin) * ny_;
         for (std::size_t j = 0; j < ny_; ++j) {
@@ -315,7 +318,7 @@ private:
             const Word* row = plane.row(j);
             const Word* next_y = plane.row(j + 1 < ny_ ? j + 1 : j);  // the row itself: no edge
             const Word* next_z = (up ? *up : plane).row(j);
-            std::uint32_t* id = edges.id.get() + 3 * j * nx_;
+            std::uint32_t* id = ids + 3 * j * nx_;
             std::uint32_t next_id = bases[j];
             const WordSpan span = row_words(rows[j]);
             for (std::size_t q = span.begin; q < span.end; ++q) {
@@ -343,14 +346,12 @@ private:
         const std::uint64_t* tri_base = plan_.triangle_base.data() + (k - plan_.range.begin) * ny_;
         const bool flip = options_.inside_below;
         const std::uint32_t vertex_base = out_.vertex_base;  // a local: the index stores cannot change it
+        const std::ptrdiff_t* offset = ids_.offsets(lower_);
         for (std::size_t j = 0; j + 1 < ny_; ++j) {
             if (!cell_row_active(rows[j], rows[j + 1])) continue;
             const Word *a = planes_[0].row(j), *b = planes_[0].row(j + 1),
                        *c = planes_[1].row(j), *d = planes_[1].row(j + 1);
-            // Vertex ids of the four sample rows around the cell row, indexed dy + 2 dz.
-            const std::size_t at[4] = {3 * j * nx_, 3 * (j + 1) * nx_, 3 * j * nx_, 3 * (j + 1) * nx_};
-            const std::uint32_t* ids[4];
-            for (unsigned r = 0; r < 4; ++r) ids[r] = edges_[r >> 1].id.get() + at[r];
+            const std::uint32_t* row_ids = ids_.plane(lower_) + 3 * j * nx_;
             std::uint32_t* out = out_.indices + 3 * tri_base[j];
             const WordSpan span = cell_row_words(rows[j], rows[j + 1]);
             for (std::size_t q = span.begin; q < span.end; ++q) {
@@ -359,12 +360,11 @@ private:
                     const unsigned r = static_cast<unsigned>(std::countr_zero(cells));
                     const std::size_t i = 64 * q + r;
                     const CaseEntry& entry = kCaseTable[cell.cell_case(r)];
+                    const std::uint32_t* cell_ids = row_ids + 3 * i;
                     for (unsigned t = 0; t < entry.count; ++t) {
                         std::uint32_t v[3];
-                        for (unsigned e = 0; e < 3; ++e) {
-                            const EdgeSlot edge = kEdgeSlot[static_cast<unsigned>(entry.edges[3 * t + e])];
-                            v[e] = vertex_base + ids[edge.row][3 * i + edge.slot];
-                        }
+                        for (unsigned e = 0; e < 3; ++e)
+                            v[e] = vertex_base + cell_ids[offset[static_cast<unsigned>(entry.edges[3 * t + e])]];
                         out[0] = v[0];
                         out[1] = flip ? v[2] : v[1];
                         out[2] = flip ? v[1] : v[2];
@@ -382,7 +382,8 @@ private:
     EdgeVertex<T> vertex_;
     std::size_t nx_, ny_, nz_, words_;
     BitPlane planes_[3];
-    EdgePlane edges_[2];
+    EdgeIds ids_;
+    unsigned lower_ = 0;  // the half of ids_ that holds plane k
 };
 
 // Slabs per thread, pulled in order: a thread that finishes early (the cost model is an
