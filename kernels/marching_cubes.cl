@@ -192,6 +192,11 @@ __kernel void classify_rows(__global const uint* bits, const uint nx, const uint
     tcount[r] = t;
 }
 
+// Row r's count from an exclusive scan `base` over `rows` rows whose total is `end`.
+inline uint scanned_count(__global const uint* base, uint r, uint rows, uint end) {
+    return (r + 1 < rows ? base[r + 1] : end) - base[r];
+}
+
 // One work-item per meta row with crossings: the vertex id of the first edge of each of its
 // words into wbase (what the triangles look up), and for owned rows its vertices at ids
 // vbase[r]... (vend: the total after the last meta row, for the last row's span). Rows
@@ -205,9 +210,8 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
                                 const int want_normals, __global float* positions, __global float* normals,
                                 __global uint* wbase) {
     const uint r = (uint)get_global_id(0);
-    if (r >= rows) return;
+    if (r >= rows || scanned_count(vbase, r, rows, vend) == 0) return;
     uint id = vbase[r];
-    if (id == (r + 1 < rows ? vbase[r + 1] : vend)) return;
     const uint p = r / ny;
     const uint j = r - p * ny;
     const uint z = begin + p;
@@ -260,9 +264,8 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
                                  __constant uchar* case_table, __constant uchar* cell_edge, const int inside_below,
                                  __global uint* indices) {
     const uint r = (uint)get_global_id(0);
-    if (r >= cell_rows) return;
+    if (r >= cell_rows || scanned_count(tbase, r, rows, tend) == 0) return;
     uint t = tbase[r];
-    if (t == (r + 1 < rows ? tbase[r + 1] : tend)) return;
     const uint p = r / ny;
     const uint j = r - p * ny;
     const uint z = begin + p;

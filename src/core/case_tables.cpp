@@ -18,35 +18,26 @@ const CaseEntry kCaseTable[256] = {
 };
 
 namespace {
-// Column code bit b is row (y + (b & 1), z + (b >> 1)); place the 8 corners from the pair.
-std::array<std::uint8_t, 256> make_column_pair_to_case() {
+// Case index of every 8-bit index that holds corner c's inside bit at bit index_bit(dx, dy, dz)
+// of the corner's offset.
+template <class IndexBit>
+std::array<std::uint8_t, 256> cases_by_index(IndexBit index_bit) {
     std::array<std::uint8_t, 256> table{};
-    for (int pair = 0; pair < 256; ++pair) {
+    for (int index = 0; index < 256; ++index) {
         int code = 0;
-        for (int c = 0; c < 8; ++c) {
-            const int column = kCornerOffset[c][0] ? pair >> 4 : pair & 15;
-            if (column >> (kCornerOffset[c][1] + 2 * kCornerOffset[c][2]) & 1) code |= 1 << c;
-        }
-        table[pair] = static_cast<std::uint8_t>(code);
-    }
-    return table;
-}
-
-std::array<std::uint8_t, 256> make_row_pairs_to_case() {
-    std::array<std::uint8_t, 256> table{};
-    for (int pairs = 0; pairs < 256; ++pairs) {
-        int code = 0;
-        for (int c = 0; c < 8; ++c) {
-            const int row = kCornerOffset[c][1] + 2 * kCornerOffset[c][2];
-            if (pairs >> (2 * row + kCornerOffset[c][0]) & 1) code |= 1 << c;
-        }
-        table[pairs] = static_cast<std::uint8_t>(code);
+        for (int c = 0; c < 8; ++c)
+            if (index >> index_bit(kCornerOffset[c][0], kCornerOffset[c][1], kCornerOffset[c][2]) & 1) code |= 1 << c;
+        table[index] = static_cast<std::uint8_t>(code);
     }
     return table;
 }
 }  // namespace
 
-const std::array<std::uint8_t, 256> kColumnPairToCase = make_column_pair_to_case();
-const std::array<std::uint8_t, 256> kRowPairsToCase = make_row_pairs_to_case();
+// Column code at x + dx in bits 4 dx..4 dx + 3, its bit dy + 2 dz for row (y + dy, z + dz).
+const std::array<std::uint8_t, 256> kColumnPairToCase =
+    cases_by_index([](int dx, int dy, int dz) { return 4 * dx + dy + 2 * dz; });
+// Row (y + dy, z + dz)'s pair in bits 2 (dy + 2 dz)..+1, its bit dx for x + dx.
+const std::array<std::uint8_t, 256> kRowPairsToCase =
+    cases_by_index([](int dx, int dy, int dz) { return 2 * (dy + 2 * dz) + dx; });
 
 }  // namespace voxmesh::detail

@@ -205,7 +205,8 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
                            *rd = up.row(j + 1);
                 std::uint32_t count = 0;
                 const WordSpan span = cell_row_words(info[j], info[j + 1]);
-                const Word nonuniform_words = (busy[j] | busy[j + 1]) | (busy[j] | busy[j + 1]) >> 1;
+                const Word crossed = busy[j] | busy[j + 1];
+                const Word nonuniform_words = crossed | crossed >> 1;
                 for (std::size_t q = span.begin; q < span.end; ++q) {
                     if (!(nonuniform_words & word_bit(q))) continue;
                     const CellWord cell(ra, rb, rc, rd, q, words);
