@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <vector>
 
 namespace voxmesh::detail {
@@ -13,6 +14,11 @@ namespace voxmesh::detail {
 // Advises huge pages for the 2 MiB-aligned part of [data, data + bytes); smaller ranges are
 // left alone.
 void advise_huge_pages(const void* data, std::size_t bytes);
+
+// `bytes` of zeroed memory, advised for huge pages when large (fresh pages from the kernel
+// are already zero, so nothing is written here: pages are faulted in by their first user).
+// Throws std::bad_alloc when the memory cannot be had.
+std::shared_ptr<void> allocate_zeroed(std::size_t bytes);
 
 // v.reserve(n), with new storage advised before anything touches it; then resize or assign.
 template <class T>

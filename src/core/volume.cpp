@@ -1,5 +1,7 @@
 #include <voxmesh/voxmesh.hpp>
 
+#include "huge_pages.hpp"
+
 #include <cstdlib>
 #include <limits>
 #include <new>
@@ -53,13 +55,18 @@ std::size_t checked_volume_bytes(std::array<std::size_t, 3> dims, ScalarType typ
 
 Volume Volume::allocate(ScalarType type, std::array<std::size_t, 3> dims) {
     const std::size_t bytes = checked_volume_bytes(dims, type);
-    void* block = std::calloc(bytes == 0 ? 1 : bytes, 1);
-    if (!block) throw Error("cannot allocate " + std::to_string(bytes) + " bytes for a volume");
     Volume v;
+    try {
+        // Huge pages: a volume is filled once, page by page, and generate reads it near the
+        // surface, a few rows in each of four planes at a time; 4 KiB pages cost a fault
+        // each on the fill and a TLB miss per row there.
+        v.storage = detail::allocate_zeroed(bytes);
+    } catch (const std::bad_alloc&) {
+        throw Error("cannot allocate " + std::to_string(bytes) + " bytes for a volume");
+    }
     v.type = type;
     v.dims = dims;
-    v.storage = std::shared_ptr<void>(block, std::free);
-    v.data = block;
+    v.data = v.storage.get();
     return v;
 }
 
