@@ -185,6 +185,16 @@ bool cpu_has_popcnt() {
 #endif
 }
 
+bool cpu_has_avx2_bmi2() {
+#ifdef VOXMESH_X86_DISPATCH
+    static const bool has = !portable_forced() && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") &&
+                            __builtin_cpu_supports("bmi2");
+    return has;
+#else
+    return false;
+#endif
+}
+
 #define VOXMESH_INSTANTIATE(T)                                                       \
     template bool pack_row_portable<T>(const T*, std::size_t, T, Word*);            \
     template RowPacker<T> avx2_row_packer<T>();                                      \

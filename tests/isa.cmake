@@ -1,0 +1,7 @@
+# Portable code paths (included by tests/CMakeLists.txt).
+#
+# On a processor with AVX2 the engine runs its AVX2 row packers and its AVX2/BMI copy of the
+# generator; VOXMESH_ISA=portable turns both off. The [core] tests compare the CPU engine with
+# the oracle, so running them again this way checks the portable paths give the same meshes.
+add_test(NAME voxmesh_core_portable_isa COMMAND voxmesh_tests "[core]")
+set_tests_properties(voxmesh_core_portable_isa PROPERTIES ENVIRONMENT "VOXMESH_ISA=portable;${VOXMESH_TEST_ENV}")
