@@ -249,8 +249,7 @@ class EdgeIds {
 public:
     EdgeIds(std::size_t nx, std::size_t ny)
         : plane_(3 * nx * ny),
-          storage_(allocate_zeroed(2 * plane_ * sizeof(std::uint32_t))),
-          id_(static_cast<std::uint32_t*>(storage_.get())) {
+          storage_(allocate_zeroed(2 * plane_ * sizeof(std::uint32_t))) {
         for (unsigned half = 0; half < 2; ++half)
             for (unsigned e = 0; e < 12; ++e) {
                 const CellEdge& edge = kCellEdge[e];
@@ -259,15 +258,19 @@ public:
             }
     }
 
-    std::uint32_t* plane(unsigned half) { return id_ + half * plane_; }
+    std::uint32_t* plane(unsigned half) { return static_cast<std::uint32_t*>(storage_.get()) + half * plane_; }
     const std::ptrdiff_t* offsets(unsigned half) const { return offset_[half]; }
 
 private:
     std::size_t plane_;
-    std::shared_ptr<void> storage_;
-    std::uint32_t* id_;
+    std::shared_ptr<void> storage_;  // the two planes' ids
     std::ptrdiff_t offset_[2][12];
 };
+
+// GCC on x86-64 builds a second copy of the generator for AVX2/BMI (Generator::run_avx2).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define VOXMESH_GENERATOR_AVX2 1
+#endif
 
 template <class T>
 class Generator {
@@ -290,16 +293,16 @@ public:
     // Meshes planes [a, b) of the range: vertices of sample planes a..b-1 and triangles of
     // cell planes a..b-1, reading ids of plane b as well.
     void run(std::size_t a, std::size_t b) {
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#ifdef VOXMESH_GENERATOR_AVX2
         if (cpu_has_avx2_bmi2()) return run_avx2(a, b);
 #endif
         run_body(a, b);
     }
 
 private:
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#ifdef VOXMESH_GENERATOR_AVX2
     // The same code with everything it calls inlined and compiled for AVX2 and BMI (VEX
-    // three-operand arithmetic, tzcnt/blsr, shlx/shrx: -11 % instructions). No FMA: fused
+    // three-operand arithmetic, tzcnt/blsr, shlx/shrx: -13 % instructions). No FMA: fused
     // multiply-adds would round differently, and every engine must give the same bits.
     [[gnu::target("avx2,bmi,bmi2,popcnt"), gnu::flatten]] void run_avx2(std::size_t a, std::size_t b) {
         run_body(a, b);

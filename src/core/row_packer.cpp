@@ -187,7 +187,7 @@ bool cpu_has_popcnt() {
 
 bool cpu_has_avx2_bmi2() {
 #ifdef VOXMESH_X86_DISPATCH
-    static const bool has = !portable_forced() && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") &&
+    static const bool has = cpu_has_popcnt() && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") &&
                             __builtin_cpu_supports("bmi2");
     return has;
 #else

@@ -29,8 +29,8 @@ RowPacker<T> row_packer();
 // True when the processor has POPCNT (and the build may use it): see cpu_engine.cpp.
 bool cpu_has_popcnt();
 
-// True when the processor has AVX2, BMI1 and BMI2 (and the build may use them): the generator
-// has a copy compiled for them (cpu_engine.cpp). VOXMESH_ISA=portable turns it off too.
+// True when the processor has POPCNT, AVX2, BMI1 and BMI2 (and the build may use them): the
+// generator has a copy compiled for them (cpu_engine.cpp). VOXMESH_ISA=portable turns it off too.
 bool cpu_has_avx2_bmi2();
 
 }  // namespace voxmesh::detail
