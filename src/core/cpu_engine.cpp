@@ -378,27 +378,47 @@ private:
                        *c = planes_[1].row(j), *d = planes_[1].row(j + 1);
             const std::uint32_t* row_ids = ids_.plane(lower_) + 3 * j * nx_;
             std::uint32_t* out = out_.indices + 3 * tri_base[j];
+            // First the row's cell cases, asking for the lines of each cell's corner ids (one
+            // per row of ids; written a plane ago, they are mostly in L3 by now); then its
+            // triangles. Reading the ids right after the case took the lookups' whole latency
+            // chain (case, table entry, edge offset, id) after every mispredicted triangle
+            // count (-15 to -21 % generate time on 2 threads, sphere 512³).
+            std::uint64_t* cases = cell_cases_.data();
+            std::size_t n = 0;
             const WordSpan span = cell_row_words(rows[j], rows[j + 1]);
             for (std::size_t q = span.begin; q < span.end; ++q) {
                 const CellWord cell(a, b, c, d, q, words_);
                 for (Word cells = cell.nonuniform(q, nx_); cells; cells &= cells - 1) {
                     const unsigned r = static_cast<unsigned>(std::countr_zero(cells));
                     const std::size_t i = 64 * q + r;
-                    const CaseEntry& entry = kCaseTable[cell.cell_case(r)];
-                    const std::uint32_t* cell_ids = row_ids + 3 * i;
-                    for (unsigned t = 0; t < entry.count; ++t) {
-                        std::uint32_t v[3];
-                        for (unsigned e = 0; e < 3; ++e)
-                            v[e] = vertex_base + cell_ids[offset[static_cast<unsigned>(entry.edges[3 * t + e])]];
-                        out[0] = v[0];
-                        out[1] = flip ? v[2] : v[1];
-                        out[2] = flip ? v[1] : v[2];
-                        out += 3;
-                    }
+                    for (unsigned e : kIdRowEdges) prefetch(row_ids + 3 * i + offset[e]);
+                    cases[n++] = static_cast<std::uint64_t>(i) << 8 | cell.cell_case(r);
+                }
+            }
+            for (std::size_t m = 0; m < n; ++m) {
+                const CaseEntry& entry = kCaseTable[cases[m] & 255];
+                const std::uint32_t* cell_ids = row_ids + 3 * static_cast<std::size_t>(cases[m] >> 8);
+                for (unsigned t = 0; t < entry.count; ++t) {
+                    std::uint32_t v[3];
+                    for (unsigned e = 0; e < 3; ++e)
+                        v[e] = vertex_base + cell_ids[offset[static_cast<unsigned>(entry.edges[3 * t + e])]];
+                    out[0] = v[0];
+                    out[1] = flip ? v[2] : v[1];
+                    out[2] = flip ? v[1] : v[2];
+                    out += 3;
                 }
             }
         }
     }
+
+    static void prefetch([[maybe_unused]] const void* p) {
+#if defined(__GNUC__)
+        __builtin_prefetch(p);
+#endif
+    }
+
+    // One x-edge of each of the four id rows a cell reads (lower j, j + 1; upper j, j + 1).
+    static constexpr unsigned kIdRowEdges[4] = {0, 2, 4, 6};
 
     const CpuChunkPlan& plan_;
     const Options& options_;
@@ -408,6 +428,7 @@ private:
     std::size_t nx_, ny_, nz_, words_;
     BitPlane planes_[3];
     EdgeIds ids_;
+    std::vector<std::uint64_t> cell_cases_ = std::vector<std::uint64_t>(nx_);  // x << 8 | case, per cell row
     unsigned lower_ = 0;  // the half of ids_ that holds plane k
 };
 
