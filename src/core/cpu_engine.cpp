@@ -238,32 +238,38 @@ std::vector<std::size_t> balanced_split(const std::vector<double>& cost, unsigne
 
 // ---------------------------------------------------------------- generate
 
-// Per sample of two planes (k and k+1), the local vertex id of each crossed edge it owns, at
-// slot 3i + axis of its plane; the planes take turns as plane k. Slots of edges that do not
-// cross are never read, so nothing is written here. One array, so that a cell edge's id is at
-// a fixed offset from its cell's sample slot: `offset[lower][e]`, for the plane k at the lower
-// or upper half. In huge pages where large: a cell row reads ids from four rows, 6 KiB apart
-// in a plane of 512² (planes 3 MiB apart), and with 4 KiB pages those were TLB misses
-// (-15 % generate time, one thread, sphere f32 512³).
+// Per sample of two planes (k and k+1; they take turns as plane k), the local vertex id of
+// each crossed edge it owns. A sample's six slots (3 per plane, x, y, z) sit side by side, at
+// kSampleSlots * (x + nx * y) + 3 * half + axis: the line generate writes a sample's ids of
+// plane k + 1 into holds its ids of plane k, which the cells below read next, and a cell reads
+// two rows of lines, not four (-7 % generate on 2 threads, sphere f32 512³; even on u8 and gyroid). Slots of edges that do not cross are never read,
+// so nothing is written here. A cell edge's id is at a fixed offset from its cell's sample
+// slot: `offset[lower][e]`, for plane k in the lower or upper half. In huge pages where large:
+// a cell row reads ids from rows 12 KiB apart at 512², a TLB miss each with 4 KiB pages.
 class EdgeIds {
 public:
+    static constexpr std::size_t kSampleSlots = 6;
+
     EdgeIds(std::size_t nx, std::size_t ny)
-        : plane_(3 * nx * ny),
-          storage_(allocate_zeroed(2 * plane_ * sizeof(std::uint32_t))) {
+        : row_(kSampleSlots * nx),
+          storage_(allocate_zeroed(row_ * ny * sizeof(std::uint32_t))) {
         for (unsigned half = 0; half < 2; ++half)
             for (unsigned e = 0; e < 12; ++e) {
                 const CellEdge& edge = kCellEdge[e];
-                const std::ptrdiff_t z = edge.dz ? (half == 0 ? 1 : -1) * static_cast<std::ptrdiff_t>(plane_) : 0;
-                offset_[half][e] = z + static_cast<std::ptrdiff_t>(3 * nx * edge.dy + 3 * edge.dx + edge.axis);
+                const std::ptrdiff_t z = edge.dz ? (half == 0 ? 3 : -3) : 0;
+                offset_[half][e] = z + static_cast<std::ptrdiff_t>(row_ * edge.dy + kSampleSlots * edge.dx + edge.axis);
             }
     }
 
-    std::uint32_t* plane(unsigned half) { return static_cast<std::uint32_t*>(storage_.get()) + half * plane_; }
+    // Slot 0 of sample (0, j) of a half; sample x's slots follow at kSampleSlots * x.
+    std::uint32_t* row(unsigned half, std::size_t j) {
+        return static_cast<std::uint32_t*>(storage_.get()) + j * row_ + 3 * half;
+    }
     const std::ptrdiff_t* offsets(unsigned half) const { return offset_[half]; }
 
 private:
-    std::size_t plane_;
-    std::shared_ptr<void> storage_;  // the two planes' ids
+    std::size_t row_;                // slots per row
+    std::shared_ptr<void> storage_;  // both planes' ids
     std::ptrdiff_t offset_[2][12];
 };
 
@@ -313,10 +319,10 @@ private:
         fill_bits(a, 0);
         if (a + 1 < nz_) fill_bits(a + 1, 1);
         if (a + 2 < nz_) fill_bits(a + 2, 2);
-        build_edges(a, planes_[0], a + 1 < nz_ ? &planes_[1] : nullptr, ids_.plane(lower_), true);
+        build_edges(a, planes_[0], a + 1 < nz_ ? &planes_[1] : nullptr, lower_, true);
         for (std::size_t k = a; k < b; ++k) {
             if (k + 1 < nz_) {
-                build_edges(k + 1, planes_[1], k + 2 < nz_ ? &planes_[2] : nullptr, ids_.plane(1 - lower_), k + 1 < b);
+                build_edges(k + 1, planes_[1], k + 2 < nz_ ? &planes_[2] : nullptr, 1 - lower_, k + 1 < b);
                 emit_triangles(k);
             }
             lower_ = 1 - lower_;
@@ -335,7 +341,7 @@ private:
         bits_.fill(planes_[slot], z, meta_rows(z), p < plan_.plane_bits.size() ? &plan_.plane_bits[p] : nullptr);
     }
 
-    void build_edges(std::size_t z, const BitPlane& plane, const BitPlane* up, std::uint32_t* ids, bool write_vertices) {
+    void build_edges(std::size_t z, const BitPlane& plane, const BitPlane* up, unsigned half, bool write_vertices) {
         const RowInfo* rows = meta_rows(z);
         const std::uint32_t* bases = plan_.vertex_base.data() + (z - plan_.range.begin) * ny_;
         for (std::size_t j = 0; j < ny_; ++j) {
@@ -343,7 +349,7 @@ private:
             const Word* row = plane.row(j);
             const Word* next_y = plane.row(j + 1 < ny_ ? j + 1 : j);  // the row itself: no edge
             const Word* next_z = (up ? *up : plane).row(j);
-            std::uint32_t* id = ids + 3 * j * nx_;
+            std::uint32_t* id = ids_.row(half, j);
             std::uint32_t next_id = bases[j];
             const WordSpan span = row_words(rows[j]);
             for (std::size_t q = span.begin; q < span.end; ++q) {
@@ -358,7 +364,7 @@ private:
                     }
                     // All three slots, without branches: a slot whose edge does not cross is never read.
                     for (unsigned axis = 0; axis < 3; ++axis) {
-                        id[3 * i + axis] = next_id;
+                        id[EdgeIds::kSampleSlots * i + axis] = next_id;
                         next_id += c >> axis & 1;
                     }
                 }
@@ -376,13 +382,13 @@ private:
             if (!cell_row_active(rows[j], rows[j + 1])) continue;
             const Word *a = planes_[0].row(j), *b = planes_[0].row(j + 1),
                        *c = planes_[1].row(j), *d = planes_[1].row(j + 1);
-            const std::uint32_t* row_ids = ids_.plane(lower_) + 3 * j * nx_;
+            const std::uint32_t* row_ids = ids_.row(lower_, j);
             std::uint32_t* out = out_.indices + 3 * tri_base[j];
             // First the row's cell cases, asking for the lines of each cell's corner ids (one
             // per row of ids; written a plane ago, they are mostly in L3 by now); then its
             // triangles. Reading the ids right after the case took the lookups' whole latency
             // chain (case, table entry, edge offset, id) after every mispredicted triangle
-            // count (-15 to -21 % generate time on 2 threads, sphere 512³).
+            // count (-3 to -8 % generate time, sphere 512³).
             std::uint64_t* cases = cell_cases_.data();
             std::size_t n = 0;
             const WordSpan span = cell_row_words(rows[j], rows[j + 1]);
@@ -391,13 +397,13 @@ private:
                 for (Word cells = cell.nonuniform(q, nx_); cells; cells &= cells - 1) {
                     const unsigned r = static_cast<unsigned>(std::countr_zero(cells));
                     const std::size_t i = 64 * q + r;
-                    for (unsigned e : kIdRowEdges) prefetch(row_ids + 3 * i + offset[e]);
+                    for (unsigned e : kIdRowEdges) prefetch(row_ids + EdgeIds::kSampleSlots * i + offset[e]);
                     cases[n++] = static_cast<std::uint64_t>(i) << 8 | cell.cell_case(r);
                 }
             }
             for (std::size_t m = 0; m < n; ++m) {
                 const CaseEntry& entry = kCaseTable[cases[m] & 255];
-                const std::uint32_t* cell_ids = row_ids + 3 * static_cast<std::size_t>(cases[m] >> 8);
+                const std::uint32_t* cell_ids = row_ids + EdgeIds::kSampleSlots * static_cast<std::size_t>(cases[m] >> 8);
                 for (unsigned t = 0; t < entry.count; ++t) {
                     std::uint32_t v[3];
                     for (unsigned e = 0; e < 3; ++e)
@@ -417,8 +423,8 @@ private:
 #endif
     }
 
-    // One x-edge of each of the four id rows a cell reads (lower j, j + 1; upper j, j + 1).
-    static constexpr unsigned kIdRowEdges[4] = {0, 2, 4, 6};
+    // One x-edge of each row of id lines a cell reads (j and j + 1).
+    static constexpr unsigned kIdRowEdges[2] = {0, 2};
 
     const CpuChunkPlan& plan_;
     const Options& options_;
