@@ -239,13 +239,14 @@ std::vector<std::size_t> balanced_split(const std::vector<double>& cost, unsigne
 // ---------------------------------------------------------------- generate
 
 // Per sample of two planes (k and k+1; they take turns as plane k), the local vertex id of
-// each crossed edge it owns. A sample's six slots (3 per plane, x, y, z) sit side by side, at
-// kSampleSlots * (x + nx * y) + 3 * half + axis: the line generate writes a sample's ids of
-// plane k + 1 into holds its ids of plane k, which the cells below read next, and a cell reads
-// two rows of lines, not four (-7 % generate on 2 threads, sphere f32 512³; even on u8 and gyroid). Slots of edges that do not cross are never read,
-// so nothing is written here. A cell edge's id is at a fixed offset from its cell's sample
-// slot: `offset[lower][e]`, for plane k in the lower or upper half. In huge pages where large:
-// a cell row reads ids from rows 12 KiB apart at 512², a TLB miss each with 4 KiB pages.
+// each crossed edge it owns. A sample's six slots (3 per plane: x, y, z) sit side by side,
+// at kSampleSlots * (x + nx * y) + 3 * half + axis: the line that takes a sample's ids of
+// plane k + 1 holds its ids of plane k, which the cells below read next, and a cell reads two
+// rows of lines, not four (-7 % generate on 2 threads, sphere f32 512³; even on u8 and
+// gyroid). Slots of edges that do not cross are never read, so nothing is written here. A
+// cell edge's id is at a fixed offset from its cell's sample slot: `offset[lower][e]`, for
+// plane k in the lower or upper half. In huge pages where large: a cell row reads ids from
+// rows 12 KiB apart at 512², a TLB miss each with 4 KiB pages.
 class EdgeIds {
 public:
     static constexpr std::size_t kSampleSlots = 6;
