@@ -339,3 +339,20 @@ TEST_CASE("rows around machine-word lengths match the oracle", "[core]") {
         }
     }
 }
+
+TEST_CASE("rows around the width where 16-bit vertex ids give way to 32-bit match the oracle", "[core]") {
+    // The generator numbers a row's vertices from the row's first in 16 bits while a row has
+    // at most 65536 edges (nx <= 21845) and in 32 bits beyond.
+    for (std::size_t nx : {21845u, 21846u}) {
+        const Dims dims{nx, 2, 2};
+        INFO("nx " << nx);
+        // A 3-d checkerboard: every edge crosses, so row (0, 0) has 3 * nx - 1 vertices.
+        std::vector<double> values(nx * 4);
+        for (std::size_t i = 0; i < values.size(); ++i) values[i] = ((i % nx + i / nx % 2 + i / nx / 2) % 2) ? 9.0 : 0.0;
+        vmtest::RefOptions ro;
+        ro.iso = 4.5;
+        const vmtest::RefMesh ref = vmtest::reference_mc(values, dims, ro);
+        for (unsigned threads : {1u, 2u})
+            require_matches(voxmesh::extract(vmtest::view_of(values, dims), cpu_options(4.5, threads)), ref);
+    }
+}

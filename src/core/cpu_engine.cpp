@@ -238,40 +238,48 @@ std::vector<std::size_t> balanced_split(const std::vector<double>& cost, unsigne
 
 // ---------------------------------------------------------------- generate
 
-// Per sample of two planes (k and k+1; they take turns as plane k), the local vertex id of
-// each crossed edge it owns. A sample's six slots (3 per plane: x, y, z) sit side by side,
-// at kSampleSlots * (x + nx * y) + 3 * half + axis: the line that takes a sample's ids of
-// plane k + 1 holds its ids of plane k, which the cells below read next, and a cell reads two
-// rows of lines, not four (-7 % generate on 2 threads, sphere f32 512³; even on u8 and
-// gyroid). Slots of edges that do not cross are never read, so nothing is written here. A
-// cell edge's id is at a fixed offset from its cell's sample slot: `offset[lower][e]`, for
-// plane k in the lower or upper half. In huge pages where large: a cell row reads ids from
-// rows 12 KiB apart at 512², a TLB miss each with 4 KiB pages.
+// Per sample of two planes (k and k+1; they take turns as plane k), the vertex id of each
+// crossed edge it owns, counted from its row's first vertex: 16 bits wherever a row has at
+// most 65536 edges (nx <= kMaxNxFor16BitIds), which halves the table and its cache lines;
+// 32 bits above. A sample's six slots (3 per plane: x, y, z) sit side by side, at
+// kSampleSlots * (x + nx * y) + 3 * half + axis: the line that takes a sample's ids of plane
+// k + 1 holds its ids of plane k, which the cells below read next, and a cell reads two rows
+// of lines, not four (-7 % generate on 2 threads, sphere f32 512³; even on u8 and gyroid).
+// Slots of edges that do not cross are never read, so nothing is written here. A cell edge's
+// id is at a fixed offset from its cell's sample slot (`slot(lower, e)`, for plane k in the
+// lower or upper half), plus the base of the row it is in (`row_of(e)`: 0 and 1 for rows y
+// and y + 1 of plane k, 2 and 3 of plane k + 1). In huge pages where large: a cell row reads
+// ids from rows 6 KiB apart at 512², a TLB miss each with 4 KiB pages.
+constexpr std::size_t kMaxNxFor16BitIds = 21845;  // 3 * nx - 1 <= 65535
+
+template <class Id>
 class EdgeIds {
 public:
     static constexpr std::size_t kSampleSlots = 6;
 
     EdgeIds(std::size_t nx, std::size_t ny)
         : row_(kSampleSlots * nx),
-          storage_(allocate_zeroed(row_ * ny * sizeof(std::uint32_t))) {
-        for (unsigned half = 0; half < 2; ++half)
-            for (unsigned e = 0; e < 12; ++e) {
-                const CellEdge& edge = kCellEdge[e];
+          storage_(allocate_zeroed(row_ * ny * sizeof(Id))) {
+        for (unsigned e = 0; e < 12; ++e) {
+            const CellEdge& edge = kCellEdge[e];
+            row_of_[e] = edge.dy + 2u * edge.dz;
+            for (unsigned half = 0; half < 2; ++half) {
                 const std::ptrdiff_t z = edge.dz ? (half == 0 ? 3 : -3) : 0;
-                offset_[half][e] = z + static_cast<std::ptrdiff_t>(row_ * edge.dy + kSampleSlots * edge.dx + edge.axis);
+                slot_[half][e] = z + static_cast<std::ptrdiff_t>(row_ * edge.dy + kSampleSlots * edge.dx + edge.axis);
             }
+        }
     }
 
     // Slot 0 of sample (0, j) of a half; sample x's slots follow at kSampleSlots * x.
-    std::uint32_t* row(unsigned half, std::size_t j) {
-        return static_cast<std::uint32_t*>(storage_.get()) + j * row_ + 3 * half;
-    }
-    const std::ptrdiff_t* offsets(unsigned half) const { return offset_[half]; }
+    Id* row(unsigned half, std::size_t j) { return static_cast<Id*>(storage_.get()) + j * row_ + 3 * half; }
+    const std::ptrdiff_t* slots(unsigned half) const { return slot_[half]; }
+    const unsigned* rows_of() const { return row_of_; }
 
 private:
     std::size_t row_;                // slots per row
     std::shared_ptr<void> storage_;  // both planes' ids
-    std::ptrdiff_t offset_[2][12];
+    std::ptrdiff_t slot_[2][12];
+    unsigned row_of_[12];
 };
 
 // GCC on x86-64 builds a second copy of the generator for AVX2/BMI (Generator::run_avx2).
@@ -279,7 +287,7 @@ private:
 #define VOXMESH_GENERATOR_AVX2 1
 #endif
 
-template <class T>
+template <class T, class Id>
 class Generator {
 public:
     Generator(const CpuChunkPlan& plan, const VolumeView& volume, const Options& options, const MeshOut& out,
@@ -350,7 +358,8 @@ private:
             const Word* row = plane.row(j);
             const Word* next_y = plane.row(j + 1 < ny_ ? j + 1 : j);  // the row itself: no edge
             const Word* next_z = (up ? *up : plane).row(j);
-            std::uint32_t* id = ids_.row(half, j);
+            Id* id = ids_.row(half, j);
+            const std::uint32_t base = bases[j];
             std::uint32_t next_id = bases[j];
             const WordSpan span = row_words(rows[j]);
             for (std::size_t q = span.begin; q < span.end; ++q) {
@@ -365,7 +374,7 @@ private:
                     }
                     // All three slots, without branches: a slot whose edge does not cross is never read.
                     for (unsigned axis = 0; axis < 3; ++axis) {
-                        id[EdgeIds::kSampleSlots * i + axis] = next_id;
+                        id[EdgeIds<Id>::kSampleSlots * i + axis] = static_cast<Id>(next_id - base);
                         next_id += c >> axis & 1;
                     }
                 }
@@ -378,12 +387,17 @@ private:
         const std::uint64_t* tri_base = plan_.triangle_base.data() + (k - plan_.range.begin) * ny_;
         const bool flip = options_.inside_below;
         const std::uint32_t vertex_base = out_.vertex_base;  // a local: the index stores cannot change it
-        const std::ptrdiff_t* offset = ids_.offsets(lower_);
+        const std::ptrdiff_t* slot = ids_.slots(lower_);
+        const unsigned* row_of = ids_.rows_of();
+        const std::uint32_t* lower_bases = plan_.vertex_base.data() + (k - plan_.range.begin) * ny_;
+        const std::uint32_t* upper_bases = lower_bases + ny_;
         for (std::size_t j = 0; j + 1 < ny_; ++j) {
             if (!cell_row_active(rows[j], rows[j + 1])) continue;
             const Word *a = planes_[0].row(j), *b = planes_[0].row(j + 1),
                        *c = planes_[1].row(j), *d = planes_[1].row(j + 1);
-            const std::uint32_t* row_ids = ids_.row(lower_, j);
+            const Id* row_ids = ids_.row(lower_, j);
+            const std::uint32_t row_base[4] = {vertex_base + lower_bases[j], vertex_base + lower_bases[j + 1],
+                                               vertex_base + upper_bases[j], vertex_base + upper_bases[j + 1]};
             std::uint32_t* out = out_.indices + 3 * tri_base[j];
             // First the row's cell cases, asking for the lines of each cell's corner ids (one
             // per row of ids; written a plane ago, they are mostly in L3 by now); then its
@@ -398,17 +412,19 @@ private:
                 for (Word cells = cell.nonuniform(q, nx_); cells; cells &= cells - 1) {
                     const unsigned r = static_cast<unsigned>(std::countr_zero(cells));
                     const std::size_t i = 64 * q + r;
-                    for (unsigned e : kIdRowEdges) prefetch(row_ids + EdgeIds::kSampleSlots * i + offset[e]);
+                    for (unsigned e : kIdRowEdges) prefetch(row_ids + EdgeIds<Id>::kSampleSlots * i + slot[e]);
                     cases[n++] = static_cast<std::uint64_t>(i) << 8 | cell.cell_case(r);
                 }
             }
             for (std::size_t m = 0; m < n; ++m) {
                 const CaseEntry& entry = kCaseTable[cases[m] & 255];
-                const std::uint32_t* cell_ids = row_ids + EdgeIds::kSampleSlots * static_cast<std::size_t>(cases[m] >> 8);
+                const Id* cell_ids = row_ids + EdgeIds<Id>::kSampleSlots * static_cast<std::size_t>(cases[m] >> 8);
                 for (unsigned t = 0; t < entry.count; ++t) {
                     std::uint32_t v[3];
-                    for (unsigned e = 0; e < 3; ++e)
-                        v[e] = vertex_base + cell_ids[offset[static_cast<unsigned>(entry.edges[3 * t + e])]];
+                    for (unsigned c = 0; c < 3; ++c) {
+                        const auto e = static_cast<unsigned>(entry.edges[3 * t + c]);
+                        v[c] = row_base[row_of[e]] + cell_ids[slot[e]];
+                    }
                     out[0] = v[0];
                     out[1] = flip ? v[2] : v[1];
                     out[2] = flip ? v[1] : v[2];
@@ -434,7 +450,7 @@ private:
     EdgeVertex<T> vertex_;
     std::size_t nx_, ny_, nz_, words_;
     BitPlane planes_[3];
-    EdgeIds ids_;
+    EdgeIds<Id> ids_;
     std::vector<std::uint64_t> cell_cases_ = std::vector<std::uint64_t>(nx_);  // x << 8 | case, per cell row
     unsigned lower_ = 0;  // the half of ids_ that holds plane k
 };
@@ -579,13 +595,18 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
         const T threshold = make_threshold<T>(options.iso).value;
         // One generator per thread, reused for its slabs: its scratch planes are touched
         // (page-faulted) once, not once per slab.
-        std::vector<std::unique_ptr<Generator<T>>> generators(std::min(slabs, resolve_threads(0)));
-        run_slabs(slabs, threads, [&](unsigned slab, unsigned worker) {
-            if (cuts[slab] == cuts[slab + 1]) return;
-            auto& generator = generators[worker];
-            if (!generator) generator = std::make_unique<Generator<T>>(plan, volume, options, out, threshold);
-            generator->run(plan.range.begin + cuts[slab], plan.range.begin + cuts[slab + 1]);
-        });
+        const auto run = [&](auto id_tag) {
+            using Id = decltype(id_tag);
+            std::vector<std::unique_ptr<Generator<T, Id>>> generators(std::min(slabs, resolve_threads(0)));
+            run_slabs(slabs, threads, [&](unsigned slab, unsigned worker) {
+                if (cuts[slab] == cuts[slab + 1]) return;
+                auto& generator = generators[worker];
+                if (!generator) generator = std::make_unique<Generator<T, Id>>(plan, volume, options, out, threshold);
+                generator->run(plan.range.begin + cuts[slab], plan.range.begin + cuts[slab + 1]);
+            });
+        };
+        if (volume.dims[0] <= kMaxNxFor16BitIds) run(std::uint16_t{});
+        else run(std::uint32_t{});
     });
 }
 
