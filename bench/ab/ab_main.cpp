@@ -1,0 +1,122 @@
+// voxmesh-ab: times extract() of two or more builds of voxmesh in one process, call by call
+// in alternating order, on one built-in volume. On a VM whose speed drifts by ±30 % over
+// seconds, alternating processes (one binary, then the other) mixes that drift into the
+// comparison; alternating calls in one process lets every build see the same phases, the
+// same volume in the same pages and the same allocator state. Builds come as shared objects
+// (bench/ab/ab.sh makes them from git commits). For development, not a measurement to quote.
+#include <voxmesh/fields.hpp>
+#include <voxmesh/voxmesh.hpp>
+
+#include <dlfcn.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace {
+
+using Extract = voxmesh::Mesh (*)(const voxmesh::VolumeView&, const voxmesh::Options&, voxmesh::Stats&);
+using MakeField = voxmesh::FieldVolume (*)(voxmesh::Field, std::size_t, voxmesh::ScalarType, std::uint32_t);
+
+// Mangled names of voxmesh::extract(view, options, stats) and voxmesh::make_field.
+constexpr const char* kExtract = "_ZN7voxmesh7extractERKNS_10VolumeViewERKNS_7OptionsERNS_5StatsE";
+constexpr const char* kMakeField = "_ZN7voxmesh10make_fieldENS_5FieldEmNS_10ScalarTypeEj";
+
+double median(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+// Parsed here: the program links no voxmesh, so every voxmesh call goes to a loaded build.
+voxmesh::ScalarType parse_type(const std::string& name) {
+    const std::pair<const char*, voxmesh::ScalarType> types[] = {
+        {"u8", voxmesh::ScalarType::U8},   {"i8", voxmesh::ScalarType::I8},   {"u16", voxmesh::ScalarType::U16},
+        {"i16", voxmesh::ScalarType::I16}, {"u32", voxmesh::ScalarType::U32}, {"i32", voxmesh::ScalarType::I32},
+        {"f32", voxmesh::ScalarType::F32}, {"f64", voxmesh::ScalarType::F64}};
+    for (const auto& [text, type] : types)
+        if (name == text) return type;
+    throw voxmesh::Error("unknown scalar type " + name + " (u8, i8, u16, i16, u32, i32, f32, f64)");
+}
+
+voxmesh::Field parse_field(const std::string& name) {
+    if (name == "sphere") return voxmesh::Field::Sphere;
+    if (name == "gyroid") return voxmesh::Field::Gyroid;
+    if (name == "blobs") return voxmesh::Field::Blobs;
+    if (name == "ct") return voxmesh::Field::Ct;
+    throw voxmesh::Error("unknown field " + name + " (sphere, gyroid, blobs, ct)");
+}
+
+void* symbol(void* library, const char* name, const char* path) {
+    void* s = dlsym(library, name);
+    if (!s) throw voxmesh::Error(std::string(path) + " has no " + name + " (not a voxmesh build?)");
+    return s;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+    if (argc < 8) {
+        std::fprintf(stderr,
+                     "usage: voxmesh-ab FIELD TYPE SIZE THREADS ROUNDS LIB.so LIB.so...\n"
+                     "  e.g. voxmesh-ab sphere u8 512 2 30 /tmp/a.so /tmp/b.so\n");
+        return 2;
+    }
+    const voxmesh::Field field = parse_field(argv[1]);
+    const voxmesh::ScalarType type = parse_type(argv[2]);
+    const std::size_t size = std::stoul(argv[3]);
+    const unsigned threads = static_cast<unsigned>(std::stoul(argv[4]));
+    const unsigned rounds = static_cast<unsigned>(std::stoul(argv[5]));
+    if (size < 2 || rounds < 1) throw voxmesh::Error("SIZE must be at least 2 and ROUNDS at least 1");
+
+    std::vector<Extract> builds;
+    MakeField make_field = nullptr;
+    for (int i = 6; i < argc; ++i) {
+        // Local and deep-bound: each build keeps its own copy of every voxmesh symbol.
+        void* library = dlopen(argv[i], RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
+        if (!library) throw voxmesh::Error(dlerror());
+        builds.push_back(reinterpret_cast<Extract>(symbol(library, kExtract, argv[i])));
+        if (!make_field) make_field = reinterpret_cast<MakeField>(symbol(library, kMakeField, argv[i]));
+    }
+    const voxmesh::FieldVolume input = make_field(field, size, type, 1);
+    voxmesh::VolumeView view;  // built here: Volume::view() is the library's, not ours
+    view.data = input.volume.data;
+    view.type = input.volume.type;
+    view.dims = input.volume.dims;
+    voxmesh::Options options;
+    options.iso = input.iso;
+    options.threads = threads;
+    options.backend = voxmesh::Backend::Cpu;
+
+    const std::size_t n = builds.size();
+    std::vector<std::vector<double>> classify(n), generate(n), total(n), ratio(n);
+    std::vector<std::size_t> triangles(n);
+    for (std::size_t b = 0; b < n; ++b) {  // warm-up: page faults, thread start, caches
+        voxmesh::Stats stats;
+        triangles[b] = builds[b](view, options, stats).triangle_count();
+    }
+    for (unsigned r = 0; r < rounds; ++r) {
+        std::vector<double> g(n);
+        for (std::size_t k = 0; k < n; ++k) {
+            const std::size_t b = r % 2 ? n - 1 - k : k;  // forward, then backward
+            voxmesh::Stats stats;
+            const voxmesh::Mesh mesh = builds[b](view, options, stats);
+            classify[b].push_back(stats.times.classify);
+            generate[b].push_back(stats.times.generate);
+            total[b].push_back(stats.times.total);
+            g[b] = stats.times.generate;
+        }
+        for (std::size_t b = 0; b < n; ++b) ratio[b].push_back(g[b] / g[0]);
+    }
+    std::printf("%s %s %zu^3, %u threads, %u rounds; medians in seconds, generate / first build's per round\n",
+                argv[1], argv[2], size, threads, rounds);
+    for (std::size_t b = 0; b < n; ++b)
+        std::printf("%-32s triangles %zu classify %.4f generate %.4f total %.4f generate/first %.3f\n", argv[6 + b],
+                    triangles[b], median(classify[b]), median(generate[b]), median(total[b]), median(ratio[b]));
+    return 0;
+} catch (const std::exception& e) {
+    std::fprintf(stderr, "voxmesh-ab: %s\n", e.what());
+    return 1;
+}
