@@ -246,9 +246,9 @@ std::vector<std::size_t> balanced_split(const std::vector<double>& cost, unsigne
 // k + 1 holds its ids of plane k, which the cells below read next, and a cell reads two rows
 // of lines, not four (-7 % generate on 2 threads, sphere f32 512³; even on u8 and gyroid).
 // Slots of edges that do not cross are never read, so nothing is written here. A cell edge's
-// id is at a fixed offset from its cell's sample slot (`slot(lower, e)`, for plane k in the
-// lower or upper half), plus the base of the row it is in (`row_of(e)`: 0 and 1 for rows y
-// and y + 1 of plane k, 2 and 3 of plane k + 1). In huge pages where large: a cell row reads
+// id is at a fixed offset from its cell's sample slot (`slots(lower)[e]`, for plane k in the
+// lower or upper half), plus the base of the row it is in (`rows_of()[e]`: 0 and 1 for rows
+// y and y + 1 of plane k, 2 and 3 of plane k + 1). In huge pages where large: a cell row reads
 // ids from rows 6 KiB apart at 512², a TLB miss each with 4 KiB pages.
 constexpr std::size_t kMaxNxFor16BitIds = 21845;  // 3 * nx - 1 <= 65535
 
@@ -360,7 +360,7 @@ private:
             const Word* next_z = (up ? *up : plane).row(j);
             Id* id = ids_.row(half, j);
             const std::uint32_t base = bases[j];
-            std::uint32_t next_id = bases[j];
+            std::uint32_t next_id = base;
             const WordSpan span = row_words(rows[j]);
             for (std::size_t q = span.begin; q < span.end; ++q) {
                 const EdgeMasks m = edge_masks(row, next_y, next_z, q, words_, nx_);
@@ -432,12 +432,6 @@ private:
                 }
             }
         }
-    }
-
-    static void prefetch([[maybe_unused]] const void* p) {
-#if defined(__GNUC__)
-        __builtin_prefetch(p);
-#endif
     }
 
     // One x-edge of each row of id lines a cell reads (j and j + 1).

@@ -13,6 +13,15 @@
 
 namespace voxmesh::detail {
 
+// Asks for the cache line holding p ahead of its use (a hint; nothing where unsupported).
+inline void prefetch(const void* p) {
+#if defined(__GNUC__)
+    __builtin_prefetch(p);
+#else
+    (void)p;
+#endif
+}
+
 template <class T>
 class EdgeVertex {
 public:
@@ -82,12 +91,6 @@ public:
     }
 
 private:
-    static void prefetch([[maybe_unused]] const T* p) {
-#if defined(__GNUC__)
-        __builtin_prefetch(p);
-#endif
-    }
-
     static double to_double(std::size_t p) { return static_cast<double>(static_cast<std::int64_t>(p)); }
 
     // 1 <= p and p + 1 <= n - 2: p and its +1 neighbour both have two neighbours along the axis.
