@@ -19,8 +19,9 @@
 // "Inside" is sample >= thr, with thr made by the host exactly as the CPU engine makes it,
 // so every case index is identical. Tables come from the host's single copy
 // (src/core/case_tables.cpp) as __constant buffers:
-//   case_table: 16 bytes per case, triangle count then 15 signed edge numbers;
-//   cell_edge:  4 bytes per edge (dx, dy, dz, axis).
+//   case_table:   16 bytes per case, triangle count then 15 signed edge numbers;
+//   case_corners: 16 bytes per case, triangle count then each corner's edge as
+//                 dx | dy << 1 | dz << 2 | axis << 3 (built from case_table and cell_edge).
 
 #define CAT2(a, b) a##b
 #define CAT(a, b) CAT2(a, b)
@@ -43,18 +44,24 @@ inline uint bits_below(uint q, uint limit) {
 // Index of the lowest set bit of w != 0 (ctz is OpenCL 2.0).
 inline uint lowest_bit(uint w) { return 31u - clz(w & (0u - w)); }
 
-// Inside bits of the 32 samples at s, and in *finite whether they are all finite. The lanes
-// of four 8-sample compares are masked to their bit and or-ed together before one
-// horizontal or (OpenCL has no movemask).
+// Inside bits of the 8 samples of v: each compare lane as one byte 0 or 1 of a ulong, then
+// one multiply moves byte i's bit to bit 56 + i (the partial products never overlap, so
+// nothing carries). OpenCL has no movemask, and the or-reduction of lane masks this
+// replaces stalled on a store-to-vector-load through the stack under PoCL.
+inline uint pack8(const voxel8 v, const voxel thr) {
+    const char8 inside = convert_char8(v >= (voxel8)(thr)) & (char8)(1);
+    return (uint)((as_ulong(inside) * 0x0102040810204080ul) >> 56);
+}
+
+// Inside bits of the 32 samples at s, and in *finite whether they are all finite.
 inline uint pack_word(__global const voxel* s, const voxel thr, int* finite) {
-    const int8 lane = (int8)(1, 2, 4, 8, 16, 32, 64, 128);
-    int8 acc = (int8)(0);
+    uint w = 0;
 #ifndef VOXEL_INTEGER
     int8 ok = (int8)(-1);
 #endif
     for (uint k = 0; k < 4; ++k) {
         const voxel8 v = vload8(k, s);
-        acc |= convert_int8(v >= (voxel8)(thr)) & (lane << (int)(8 * k));
+        w |= pack8(v, thr) << (8 * k);
 #ifndef VOXEL_INTEGER
         ok &= convert_int8(isfinite(v));
 #endif
@@ -62,9 +69,7 @@ inline uint pack_word(__global const voxel* s, const voxel thr, int* finite) {
 #ifndef VOXEL_INTEGER
     if (!all(ok)) *finite = 0;
 #endif
-    const int4 a = acc.lo | acc.hi;
-    const int2 b = a.lo | a.hi;
-    return (uint)(b.x | b.y);
+    return w;
 }
 
 // One work-item per bit row: its nx samples into `words` words.
@@ -114,35 +119,36 @@ inline EdgeMasks edge_masks(__global const uint* row, __global const uint* ny_ro
 inline uint edge_count(EdgeMasks m) { return popcount(m.x) + popcount(m.y) + popcount(m.z); }
 
 // The eight corner masks of word q of the cell row spanned by rows a = (y, z), b = (y+1, z),
-// c = (y, z+1), d = (y+1, z+1), in case-bit order.
+// c = (y, z+1), d = (y+1, z+1), in case-bit order. Named scalars, not an array: PoCL kept
+// an array on the stack and reloaded it as a vector, a store-forwarding stall per word.
 typedef struct {
-    uint k[8];
+    uint k0, k1, k2, k3, k4, k5, k6, k7;
 } CellWord;
 
 inline CellWord cell_word(__global const uint* a, __global const uint* b, __global const uint* c,
                           __global const uint* d, uint q, uint words) {
     CellWord w;
-    w.k[0] = a[q];
-    w.k[1] = next_x(a, q, words);
-    w.k[2] = next_x(b, q, words);
-    w.k[3] = b[q];
-    w.k[4] = c[q];
-    w.k[5] = next_x(c, q, words);
-    w.k[6] = next_x(d, q, words);
-    w.k[7] = d[q];
+    w.k0 = a[q];
+    w.k1 = next_x(a, q, words);
+    w.k2 = next_x(b, q, words);
+    w.k3 = b[q];
+    w.k4 = c[q];
+    w.k5 = next_x(c, q, words);
+    w.k6 = next_x(d, q, words);
+    w.k7 = d[q];
     return w;
 }
 
-inline uint nonuniform(const CellWord* w, uint q, uint nx) {
-    uint diff = 0;
-    for (uint k = 1; k < 8; ++k) diff |= w->k[0] ^ w->k[k];
-    return diff & bits_below(q, nx - 1);
+// Cells whose corners are neither all inside nor all outside.
+inline uint nonuniform(CellWord w, uint q, uint nx) {
+    const uint any = w.k0 | w.k1 | w.k2 | w.k3 | w.k4 | w.k5 | w.k6 | w.k7;
+    const uint all = w.k0 & w.k1 & w.k2 & w.k3 & w.k4 & w.k5 & w.k6 & w.k7;
+    return (any & ~all) & bits_below(q, nx - 1);
 }
 
-inline uint cell_case(const CellWord* w, uint b) {
-    uint c = 0;
-    for (uint k = 0; k < 8; ++k) c |= (w->k[k] >> b & 1u) << k;
-    return c;
+inline uint cell_case(CellWord w, uint b) {
+    return (w.k0 >> b & 1u) | (w.k1 >> b & 1u) << 1 | (w.k2 >> b & 1u) << 2 | (w.k3 >> b & 1u) << 3 |
+           (w.k4 >> b & 1u) << 4 | (w.k5 >> b & 1u) << 5 | (w.k6 >> b & 1u) << 6 | (w.k7 >> b & 1u) << 7;
 }
 
 // Row r's neighbours in +y and +z among the bit rows, or null at the volume's border.
@@ -184,8 +190,8 @@ __kernel void classify_rows(__global const uint* bits, const uint nx, const uint
     if (cells_here && crossed) {
         for (uint q = 0; q < words; ++q) {
             const CellWord w = cell_word(a, b, c, d, q, words);
-            for (uint cells = nonuniform(&w, q, nx); cells; cells &= cells - 1)
-                t += case_table[16 * cell_case(&w, lowest_bit(cells))];
+            for (uint cells = nonuniform(w, q, nx); cells; cells &= cells - 1)
+                t += case_table[16 * cell_case(w, lowest_bit(cells))];
         }
     }
     vcount[r] = v;
@@ -229,7 +235,8 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
             id += edge_count(m);
             continue;
         }
-        for (uint any = m.x | m.y | m.z; any; any &= any - 1) {
+        const uint any_crossed = m.x | m.y | m.z;
+        for (uint any = any_crossed; any; any &= any - 1) {
             const uint b = lowest_bit(any);
             const uint x = 32 * q + b;
             const uint axes = (m.x >> b & 1u) | (m.y >> b & 1u) << 1 | (m.z >> b & 1u) << 2;
@@ -257,12 +264,13 @@ inline uint edge_id(uint base, EdgeMasks m, uint b, uint axis) {
 // One work-item per cell row with triangles. Cell row (y, z) is spanned by sample rows
 // (y + dy, z + dz), indexed k = dy + 2 dz; a triangle corner on the edge from sample
 // x = 32 q + b + dx of row k has the id of its word's first vertex plus the crossed edges
-// before it in that word. Words without a non-uniform cell are skipped.
+// before it in that word. Words without a non-uniform cell are skipped. case_corners: per
+// case the triangle count, then each corner as dx | k << 1 | axis << 3 (the host's
+// case_corner_table).
 __kernel void generate_triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz,
                                  const uint words, const uint begin, const uint cell_rows, const uint rows,
                                  const uint tend, __global const uint* tbase, __global const uint* wbase,
-                                 __constant uchar* case_table, __constant uchar* cell_edge, const int inside_below,
-                                 __global uint* indices) {
+                                 __constant uchar* case_corners, const int inside_below, __global uint* indices) {
     const uint r = (uint)get_global_id(0);
     if (r >= cell_rows || scanned_count(tbase, r, rows, tend) == 0) return;
     uint t = tbase[r];
@@ -272,35 +280,39 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
     __global const uint* row[4];
     __global const uint* ry[4];
     __global const uint* rz[4];
-    __global const uint* word_base[4];
     for (uint k = 0; k < 4; ++k) {
         const uint rk = r + (k & 1u) + (k >> 1) * ny;
         row[k] = bits + rk * words;
         ry[k] = row_y(bits, rk, j + (k & 1u), ny, words);
         rz[k] = row_z(bits, rk, z + (k >> 1), ny, nz, words);
-        word_base[k] = wbase + rk * words;
     }
+    // Word q of row k's first vertex id is wbase[first_word + rk_offset[k] + q].
+    const uint first_word = r * words;
+    const uint rk_offset[4] = {0u, words, ny * words, (ny + 1u) * words};
     __global uint* out = indices + 3 * t;
     for (uint q = 0; q < words; ++q) {
         const CellWord w = cell_word(row[0], row[1], row[2], row[3], q, words);
-        uint cells = nonuniform(&w, q, nx);
+        uint cells = nonuniform(w, q, nx);
         if (!cells) continue;
         EdgeMasks m[4];
         for (uint k = 0; k < 4; ++k) m[k] = edge_masks(row[k], ry[k], rz[k], q, words, nx);
         for (; cells; cells &= cells - 1) {
             const uint b = lowest_bit(cells);
-            const uint c = cell_case(&w, b);
-            const uint n = case_table[16 * c];
+            __constant uchar* corners = case_corners + 16 * cell_case(w, b);
+            const uint n = corners[0];
             for (uint tri = 0; tri < n; ++tri) {
                 uint id[3];
                 for (uint e = 0; e < 3; ++e) {
-                    __constant uchar* ce = cell_edge + 4 * case_table[16 * c + 1 + 3 * tri + e];
-                    const uint k = ce[1] + 2u * ce[2];
-                    if (b + ce[0] < 32) {
-                        id[e] = edge_id(word_base[k][q], m[k], b + ce[0], ce[3]);
+                    const uint code = corners[1 + 3 * tri + e];
+                    const uint k = code >> 1 & 3u;
+                    const uint axis = code >> 3;
+                    const uint x = b + (code & 1u);
+                    __global const uint* word_base = wbase + first_word + rk_offset[k] + q;
+                    if (x < 32) {
+                        id[e] = edge_id(word_base[0], m[k], x, axis);
                     } else {  // the first sample of the next word
                         const EdgeMasks next = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
-                        id[e] = edge_id(word_base[k][q + 1], next, 0, ce[3]);
+                        id[e] = edge_id(word_base[1], next, 0, axis);
                     }
                 }
                 out[0] = id[0];

@@ -4,6 +4,7 @@
 # REV is a git revision or "." for the working tree. Each is built position-independent in
 # $AB_DIR (default /tmp/voxmesh-ab; revisions are git worktrees there: `rm -rf` it, then
 # `git worktree prune`) and wrapped as a shared object; then voxmesh-ab runs.
+# AB_BACKEND=opencl times the OpenCL engine (default: the CPU engine).
 set -euo pipefail
 if [ $# -lt 6 ]; then sed -n 2,6p "$0"; exit 2; fi
 field=$1 type=$2 size=$3 threads=$4 rounds=$5; shift 5

@@ -425,7 +425,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             cl::Buffer indices = output(kIndices, piece.mesh.indices, triangles * 12);
             cl::Kernel& k = d.mc_kernel(job.options, "generate_triangles");
             set_args(k, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin), u(s.cell_rows), u(s.rows),
-                     u(triangles), tbase, word_base, d.case_table, d.cell_edge,
+                     u(triangles), tbase, word_base, d.case_corners,
                      static_cast<cl_int>(options_.inside_below), indices);
             launch(k, s.cell_rows, Pass::Generate);
             fetch(indices, piece.mesh.indices, triangles * 12);

@@ -115,6 +115,21 @@ Device::Device(const cl::Device& dev, DeviceInfo description)
     case_table = constant_buffer(context, kCaseTable, sizeof(kCaseTable));
     cell_edge = constant_buffer(context, kCellEdge, sizeof(kCellEdge));
     pair_to_case = constant_buffer(context, kColumnPairToCase.data(), kColumnPairToCase.size());
+    static const std::array<std::uint8_t, 256 * 16> corners = case_corner_table();
+    case_corners = constant_buffer(context, corners.data(), corners.size());
+}
+
+std::array<std::uint8_t, 256 * 16> case_corner_table() {
+    std::array<std::uint8_t, 256 * 16> table{};
+    for (std::size_t c = 0; c < 256; ++c) {
+        const CaseEntry& entry = kCaseTable[c];
+        table[16 * c] = entry.count;
+        for (std::size_t i = 0; i < 3u * entry.count; ++i) {
+            const CellEdge& e = kCellEdge[entry.edges[i]];
+            table[16 * c + 1 + i] = static_cast<std::uint8_t>(e.dx | e.dy << 1 | e.dz << 2 | e.axis << 3);
+        }
+    }
+    return table;
 }
 
 cl::Program Device::build(const std::string& source, const std::string& options) {

@@ -39,6 +39,11 @@ struct EventLog {
 };
 double event_seconds(const cl::Event& event);
 
+// Per case, 16 bytes: the triangle count, then each triangle corner's edge as one byte
+// dx | dy << 1 | dz << 2 | axis << 3 (kCellEdge of the case table's edge number), so that a
+// kernel finds a corner's sample and axis with one load instead of two dependent ones.
+std::array<std::uint8_t, 256 * 16> case_corner_table();
+
 class Device {
 public:
     Device(const cl::Device& device, DeviceInfo info);
@@ -48,6 +53,7 @@ public:
     cl::Context context;
     cl::CommandQueue queue;
     cl::Buffer case_table, cell_edge, pair_to_case;  // from src/core/case_tables.cpp
+    cl::Buffer case_corners;                          // case_corner_table(), derived from them
     std::mutex mutex;  // whoever uses queue, kernels or buffers holds it
     std::size_t programs_built = 0;  // by build(): programs are cached, so this stops growing
 
