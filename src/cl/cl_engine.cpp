@@ -188,6 +188,7 @@ void Engine::prepare(DeviceJob& job) {
     job.device_type = job.convert ? ScalarType::F32 : volume_.type;
     job.options = std::string("-cl-std=CL1.2 -DVOXEL_T=") + cl_type_name(job.device_type);
     if (is_integer(job.device_type)) job.options += " -DVOXEL_INTEGER";
+    if (job.device->info.type == DeviceType::Cpu) job.options += " -DCPU_PREFETCH";
     if (job.fp64) job.options += " -DUSE_FP64";
     dispatch_scalar(job.device_type, [&](auto tag) {
         using T = decltype(tag);
