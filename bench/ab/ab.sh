@@ -4,9 +4,9 @@
 # REV is a git revision or "." for the working tree. Each is built position-independent in
 # $AB_DIR (default /tmp/voxmesh-ab; revisions are git worktrees there: `rm -rf` it, then
 # `git worktree prune`) and wrapped as a shared object; then voxmesh-ab runs.
-# AB_BACKEND=opencl times the OpenCL engine (default: the CPU engine).
+# AB_BACKEND=opencl times the OpenCL engine, AB_BACKEND=cpu,opencl both (default: cpu).
 set -euo pipefail
-if [ $# -lt 6 ]; then sed -n 2,6p "$0"; exit 2; fi
+if [ $# -lt 6 ]; then sed -n 2,7p "$0"; exit 2; fi
 field=$1 type=$2 size=$3 threads=$4 rounds=$5; shift 5
 repo=$(git -C "$(dirname "$0")" rev-parse --show-toplevel)
 work=${AB_DIR:-/tmp/voxmesh-ab}

@@ -59,10 +59,11 @@ void* symbol(void* library, const char* name, const char* path) {
 }  // namespace
 
 int main(int argc, char** argv) try {
-    if (argc < 8) {
+    if (argc < 7) {
         std::fprintf(stderr,
-                     "usage: voxmesh-ab FIELD TYPE SIZE THREADS ROUNDS LIB.so LIB.so...\n"
-                     "  e.g. voxmesh-ab sphere u8 512 2 30 /tmp/a.so /tmp/b.so\n");
+                     "usage: voxmesh-ab FIELD TYPE SIZE THREADS ROUNDS LIB.so...\n"
+                     "  e.g. voxmesh-ab sphere u8 512 2 30 /tmp/a.so /tmp/b.so\n"
+                     "  AB_BACKEND=cpu (default), opencl or cpu,opencl: the engines each build runs\n");
         return 2;
     }
     const voxmesh::Field field = parse_field(argv[1]);
@@ -72,15 +73,37 @@ int main(int argc, char** argv) try {
     const unsigned rounds = static_cast<unsigned>(std::stoul(argv[5]));
     if (size < 2 || rounds < 1) throw voxmesh::Error("SIZE must be at least 2 and ROUNDS at least 1");
 
-    std::vector<Extract> builds;
+    // AB_BACKEND: the engines every build runs, alternated like the builds (cpu,opencl
+    // compares the two engines in one process; each build gets its own OpenCL context).
+    std::vector<voxmesh::Backend> backends;
+    const char* backend_list = std::getenv("AB_BACKEND");
+    std::string list = backend_list ? backend_list : "cpu";
+    for (std::size_t at = 0; at <= list.size();) {
+        const std::size_t comma = std::min(list.find(',', at), list.size());
+        const std::string name = list.substr(at, comma - at);
+        if (name == "cpu") backends.push_back(voxmesh::Backend::Cpu);
+        else if (name == "opencl") backends.push_back(voxmesh::Backend::OpenCL);
+        else throw voxmesh::Error("AB_BACKEND: unknown engine '" + name + "' (cpu, opencl)");
+        at = comma + 1;
+    }
+
+    struct Entry {
+        Extract extract;
+        voxmesh::Backend backend;
+        std::string label;
+    };
+    std::vector<Entry> builds;
     MakeField make_field = nullptr;
     for (int i = 6; i < argc; ++i) {
         // Local and deep-bound: each build keeps its own copy of every voxmesh symbol.
         void* library = dlopen(argv[i], RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
         if (!library) throw voxmesh::Error(dlerror());
-        builds.push_back(reinterpret_cast<Extract>(symbol(library, kExtract, argv[i])));
+        const auto extract = reinterpret_cast<Extract>(symbol(library, kExtract, argv[i]));
+        for (const voxmesh::Backend backend : backends)
+            builds.push_back({extract, backend, std::string(argv[i]) + " " + (backend == voxmesh::Backend::Cpu ? "cpu" : "opencl")});
         if (!make_field) make_field = reinterpret_cast<MakeField>(symbol(library, kMakeField, argv[i]));
     }
+    if (builds.size() < 2) throw voxmesh::Error("nothing to compare: give two builds or two engines");
     const voxmesh::FieldVolume input = make_field(field, size, type, 1);
     voxmesh::VolumeView view;  // built here: Volume::view() is the library's, not ours
     view.data = input.volume.data;
@@ -89,23 +112,22 @@ int main(int argc, char** argv) try {
     voxmesh::Options options;
     options.iso = input.iso;
     options.threads = threads;
-    // AB_BACKEND=opencl times the OpenCL engine instead (every build gets its own context).
-    const char* backend = std::getenv("AB_BACKEND");
-    options.backend = backend && std::string(backend) == "opencl" ? voxmesh::Backend::OpenCL : voxmesh::Backend::Cpu;
 
     const std::size_t n = builds.size();
     std::vector<std::vector<double>> classify(n), generate(n), total(n), ratio(n), total_ratio(n);
     std::vector<std::size_t> triangles(n);
     for (std::size_t b = 0; b < n; ++b) {  // warm-up: page faults, thread start, caches
         voxmesh::Stats stats;
-        triangles[b] = builds[b](view, options, stats).triangle_count();
+        options.backend = builds[b].backend;
+        triangles[b] = builds[b].extract(view, options, stats).triangle_count();
     }
     for (unsigned r = 0; r < rounds; ++r) {
         std::vector<double> g(n), t(n);
         for (std::size_t k = 0; k < n; ++k) {
             const std::size_t b = r % 2 ? n - 1 - k : k;  // forward, then backward
             voxmesh::Stats stats;
-            const voxmesh::Mesh mesh = builds[b](view, options, stats);
+            options.backend = builds[b].backend;
+            const voxmesh::Mesh mesh = builds[b].extract(view, options, stats);
             classify[b].push_back(stats.times.classify);
             generate[b].push_back(stats.times.generate);
             total[b].push_back(stats.times.total);
@@ -120,8 +142,8 @@ int main(int argc, char** argv) try {
     std::printf("%s %s %zu^3, %u threads, %u rounds; medians in seconds, generate and total / first build's per round\n",
                 argv[1], argv[2], size, threads, rounds);
     for (std::size_t b = 0; b < n; ++b)
-        std::printf("%-32s triangles %zu classify %.4f generate %.4f total %.4f generate/first %.3f total/first %.3f\n",
-                    argv[6 + b], triangles[b], median(classify[b]), median(generate[b]), median(total[b]),
+        std::printf("%-39s triangles %zu classify %.4f generate %.4f total %.4f generate/first %.3f total/first %.3f\n",
+                    builds[b].label.c_str(), triangles[b], median(classify[b]), median(generate[b]), median(total[b]),
                     median(ratio[b]), median(total_ratio[b]));
     return 0;
 } catch (const std::exception& e) {
