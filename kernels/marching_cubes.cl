@@ -216,9 +216,11 @@ inline uint scanned_count(__global const uint* base, uint r, uint rows, uint end
 }
 
 // One work-item per meta row with crossings: the vertex id of the first edge of each of its
-// words into wbase (what the triangles look up), and for owned rows its vertices at ids
-// vbase[r]... (vend: the total after the last meta row, for the last row's span). Rows
-// without crossings leave wbase unwritten: no triangle refers to them.
+// words, counted from the row's first vertex vbase[r], into wbase (what the triangles look
+// up; word_id is ushort where rows have at most 65536 edges, set by the host, else uint),
+// and for owned rows its vertices at ids vbase[r]... (vend: the total after the last meta
+// row, for the last row's span). Rows without crossings leave wbase unwritten: no triangle
+// refers to them.
 __kernel void generate_vertices(__global const voxel* data, __global const uint* bits, const voxel thr, const real iso,
                                 const long iso_int, const float iso_frac, const real ox, const real oy, const real oz,
                                 const real sx, const real sy, const real sz, const real ix, const real iy,
@@ -226,10 +228,11 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
                                 const uint begin, const uint first_sample, const uint owned_rows, const uint rows,
                                 const uint vend, __global const uint* vbase, const int inside_below,
                                 const int want_normals, __global float* positions, __global float* normals,
-                                __global uint* wbase) {
+                                __global word_id* wbase) {
     const uint r = (uint)get_global_id(0);
     if (r >= rows || scanned_count(vbase, r, rows, vend) == 0) return;
-    uint id = vbase[r];
+    const uint row_first = vbase[r];
+    uint id = row_first;
     const uint p = r / ny;
     const uint j = r - p * ny;
     const uint z = begin + p;
@@ -237,11 +240,11 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
     __global const uint* row = bits + r * words;
     __global const uint* ry = row_y(bits, r, j, ny, words);
     __global const uint* rz = row_z(bits, r, z, ny, nz, words);
-    __global uint* word_base = wbase + r * words;
+    __global word_id* word_base = wbase + r * words;
     const int owned = r < owned_rows;  // plane `end`: ids only, its vertices belong to the next chunk
     const uint row_sample = first_sample + r * nx;
     for (uint q = 0; q < words; ++q) {
-        word_base[q] = id;
+        word_base[q] = (word_id)(id - row_first);
         const EdgeMasks m = edge_masks(row, ry, rz, q, words, nx);
         if (!owned) {
             id += edge_count(m);
@@ -287,8 +290,8 @@ inline uint edge_id(uint base, EdgeMasks m, uint b, uint axis) {
 // case_corner_table).
 __kernel void generate_triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz,
                                  const uint words, const uint begin, const uint cell_rows, const uint rows,
-                                 const uint tend, __global const uint* tbase, __global const uint* wbase,
-                                 __constant uchar* case_corners, const int inside_below, __global uint* indices) {
+                                 const uint tend, __global const uint* tbase, __global const uint* vbase,
+                                 __global const word_id* wbase, __constant uchar* case_corners, const int inside_below, __global uint* indices) {
     const uint r = (uint)get_global_id(0);
     if (r >= cell_rows || scanned_count(tbase, r, rows, tend) == 0) return;
     uint t = tbase[r];
@@ -304,9 +307,10 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
         ry[k] = row_y(bits, rk, j + (k & 1u), ny, words);
         rz[k] = row_z(bits, rk, z + (k >> 1), ny, nz, words);
     }
-    // Word q of row k's first vertex id is wbase[first_word + rk_offset[k] + q].
+    // Word q of row k's first vertex id is row_first[k] + wbase[first_word + rk_offset[k] + q].
     const uint first_word = r * words;
     const uint rk_offset[4] = {0u, words, ny * words, (ny + 1u) * words};
+    const uint row_first[4] = {vbase[r], vbase[r + 1], vbase[r + ny], vbase[r + ny + 1]};
     __global uint* out = indices + 3 * t;
     for (uint q = 0; q < words; ++q) {
         const CellWord w = cell_word(row[0], row[1], row[2], row[3], q, words);
@@ -325,12 +329,12 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
                     const uint k = code >> 1 & 3u;
                     const uint axis = code >> 3;
                     const uint x = b + (code & 1u);
-                    __global const uint* word_base = wbase + first_word + rk_offset[k] + q;
+                    __global const word_id* word_base = wbase + first_word + rk_offset[k] + q;
                     if (x < 32) {
-                        id[e] = edge_id(word_base[0], m[k], x, axis);
+                        id[e] = edge_id(row_first[k] + word_base[0], m[k], x, axis);
                     } else {  // the first sample of the next word
                         const EdgeMasks next = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
-                        id[e] = edge_id(word_base[1], next, 0, axis);
+                        id[e] = edge_id(row_first[k] + word_base[1], next, 0, axis);
                     }
                 }
                 out[0] = id[0];

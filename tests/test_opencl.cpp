@@ -274,6 +274,24 @@ TEST_CASE("OpenCL matches the CPU engine on rows around 32-bit word lengths", "[
     }
 }
 
+TEST_CASE("OpenCL matches the CPU engine on rows around the width where 16-bit word bases give way to 32-bit",
+          "[opencl]") {
+    // generate_vertices stores each 32-sample word's first vertex id, counted from its row's
+    // first, in 16 bits while the last word starts at most 65535 edges in (683 words, nx up
+    // to 21856), in 32 bits beyond.
+    if (!have_device()) return;
+    for (std::size_t nx : {21856u, 21857u}) {
+        Grid g{{nx, 2, 2}};
+        INFO("nx " << nx);
+        // A 3-d checkerboard: every edge crosses, so row (0, 0) owns 3 * nx - 1 vertices.
+        std::vector<std::uint8_t> b(g.size());
+        for (std::size_t i = 0; i < b.size(); ++i) b[i] = ((i % nx + i / nx % 2 + i / nx / 2) % 2) ? 9 : 0;
+        Options o;
+        o.iso = 4.5;
+        compare(view_of(b.data(), ScalarType::U8, g), o);
+    }
+}
+
 TEST_CASE("OpenCL matches the CPU engine on all 256 cube cases", "[opencl]") {
     if (!have_device()) return;
     // Each case in a 4x3x3 volume: the cube at (1,1,1)..(2,2,2) set by the case bits, the

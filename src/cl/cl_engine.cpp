@@ -41,6 +41,10 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // Buffer slots of a device.
+// Word bases (a row word's first vertex id, counted from the row's first vertex) fit 16 bits
+// while the last word starts at most 65535 edges in: 3 * 32 * (words - 1) <= 65535.
+constexpr std::size_t kMaxWordsFor16BitBases = 65535 / 96 + 1;  // 683 words, nx <= 21856
+
 enum : unsigned { kData, kBits, kVBase, kTBase, kWordBase, kPositions, kNormals, kIndices, kNan };
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
@@ -97,6 +101,7 @@ struct DeviceJob {
     std::vector<unsigned char> threshold;      // bytes of a device_type value
     std::size_t limit = 0;                     // bytes one chunk may use
     std::size_t local = kLocalSize;            // work-group size of every launch
+    std::size_t word_id_bytes = 4;             // of the per-word vertex id bases (2 or 4)
     DeviceStats stats;
     double pass_seconds[3] = {0, 0, 0};
 };
@@ -189,6 +194,8 @@ void Engine::prepare(DeviceJob& job) {
     job.options = std::string("-cl-std=CL1.2 -DVOXEL_T=") + cl_type_name(job.device_type);
     if (is_integer(job.device_type)) job.options += " -DVOXEL_INTEGER";
     if (job.device->info.type == DeviceType::Cpu) job.options += " -DCPU_PREFETCH";
+    job.word_id_bytes = (nx_ + 31) / 32 <= kMaxWordsFor16BitBases ? 2 : 4;
+    job.options += job.word_id_bytes == 2 ? " -Dword_id=ushort" : " -Dword_id=uint";
     if (job.fp64) job.options += " -DUSE_FP64";
     dispatch_scalar(job.device_type, [&](auto tag) {
         using T = decltype(tag);
@@ -239,7 +246,8 @@ ChunkShape Engine::shape(ZRange range) const {
 // Device bytes of a chunk, outputs excluded: samples, bits, a vertex id per row word, two
 // counts per row (+ the scan's block sums).
 std::size_t Engine::fixed_bytes(const DeviceJob& job, const ChunkShape& s) const {
-    return s.data_samples * scalar_size(job.device_type) + s.bit_words * 4 + s.rows * s.words * 4 + s.rows * 8 +
+    return s.data_samples * scalar_size(job.device_type) + s.bit_words * 4 + s.rows * s.words * job.word_id_bytes +
+           s.rows * 8 +
            s.rows / 128 + 64;
 }
 
@@ -248,7 +256,7 @@ std::size_t Engine::fixed_bytes(const DeviceJob& job, const ChunkShape& s) const
 bool Engine::fits(const DeviceJob& job, const ChunkShape& s) const {
     const std::size_t max_allocation = job.device->info.max_allocation;
     return s.data_samples <= kMaxChunkSamples && s.data_samples * scalar_size(job.device_type) <= max_allocation &&
-           s.bit_words * 4 <= max_allocation && s.rows * s.words * 4 <= max_allocation &&
+           s.bit_words * 4 <= max_allocation && s.rows * s.words * job.word_id_bytes <= max_allocation &&
            2 * fixed_bytes(job, s) <= job.limit;
 }
 
@@ -404,7 +412,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             }
         };
         // Per meta row and word, the id of the word's first vertex: written with the vertices.
-        cl::Buffer& word_base = d.buffer(kWordBase, s.rows * s.words * 4);
+        cl::Buffer& word_base = d.buffer(kWordBase, s.rows * s.words * job.word_id_bytes);
         if (all_vertices > 0) {
             cl::Buffer positions = vertices > 0 ? output(kPositions, piece.mesh.positions, vertices * 12)
                                                 : d.buffer(kPositions, 16);
@@ -426,7 +434,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             cl::Buffer indices = output(kIndices, piece.mesh.indices, triangles * 12);
             cl::Kernel& k = d.mc_kernel(job.options, "generate_triangles");
             set_args(k, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin), u(s.cell_rows), u(s.rows),
-                     u(triangles), tbase, word_base, d.case_corners,
+                     u(triangles), tbase, vbase, word_base, d.case_corners,
                      static_cast<cl_int>(options_.inside_below), indices);
             launch(k, s.cell_rows, Pass::Generate);
             fetch(indices, piece.mesh.indices, triangles * 12);
