@@ -171,13 +171,20 @@ inline __global const uint* row_z(__global const uint* bits, uint r, uint z, uin
     return z + 1 < nz ? bits + (r + ny) * words : 0;
 }
 
-// One work-item per meta row: the vertices it owns and the triangles of the cell row it
-// starts (cell planes below cell_end, y < ny - 1). A cell that is not uniform has a crossed
-// edge among row a's edges and row b's x- and z-edges (they join all 8 corners), so cell
-// rows without one are skipped.
+// A row's word groups: bit g of a 64-bit mask stands for words [g * group, (g + 1) * group),
+// group = ceil(words / 64) (one word per bit up to nx = 2048).
+inline uint word_group(uint words) { return (words + 63u) / 64u; }
+inline uint lowest_bit64(ulong w) { return 63u - (uint)clz(w & (0ul - w)); }
+
+// One work-item per meta row: the vertices it owns, the triangles of the cell row it starts
+// (cell planes below cell_end, y < ny - 1) and which word groups of that cell row hold a
+// non-uniform cell (cell_groups: the words generate_triangles visits; on a sphere a crossed
+// row has two clusters of crossings and uniform words between them). A cell that is not
+// uniform has a crossed edge among row a's edges and row b's x- and z-edges (they join all
+// 8 corners), so cell rows without one are skipped.
 __kernel void classify_rows(__global const uint* bits, const uint nx, const uint ny, const uint nz, const uint words,
                             const uint begin, const uint cell_end, const uint rows, __constant uchar* case_table,
-                            __global uint* vcount, __global uint* tcount) {
+                            __global uint* vcount, __global uint* tcount, __global ulong* cell_groups) {
     const uint r = (uint)get_global_id(0);
     if (r >= rows) return;
     const uint p = r / ny;
@@ -199,15 +206,20 @@ __kernel void classify_rows(__global const uint* bits, const uint nx, const uint
         }
     }
     uint t = 0;
+    ulong groups = 0;
     if (cells_here && crossed) {
+        const uint group = word_group(words);
         for (uint q = 0; q < words; ++q) {
             const CellWord w = cell_word(a, b, c, d, q, words);
-            for (uint cells = nonuniform(w, q, nx); cells; cells &= cells - 1)
-                t += case_table[16 * cell_case(w, lowest_bit(cells))];
+            const uint cells = nonuniform(w, q, nx);
+            groups |= (ulong)(cells != 0u) << (q / group);
+            for (uint left = cells; left; left &= left - 1)
+                t += case_table[16 * cell_case(w, lowest_bit(left))];
         }
     }
     vcount[r] = v;
     tcount[r] = t;
+    cell_groups[r] = groups;
 }
 
 // Row r's count from an exclusive scan `base` over `rows` rows whose total is `end`.
@@ -285,13 +297,15 @@ inline uint edge_id(uint base, EdgeMasks m, uint b, uint axis) {
 // One work-item per cell row with triangles. Cell row (y, z) is spanned by sample rows
 // (y + dy, z + dz), indexed k = dy + 2 dz; a triangle corner on the edge from sample
 // x = 32 q + b + dx of row k has the id of its word's first vertex plus the crossed edges
-// before it in that word. Words without a non-uniform cell are skipped. case_corners: per
+// before it in that word. Only the word groups classify_rows marked are visited, and words
+// without a non-uniform cell there are skipped. case_corners: per
 // case the triangle count, then each corner as dx | k << 1 | axis << 3 (the host's
 // case_corner_table).
 __kernel void generate_triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz,
                                  const uint words, const uint begin, const uint cell_rows, const uint rows,
                                  const uint tend, __global const uint* tbase, __global const uint* vbase,
-                                 __global const word_id* wbase, __constant uchar* case_corners, const int inside_below, __global uint* indices) {
+                                 __global const word_id* wbase, __global const ulong* cell_groups,
+                                 __constant uchar* case_corners, const int inside_below, __global uint* indices) {
     const uint r = (uint)get_global_id(0);
     if (r >= cell_rows || scanned_count(tbase, r, rows, tend) == 0) return;
     uint t = tbase[r];
@@ -312,35 +326,40 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
     const uint rk_offset[4] = {0u, words, ny * words, (ny + 1u) * words};
     const uint row_first[4] = {vbase[r], vbase[r + 1], vbase[r + ny], vbase[r + ny + 1]};
     __global uint* out = indices + 3 * t;
-    for (uint q = 0; q < words; ++q) {
-        const CellWord w = cell_word(row[0], row[1], row[2], row[3], q, words);
-        uint cells = nonuniform(w, q, nx);
-        if (!cells) continue;
-        EdgeMasks m[4];
-        for (uint k = 0; k < 4; ++k) m[k] = edge_masks(row[k], ry[k], rz[k], q, words, nx);
-        for (; cells; cells &= cells - 1) {
-            const uint b = lowest_bit(cells);
-            __constant uchar* corners = case_corners + 16 * cell_case(w, b);
-            const uint n = corners[0];
-            for (uint tri = 0; tri < n; ++tri) {
-                uint id[3];
-                for (uint e = 0; e < 3; ++e) {
-                    const uint code = corners[1 + 3 * tri + e];
-                    const uint k = code >> 1 & 3u;
-                    const uint axis = code >> 3;
-                    const uint x = b + (code & 1u);
-                    __global const word_id* word_base = wbase + first_word + rk_offset[k] + q;
-                    if (x < 32) {
-                        id[e] = edge_id(row_first[k] + word_base[0], m[k], x, axis);
-                    } else {  // the first sample of the next word
-                        const EdgeMasks next = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
-                        id[e] = edge_id(row_first[k] + word_base[1], next, 0, axis);
+    const uint group = word_group(words);
+    for (ulong g = cell_groups[r]; g; g &= g - 1) {
+        const uint first = lowest_bit64(g) * group;
+        const uint last = min(first + group, words);
+        for (uint q = first; q < last; ++q) {
+            const CellWord w = cell_word(row[0], row[1], row[2], row[3], q, words);
+            uint cells = nonuniform(w, q, nx);
+            if (!cells) continue;
+            EdgeMasks m[4];
+            for (uint k = 0; k < 4; ++k) m[k] = edge_masks(row[k], ry[k], rz[k], q, words, nx);
+            for (; cells; cells &= cells - 1) {
+                const uint b = lowest_bit(cells);
+                __constant uchar* corners = case_corners + 16 * cell_case(w, b);
+                const uint n = corners[0];
+                for (uint tri = 0; tri < n; ++tri) {
+                    uint id[3];
+                    for (uint e = 0; e < 3; ++e) {
+                        const uint code = corners[1 + 3 * tri + e];
+                        const uint k = code >> 1 & 3u;
+                        const uint axis = code >> 3;
+                        const uint x = b + (code & 1u);
+                        __global const word_id* word_base = wbase + first_word + rk_offset[k] + q;
+                        if (x < 32) {
+                            id[e] = edge_id(row_first[k] + word_base[0], m[k], x, axis);
+                        } else {  // the first sample of the next word
+                            const EdgeMasks next = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
+                            id[e] = edge_id(row_first[k] + word_base[1], next, 0, axis);
+                        }
                     }
+                    out[0] = id[0];
+                    out[1] = inside_below ? id[2] : id[1];
+                    out[2] = inside_below ? id[1] : id[2];
+                    out += 3;
                 }
-                out[0] = id[0];
-                out[1] = inside_below ? id[2] : id[1];
-                out[2] = inside_below ? id[1] : id[2];
-                out += 3;
             }
         }
     }

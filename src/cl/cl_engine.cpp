@@ -45,7 +45,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // while the last word starts at most 65535 edges in: 3 * 32 * (words - 1) <= 65535.
 constexpr std::size_t kMaxWordsFor16BitBases = 65535 / 96 + 1;  // 683 words, nx <= 21856
 
-enum : unsigned { kData, kBits, kVBase, kTBase, kWordBase, kPositions, kNormals, kIndices, kNan };
+enum : unsigned { kData, kBits, kVBase, kTBase, kCellGroups, kWordBase, kPositions, kNormals, kIndices, kNan };
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
 std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
@@ -244,11 +244,10 @@ ChunkShape Engine::shape(ZRange range) const {
 }
 
 // Device bytes of a chunk, outputs excluded: samples, bits, a vertex id per row word, two
-// counts per row (+ the scan's block sums).
+// counts and a word-group mask per row (+ the scan's block sums).
 std::size_t Engine::fixed_bytes(const DeviceJob& job, const ChunkShape& s) const {
     return s.data_samples * scalar_size(job.device_type) + s.bit_words * 4 + s.rows * s.words * job.word_id_bytes +
-           s.rows * 8 +
-           s.rows / 128 + 64;
+           s.rows * 16 + s.rows / 128 + 64;
 }
 
 // Whether a chunk can fit the device before its outputs are known: the fixed part must
@@ -358,6 +357,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
         cl::Buffer& bits = d.buffer(kBits, s.bit_words * 4);
         cl::Buffer& vbase = d.buffer(kVBase, s.rows * 4);  // per row: counts, then their prefix sums
         cl::Buffer& tbase = d.buffer(kTBase, s.rows * 4);
+        cl::Buffer& cell_groups = d.buffer(kCellGroups, s.rows * 8);  // per cell row: word groups to visit
         cl::Buffer& nan = d.buffer(kNan, sizeof(cl_int));
         const cl_int no_nan = INT_MAX;
         d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
@@ -369,7 +369,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
 
         cl::Kernel& count = d.mc_kernel(job.options, "classify_rows");
         set_args(count, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin), u(s.cell_end), u(s.rows),
-                 d.case_table, vbase, tbase);
+                 d.case_table, vbase, tbase, cell_groups);
         launch(count, s.rows, Pass::Classify);
 
         const std::uint64_t all_vertices = scan(d, vbase, s.rows, log);
@@ -434,7 +434,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             cl::Buffer indices = output(kIndices, piece.mesh.indices, triangles * 12);
             cl::Kernel& k = d.mc_kernel(job.options, "generate_triangles");
             set_args(k, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin), u(s.cell_rows), u(s.rows),
-                     u(triangles), tbase, vbase, word_base, d.case_corners,
+                     u(triangles), tbase, vbase, word_base, cell_groups, d.case_corners,
                      static_cast<cl_int>(options_.inside_below), indices);
             launch(k, s.cell_rows, Pass::Generate);
             fetch(indices, piece.mesh.indices, triangles * 12);
