@@ -1,5 +1,5 @@
 // What every marching-cubes kernel shares: the sample and arithmetic types, and the vertex
-// of a crossed edge, computed with the formula of src/core/edge_vertex.hpp. The host puts
+// of a sample's crossed edges, computed with the formula of src/core/edge_vertex.hpp. The host puts
 // this file in front of marching_cubes.cl and sculpt_blocks.cl when it builds them.
 //
 // Build options chosen by the host:
@@ -41,60 +41,77 @@ inline real axis_diff(__global const voxel* data, uint idx, uint pos, uint n, ui
     return DIFF(hi, lo) * step * inv;
 }
 
-// The vertex of the edge from global sample (x, y, z), at data index idx, along `axis`:
-// position into position[0..2] and, when want_normals, the normal into normal[0..2].
-// stride_y / stride_z: the data's strides; nx, ny, nz: the whole volume's dimensions.
-inline void edge_vertex(__global const voxel* data, const uint idx, const uint x, const uint y, const uint z,
-                        const uint axis, const uint stride_y, const uint stride_z, const uint nx, const uint ny,
-                        const uint nz, const voxel thr, const real iso, const long iso_int, const float iso_frac,
-                        const real ox, const real oy, const real oz, const real sx, const real sy, const real sz,
-                        const real ix, const real iy, const real iz, const int inside_below,
-                        const int want_normals, __global float* position, __global float* normal) {
-    const uint stride = axis == 0 ? 1u : axis == 1 ? stride_y : stride_z;
-    const uint idx1 = idx + stride;
-    const voxel v0 = data[idx];
-    const voxel v1 = data[idx1];
-    const real t = ISO_MINUS(v0) / DIFF(v1, v0);
-    position[0] = (float)(ox + ((real)x + (axis == 0 ? t : (real)0)) * sx);
-    position[1] = (float)(oy + ((real)y + (axis == 1 ? t : (real)0)) * sy);
-    position[2] = (float)(oz + ((real)z + (axis == 2 ? t : (real)0)) * sz);
-    if (!want_normals) return;
+// Central differences at data index idx away from the border, divided by spacing.
+inline void central_gradient(__global const voxel* data, uint idx, uint stride_y, uint stride_z, real ix, real iy,
+                             real iz, real* g) {
+    g[0] = DIFF(data[idx + 1], data[idx - 1]) * (real)0.5 * ix;
+    g[1] = DIFF(data[idx + stride_y], data[idx - stride_y]) * (real)0.5 * iy;
+    g[2] = DIFF(data[idx + stride_z], data[idx - stride_z]) * (real)0.5 * iz;
+}
 
-    const uint x1 = x + (axis == 0), y1 = y + (axis == 1), z1 = z + (axis == 2);
-    real g0x, g0y, g0z, g1x, g1y, g1z;
-    // Most vertices lie away from the border: there both gradients are plain central
-    // differences, taken without the per-axis border tests (the same arithmetic).
-    if (x - 1 < nx - 2 && y - 1 < ny - 2 && z - 1 < nz - 2 && x1 + 1 < nx && y1 + 1 < ny && z1 + 1 < nz) {
-        g0x = DIFF(data[idx + 1], data[idx - 1]) * (real)0.5 * ix;
-        g1x = DIFF(data[idx1 + 1], data[idx1 - 1]) * (real)0.5 * ix;
-        g0y = DIFF(data[idx + stride_y], data[idx - stride_y]) * (real)0.5 * iy;
-        g1y = DIFF(data[idx1 + stride_y], data[idx1 - stride_y]) * (real)0.5 * iy;
-        g0z = DIFF(data[idx + stride_z], data[idx - stride_z]) * (real)0.5 * iz;
-        g1z = DIFF(data[idx1 + stride_z], data[idx1 - stride_z]) * (real)0.5 * iz;
-    } else {
-        g0x = axis_diff(data, idx, x, nx, 1, ix);
-        g1x = axis_diff(data, idx1, x1, nx, 1, ix);
-        g0y = axis_diff(data, idx, y, ny, stride_y, iy);
-        g1y = axis_diff(data, idx1, y1, ny, stride_y, iy);
-        g0z = axis_diff(data, idx, z, nz, stride_z, iz);
-        g1z = axis_diff(data, idx1, z1, nz, stride_z, iz);
+// The same, one-sided where (x, y, z) lies on the volume's border.
+inline void border_gradient(__global const voxel* data, uint idx, uint x, uint y, uint z, uint stride_y,
+                            uint stride_z, uint nx, uint ny, uint nz, real ix, real iy, real iz, real* g) {
+    g[0] = axis_diff(data, idx, x, nx, 1, ix);
+    g[1] = axis_diff(data, idx, y, ny, stride_y, iy);
+    g[2] = axis_diff(data, idx, z, nz, stride_z, iz);
+}
+
+// The vertices of the crossed edges global sample (x, y, z), at data index idx, owns: bit a
+// of `axes` for the edge along axis a, written in axis order to position[0..] and, when
+// want_normals, normal[0..]. The sample's value and gradient are read once for all its
+// edges (as the CPU engine does; the arithmetic per edge is the same either way).
+// stride_y / stride_z: the data's strides; nx, ny, nz: the whole volume's dimensions.
+inline void sample_vertices(__global const voxel* data, const uint idx, const uint x, const uint y, const uint z,
+                            const uint axes, const uint stride_y, const uint stride_z, const uint nx, const uint ny,
+                            const uint nz, const voxel thr, const real iso, const long iso_int, const float iso_frac,
+                            const real ox, const real oy, const real oz, const real sx, const real sy, const real sz,
+                            const real ix, const real iy, const real iz, const int inside_below,
+                            const int want_normals, __global float* position, __global float* normal) {
+    const voxel v0 = data[idx];
+    // Both ends of every edge at least one sample in: plain central differences, without the
+    // per-axis border tests.
+    const int interior = x >= 1 && x + 3 <= nx && y >= 1 && y + 3 <= ny && z >= 1 && z + 3 <= nz;
+    real g0[3] = {0, 0, 0};
+    if (want_normals) {
+        if (interior) central_gradient(data, idx, stride_y, stride_z, ix, iy, iz, g0);
+        else border_gradient(data, idx, x, y, z, stride_y, stride_z, nx, ny, nz, ix, iy, iz, g0);
     }
-    // Outward is toward decreasing values: the negated gradient (flipped for inside_below).
-    const real sign = inside_below ? (real)1 : (real)-1;
-    const real n0 = sign * (g0x + t * (g1x - g0x));
-    const real n1 = sign * (g0y + t * (g1y - g0y));
-    const real n2 = sign * (g0z + t * (g1z - g0z));
-    const real len2 = n0 * n0 + n1 * n1 + n2 * n2;
-    if (len2 > 0 && isfinite(len2)) {
-        const real inv = (real)1 / sqrt(len2);
-        normal[0] = (float)(n0 * inv);
-        normal[1] = (float)(n1 * inv);
-        normal[2] = (float)(n2 * inv);
-    } else {
-        // Flat gradient: along the edge, from its inside end to its outside end.
-        const float s = ((v0 >= thr) != (inside_below != 0)) ? 1.f : -1.f;
-        normal[0] = axis == 0 ? s : 0.f;
-        normal[1] = axis == 1 ? s : 0.f;
-        normal[2] = axis == 2 ? s : 0.f;
+    const real sign = inside_below ? (real)1 : (real)-1;  // outward: toward decreasing values
+    for (uint axis = 0; axis < 3; ++axis) {
+        if (!(axes >> axis & 1u)) continue;
+        const uint stride = axis == 0 ? 1u : axis == 1 ? stride_y : stride_z;
+        const uint idx1 = idx + stride;
+        const voxel v1 = data[idx1];
+        const real t = ISO_MINUS(v0) / DIFF(v1, v0);
+        position[0] = (float)(ox + ((real)x + (axis == 0 ? t : (real)0)) * sx);
+        position[1] = (float)(oy + ((real)y + (axis == 1 ? t : (real)0)) * sy);
+        position[2] = (float)(oz + ((real)z + (axis == 2 ? t : (real)0)) * sz);
+        position += 3;
+        if (!want_normals) continue;
+        real g1[3];
+        if (interior) {
+            central_gradient(data, idx1, stride_y, stride_z, ix, iy, iz, g1);
+        } else {
+            border_gradient(data, idx1, x + (axis == 0), y + (axis == 1), z + (axis == 2), stride_y, stride_z, nx, ny,
+                            nz, ix, iy, iz, g1);
+        }
+        const real n0 = sign * (g0[0] + t * (g1[0] - g0[0]));
+        const real n1 = sign * (g0[1] + t * (g1[1] - g0[1]));
+        const real n2 = sign * (g0[2] + t * (g1[2] - g0[2]));
+        const real len2 = n0 * n0 + n1 * n1 + n2 * n2;
+        if (len2 > 0 && isfinite(len2)) {
+            const real inv = (real)1 / sqrt(len2);
+            normal[0] = (float)(n0 * inv);
+            normal[1] = (float)(n1 * inv);
+            normal[2] = (float)(n2 * inv);
+        } else {
+            // Flat gradient: along the edge, from its inside end to its outside end.
+            const float s = ((v0 >= thr) != (inside_below != 0)) ? 1.f : -1.f;
+            normal[0] = axis == 0 ? s : 0.f;
+            normal[1] = axis == 1 ? s : 0.f;
+            normal[2] = axis == 2 ? s : 0.f;
+        }
+        normal += 3;
     }
 }

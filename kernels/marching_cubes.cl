@@ -273,13 +273,10 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
             const uint b = lowest_bit(any);
             const uint x = 32 * q + b;
             const uint axes = (m.x >> b & 1u) | (m.y >> b & 1u) << 1 | (m.z >> b & 1u) << 2;
-            for (uint axis = 0; axis < 3; ++axis) {
-                if (!(axes >> axis & 1u)) continue;
-                edge_vertex(data, row_sample + x, x, j, z, axis, nx, plane, nx, ny, nz, thr, iso, iso_int, iso_frac,
-                            ox, oy, oz, sx, sy, sz, ix, iy, iz, inside_below, want_normals, positions + 3 * id,
+            sample_vertices(data, row_sample + x, x, j, z, axes, nx, plane, nx, ny, nz, thr, iso, iso_int, iso_frac, ox,
+                            oy, oz, sx, sy, sz, ix, iy, iz, inside_below, want_normals, positions + 3 * id,
                             normals + 3 * id);
-                ++id;
-            }
+            id += popcount(axes);
         }
     }
 }

@@ -127,12 +127,10 @@ __kernel void block_vertices(__global const voxel* data, __global const uint* me
         if (code == 0) continue;
         const uint gx = k.c0x + x;
         const uint idx = staged(&k, x, y, z);
-        for (uint axis = 0; axis < 3; ++axis) {
-            if (!(code >> axis & 1)) continue;
-            edge_vertex(data, idx, gx, gy, gz, axis, k.sx, k.splane, nx, ny, nz, thr, iso, iso_int, iso_frac, ox, oy,
-                        oz, sx, sy, sz, ix, iy, iz, inside_below, want_normals, positions + 3 * v, normals + 3 * v);
-            ++v;
-        }
+        const uint axes = code & 7u;
+        sample_vertices(data, idx, gx, gy, gz, axes, k.sx, k.splane, nx, ny, nz, thr, iso, iso_int, iso_frac, ox, oy, oz,
+                        sx, sy, sz, ix, iy, iz, inside_below, want_normals, positions + 3 * v, normals + 3 * v);
+        v += popcount(axes);
     }
 }
 
