@@ -41,6 +41,7 @@ struct Result {
     std::string backend, backend_ran, device;
     unsigned threads = 0;
     bool normals = true;
+    bool reuse_mesh = false;
     int repeat = 0, warmup = 0;
     std::string status = "ok";  // "ok", "unavailable", "error"
     std::string error;
@@ -73,6 +74,7 @@ struct Settings {
     int repeat = 3, warmup = 1;
     bool normals = true;
     bool quiet = false;
+    bool reuse_mesh = false;  // extract_into() one Mesh kept across runs, instead of extract()
 };
 
 // ---- measure.cpp ----

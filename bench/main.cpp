@@ -102,6 +102,8 @@ int main(int argc, char** argv) {
     app.add_option("--warmup", settings.warmup, "untimed runs first")->check(CLI::Range(0, 100));
     app.add_option("--seed", seed, "seed of the blobs and ct fields");
     app.add_flag("--no-normals", no_normals, "mesh without normals (default: normals on)");
+    app.add_flag("--reuse-mesh", settings.reuse_mesh,
+                 "mesh every run into one kept Mesh with extract_into() (no fresh output pages), not extract()");
     app.add_flag("--paper", paper, "the paper's Table 1 grid: sizes 64..512 x threads 1,2,4,6,16 on the CPU");
     app.add_flag("--sculpt", sculpt,
                  "sculpting: a built-in stroke path over a sphere, update latency p50/p95/p99 beside a full re-mesh "

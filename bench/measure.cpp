@@ -148,6 +148,7 @@ Result measure(const Input& input, const Combo& combo, const Settings& settings)
     r.device = combo.device;
     r.threads = combo.threads;
     r.normals = settings.normals;
+    r.reuse_mesh = settings.reuse_mesh;
     r.repeat = settings.repeat;
     r.warmup = settings.warmup;
     r.volume_mb = double(input.volume.byte_size()) / (1024.0 * 1024.0);
@@ -184,10 +185,18 @@ Result measure(const Input& input, const Combo& combo, const Settings& settings)
             if (std::find(r.warnings.begin(), r.warnings.end(), w) == r.warnings.end()) r.warnings.push_back(w);
     };
 
+    // --reuse-mesh: every run meshes into this one Mesh (extract_into), as a sculpting loop
+    // would; otherwise each run gets a new Mesh from extract(), freed after the timed call.
+    voxmesh::Mesh kept;
+    const auto run = [&](voxmesh::Stats& stats) {
+        if (!settings.reuse_mesh) return voxmesh::extract(view, options, stats);
+        voxmesh::extract_into(view, options, kept, stats);
+        return voxmesh::Mesh{};
+    };
     try {
         for (int i = 0; i < settings.warmup && !g_interrupted; ++i) {
             voxmesh::Stats stats;
-            voxmesh::Mesh m = voxmesh::extract(view, options, stats);
+            voxmesh::Mesh m = run(stats);
             r.backend_ran = voxmesh::backend_name(stats.backend);
         }
         for (int i = 0; i < std::max(1, settings.repeat) && !g_interrupted; ++i) {
@@ -195,8 +204,9 @@ Result measure(const Input& input, const Combo& combo, const Settings& settings)
             const double rss_before = status_mb("VmRSS");
             voxmesh::Stats stats;
             const double t0 = now_s();
-            voxmesh::Mesh m = voxmesh::extract(view, options, stats);
+            voxmesh::Mesh fresh = run(stats);
             const double t1 = now_s();
+            const voxmesh::Mesh& m = settings.reuse_mesh ? kept : fresh;
             const double hwm = status_mb("VmHWM");
             r.times.push_back(t1 - t0);
             record_stats(stats);

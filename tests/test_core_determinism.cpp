@@ -147,3 +147,38 @@ TEST_CASE("identical meshes for every scalar type holding the same integer field
         }
     }
 }
+
+TEST_CASE("extract_into gives extract()'s mesh in a reused mesh's storage", "[core]") {
+    const Dims dims{33, 29, 31};
+    const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));
+    const voxmesh::VolumeView view = vmtest::view_of(values, dims);
+    // Storage dirtier and larger than any result: stale values must all be overwritten.
+    voxmesh::Mesh mesh;
+    mesh.positions.assign(200000, -7.f);
+    mesh.normals.assign(200000, 3.f);
+    mesh.indices.assign(300000, 0xdeadbeefu);
+    const float* storage = mesh.positions.data();
+    voxmesh::Stats stats;
+    for (double iso : {0.15, -0.2, 0.15}) {
+        for (bool normals : {true, false, true}) {
+            for (unsigned threads : {1u, 2u}) {
+                INFO("iso " << iso << " normals " << normals << " threads " << threads);
+                voxmesh::Options o = cpu_options(iso, threads);
+                o.normals = normals;
+                voxmesh::extract_into(view, o, mesh, stats);
+                REQUIRE(mesh.triangle_count() > 1000);
+                require_identical(voxmesh::extract(view, o), mesh);
+                CHECK(mesh.positions.data() == storage);  // reused, not reallocated
+                CHECK(stats.backend == voxmesh::Backend::Cpu);
+            }
+        }
+    }
+    // A volume the engine refuses leaves the mesh empty, not stale.
+    std::vector<float> bad = values;
+    bad[dims[0] * 3 + 5] = std::nanf("");
+    CHECK_THROWS_AS(voxmesh::extract_into(vmtest::view_of(bad, dims), cpu_options(0.15, 2), mesh, stats),
+                    voxmesh::Error);
+    CHECK(mesh.positions.empty());
+    CHECK(mesh.normals.empty());
+    CHECK(mesh.indices.empty());
+}

@@ -562,3 +562,31 @@ TEST_CASE("A 256^3 volume meshes identically through OpenCL, Hybrid and CPU", "[
                    << cl_stats.times.total << " s (kernels " << cl_stats.devices[0].kernel_s << " s, transfers "
                    << cl_stats.devices[0].transfer_s << " s), hybrid " << hybrid_stats.times.total << " s");
 }
+
+TEST_CASE("OpenCL extract_into gives extract()'s mesh in a reused mesh's storage", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{41, 37, 33}};
+    std::vector<float> v(g.size());
+    std::mt19937 rng(31);
+    std::uniform_real_distribution<float> u(-1, 1);
+    for (auto& x : v) x = u(rng);
+    const VolumeView view = view_of(v.data(), ScalarType::F32, g);
+    Mesh mesh;
+    mesh.positions.assign(900000, -7.f);
+    mesh.normals.assign(900000, 3.f);
+    mesh.indices.assign(1200000, 0xdeadbeefu);
+    for (std::size_t chunk_planes : {0u, 5u}) {  // one chunk (written in place), several (assembled)
+        for (bool normals : {true, false}) {
+            INFO("chunk_planes " << chunk_planes << " normals " << normals);
+            Options o;
+            o.backend = Backend::OpenCL;
+            o.chunk_planes = chunk_planes;
+            o.normals = normals;
+            Stats stats;
+            extract_into(view, o, mesh, stats);
+            CHECK(stats.backend == Backend::OpenCL);
+            REQUIRE(mesh.triangle_count() > 10000);
+            require_same(run(view, o, Backend::Cpu), mesh, view);
+        }
+    }
+}

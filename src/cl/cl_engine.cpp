@@ -108,8 +108,8 @@ struct DeviceJob {
 
 class Engine {
 public:
-    Engine(const VolumeView& volume, const Options& options, bool hybrid)
-        : volume_(volume), options_(options), hybrid_(hybrid) {
+    Engine(const VolumeView& volume, const Options& options, bool hybrid, Mesh storage)
+        : volume_(volume), options_(options), hybrid_(hybrid), storage_(std::move(storage)) {
         nx_ = volume.dims[0];
         ny_ = volume.dims[1];
         nz_ = volume.dims[2];
@@ -138,10 +138,13 @@ private:
     Mesh assemble(std::vector<std::vector<Piece>>& results);
     void warn(const std::string& message);
     bool next_chunk(std::size_t& index);
+    Mesh take_storage();
 
     const VolumeView& volume_;
     const Options& options_;
     bool hybrid_;
+    Mesh storage_;  // the caller's arrays to reuse: for the one piece of a single chunk, or the assembled mesh
+    std::atomic<bool> storage_taken_{false};
     std::size_t nx_, ny_, nz_, plane_;
     unsigned threads_;
 
@@ -154,6 +157,12 @@ private:
     DeviceStats cpu_stats_, fallback_stats_;
     double cpu_pass_seconds_[3] = {0, 0, 0};
 };
+
+// The caller's storage for the first taker; an empty mesh after that.
+Mesh Engine::take_storage() {
+    if (storage_taken_.exchange(true)) return Mesh{};
+    return std::move(storage_);
+}
 
 void Engine::warn(const std::string& message) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -294,6 +303,7 @@ Piece Engine::run_on_cpu(ZRange range, unsigned threads) {
     piece.range = range;
     CpuChunkPlan plan = cpu_classify(volume_, options_, range, threads);
     piece.vertices = plan.vertices;
+    if (chunks_.size() == 1) piece.mesh = take_storage();
     allocate_output(piece.mesh, plan.vertices, plan.triangles, options_.normals, threads);
     cpu_generate(plan, volume_, options_, threads,
                  MeshOut{piece.mesh.positions.data(), options_.normals ? piece.mesh.normals.data() : nullptr,
@@ -396,6 +406,7 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             if (s.planes > 1) throw TooBig{};
         }
         piece.vertices = vertices;
+        if (chunks_.size() == 1) piece.mesh = take_storage();
         allocate_output(piece.mesh, vertices, triangles, options_.normals, threads_);
         // Where the device shares host memory, the kernels write the mesh where it will stay.
         const auto output = [&](unsigned slot, auto& host, std::size_t bytes) -> cl::Buffer {
@@ -537,7 +548,7 @@ Mesh Engine::assemble(std::vector<std::vector<Piece>>& results) {
     if (vertices > std::numeric_limits<std::uint32_t>::max())
         throw Error("the mesh would have more than 2^32-1 vertices; 32-bit indices cannot address it "
                     "(mesh a sub-volume or a coarser volume)");
-    Mesh mesh;
+    Mesh mesh = take_storage();
     allocate_output(mesh, vertices, triangles, options_.normals, threads_);
     const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(threads_, std::max<std::size_t>(pieces.size(), 1)));
     run_workers(workers, [&](unsigned w) {
@@ -579,13 +590,13 @@ Mesh Engine::run(Stats& stats) {
         if (!hybrid_) throw Error(why + "; use Backend::Cpu, Backend::Auto or check the OpenCL installation (clinfo)");
         warn(why + "; the hybrid backend runs the CPU engine alone");
         report();
-        return cpu_extract(volume_, options_, stats);
+        return cpu_extract(volume_, options_, stats, take_storage());
     }
     // A threshold no sample can cross: nothing to mesh; the CPU engine only checks the samples.
     const bool uniform = dispatch_scalar(volume_.type, [&](auto tag) {
         return make_threshold<decltype(tag)>(options_.iso).uniform != Uniform::Mixed;
     });
-    if (uniform) return cpu_extract(volume_, options_, stats);
+    if (uniform) return cpu_extract(volume_, options_, stats, take_storage());
 
     std::vector<DeviceJob> jobs(chosen.size());
     for (std::size_t i = 0; i < chosen.size(); ++i) {
@@ -625,9 +636,9 @@ Mesh Engine::run(Stats& stats) {
 
 }  // namespace
 
-Mesh opencl_extract(const VolumeView& volume, const Options& options, Stats& stats, bool hybrid) {
+Mesh opencl_extract(const VolumeView& volume, const Options& options, Stats& stats, bool hybrid, Mesh storage) {
     validate_volume(volume);
-    Engine engine(volume, options, hybrid);
+    Engine engine(volume, options, hybrid, std::move(storage));
     try {
         return engine.run(stats);
     } catch (const cl::Error& e) {

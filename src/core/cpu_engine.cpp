@@ -483,6 +483,7 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
     std::vector<Job> jobs{{12 * triangles, [&] { fill(mesh.indices, 3 * triangles); }},
                           {12 * vertices, [&] { fill(mesh.positions, 3 * vertices); }}};
     if (normals) jobs.push_back({12 * vertices, [&] { fill(mesh.normals, 3 * vertices); }});
+    else mesh.normals.clear();  // a reused mesh may have had normals
     std::size_t total = 0;
     for (const Job& job : jobs) total += job.bytes;
     constexpr std::size_t kWorthThreads = std::size_t{8} << 20;
@@ -604,7 +605,7 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
     });
 }
 
-Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats) {
+Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage) {
     const auto t0 = Clock::now();
     validate_volume(volume);
     const unsigned threads = resolve_threads(options.threads);
@@ -617,7 +618,7 @@ Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats)
 
     // Output allocation counts toward generate: it is the first write of the output.
     const auto t = Clock::now();
-    Mesh mesh;
+    Mesh mesh = std::move(storage);
     allocate_output(mesh, plan.vertices, plan.triangles, options.normals, threads);
 
     cpu_generate(plan, volume, options, threads,

@@ -72,7 +72,8 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
 void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads);
 
 // Whole-volume extraction written straight into the mesh (no merge copy).
-Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats);
+// `storage`: a mesh whose arrays' capacity the result reuses (extract_into).
+Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage = {});
 
 // Throws Error unless every dimension is >= 2, data is set and the size is addressable.
 void validate_volume(const VolumeView& volume);

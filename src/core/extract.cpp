@@ -4,6 +4,7 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
+#include <utility>
 
 namespace voxmesh {
 
@@ -14,33 +15,29 @@ void warn(const Options& options, Stats& stats, const std::string& message) {
 }
 
 bool is_discrete(const DeviceInfo& d) { return d.type == DeviceType::Gpu || d.type == DeviceType::Accelerator; }
-}  // namespace
 
-Mesh extract(const VolumeView& volume, const Options& options) {
-    Stats stats;
-    return extract(volume, options, stats);
-}
-
-Mesh extract(const VolumeView& volume, const Options& options, Stats& stats) {
+// The engine options.backend picks; the result reuses `storage`'s arrays.
+Mesh run_engine(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage) {
     stats = Stats{};
     detail::validate_volume(volume);
     switch (options.backend) {
         case Backend::Cpu:
-            return detail::cpu_extract(volume, options, stats);
+            return detail::cpu_extract(volume, options, stats, std::move(storage));
         case Backend::OpenCL:
-            return detail::opencl_extract(volume, options, stats, false);
+            return detail::opencl_extract(volume, options, stats, false, std::move(storage));
         case Backend::Hybrid:
         case Backend::Auto: {
             const auto devices = detail::opencl_devices();
             if (devices.empty()) {
                 warn(options, stats, std::string("no usable OpenCL device (no OpenCL platform found); ") +
                                          backend_name(options.backend) + " backend runs the CPU engine");
-                return detail::cpu_extract(volume, options, stats);
+                return detail::cpu_extract(volume, options, stats, std::move(storage));
             }
-            if (options.backend == Backend::Hybrid) return detail::opencl_extract(volume, options, stats, true);
+            if (options.backend == Backend::Hybrid)
+                return detail::opencl_extract(volume, options, stats, true, std::move(storage));
             // Auto with devices chosen explicitly: those devices.
             if (!options.devices.empty() || options.device_type != DeviceType::Any)
-                return detail::opencl_extract(volume, options, stats, false);
+                return detail::opencl_extract(volume, options, stats, false, std::move(storage));
             // Auto: a GPU or accelerator meshes faster than the CPU's threads; an OpenCL device
             // that is the CPU itself (PoCL) is slower than the CPU engine, so that one is not used.
             if (std::any_of(devices.begin(), devices.end(), is_discrete)) {
@@ -50,12 +47,29 @@ Mesh extract(const VolumeView& volume, const Options& options, Stats& stats) {
                                   }) != devices.end()
                                       ? DeviceType::Gpu
                                       : DeviceType::Accelerator;
-                return detail::opencl_extract(volume, gpu, stats, false);
+                return detail::opencl_extract(volume, gpu, stats, false, std::move(storage));
             }
-            return detail::cpu_extract(volume, options, stats);
+            return detail::cpu_extract(volume, options, stats, std::move(storage));
         }
     }
     throw Error("unknown backend");
+}
+
+}  // namespace
+
+Mesh extract(const VolumeView& volume, const Options& options) {
+    Stats stats;
+    return extract(volume, options, stats);
+}
+
+Mesh extract(const VolumeView& volume, const Options& options, Stats& stats) {
+    return run_engine(volume, options, stats, Mesh{});
+}
+
+void extract_into(const VolumeView& volume, const Options& options, Mesh& mesh, Stats& stats) {
+    Mesh storage = std::move(mesh);
+    mesh = Mesh{};  // left empty if meshing throws
+    mesh = run_engine(volume, options, stats, std::move(storage));
 }
 
 std::vector<DeviceInfo> list_devices() { return detail::opencl_devices(); }

@@ -2,7 +2,7 @@
 
 namespace voxmesh::detail {
 
-Mesh opencl_extract(const VolumeView&, const Options&, Stats&, bool) {
+Mesh opencl_extract(const VolumeView&, const Options&, Stats&, bool, Mesh) {
     throw Error("voxmesh was built without OpenCL (VOXMESH_WITH_OPENCL=OFF); use the cpu backend");
 }
 

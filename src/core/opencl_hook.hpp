@@ -13,7 +13,8 @@ namespace voxmesh::detail {
 // Meshes with OpenCL devices (Backend::OpenCL) or devices plus CPU threads (Backend::Hybrid).
 // Throws Error when no usable device exists (OpenCL); Hybrid then runs the CPU engine
 // alone, with a warning.
-Mesh opencl_extract(const VolumeView& volume, const Options& options, Stats& stats, bool hybrid);
+// `storage`: a mesh whose arrays' capacity the result reuses (extract_into).
+Mesh opencl_extract(const VolumeView& volume, const Options& options, Stats& stats, bool hybrid, Mesh storage = {});
 
 // Every usable OpenCL device; empty when there is none (never throws for a missing platform).
 std::vector<DeviceInfo> opencl_devices();
