@@ -41,7 +41,7 @@ struct Result {
     std::string backend, backend_ran, device;
     unsigned threads = 0;
     bool normals = true;
-    bool reuse_mesh = false;
+    bool reuse_mesh = false, interleaved = false;
     int repeat = 0, warmup = 0;
     std::string status = "ok";  // "ok", "unavailable", "error"
     std::string error;
@@ -75,6 +75,7 @@ struct Settings {
     bool normals = true;
     bool quiet = false;
     bool reuse_mesh = false;  // extract_into() one Mesh kept across runs, instead of extract()
+    bool interleave = false;  // an input's combinations take turns run by run (measure_interleaved)
 };
 
 // ---- measure.cpp ----
@@ -84,6 +85,30 @@ double median(std::vector<double> v);
 double streaming_floor(const voxmesh::VolumeView& view, unsigned threads, int repeat, int warmup);
 // Runs one combination on one input: warmup, then `repeat` timed extract() calls.
 Result measure(const Input& input, const Combo& combo, const Settings& settings);
+// All combinations of one input, taking turns run by run (forward, then backward): on a
+// machine whose speed drifts over seconds, their ratios (threads, engines) then compare runs
+// made in the same phases instead of one combination's phase against another's.
+std::vector<Result> measure_interleaved(const Input& input, const std::vector<Combo>& combos,
+                                        const Settings& settings);
+
+// One combination's runs, one call at a time (what both of the above drive).
+class Runner {
+public:
+    Runner(const Input& input, const Combo& combo, const Settings& settings);
+    bool run(bool timed);  // false once the combination failed (status and error set)
+    Result finish();       // medians of the timed runs
+
+private:
+    void record(const voxmesh::Stats& stats);
+
+    const Settings& settings_;
+    voxmesh::VolumeView view_;
+    voxmesh::Options options_;
+    bool per_run_rss_;
+    Result result_;
+    voxmesh::Mesh kept_;  // --reuse-mesh
+    std::vector<double> classify_, scan_, generate_, total_, kernel_, transfer_;
+};
 // Whether /proc/self/clear_refs can reset VmHWM (per-run peaks) on this system.
 bool rss_reset_works();
 unsigned hardware_threads();

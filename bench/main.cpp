@@ -104,6 +104,8 @@ int main(int argc, char** argv) {
     app.add_flag("--no-normals", no_normals, "mesh without normals (default: normals on)");
     app.add_flag("--reuse-mesh", settings.reuse_mesh,
                  "mesh every run into one kept Mesh with extract_into() (no fresh output pages), not extract()");
+    app.add_flag("--interleave", settings.interleave,
+                 "an input's combinations take turns run by run (robust ratios on a machine whose speed drifts)");
     app.add_flag("--paper", paper, "the paper's Table 1 grid: sizes 64..512 x threads 1,2,4,6,16 on the CPU");
     app.add_flag("--sculpt", sculpt,
                  "sculpting: a built-in stroke path over a sphere, update latency p50/p95/p99 beside a full re-mesh "
@@ -256,7 +258,16 @@ int main(int argc, char** argv) {
                              rc.file ? "loaded" : "generated", now_s() - g0);
 
             std::map<unsigned, double> floors;
-            for (const Combo& c : combos_for()) {
+            const std::vector<Combo> combos = combos_for();
+            std::vector<Result> interleaved;
+            if (settings.interleave) {
+                if (!settings.quiet)
+                    std::fprintf(stderr, "%zu combinations taking turns, %d runs each ...\n", combos.size(),
+                                 settings.repeat);
+                interleaved = measure_interleaved(in, combos, settings);
+            }
+            for (std::size_t ci = 0; ci < combos.size(); ++ci) {
+                const Combo& c = combos[ci];
                 if (g_interrupted) break;
                 ++done;
                 if (!settings.quiet)
@@ -264,7 +275,7 @@ int main(int argc, char** argv) {
                                  in.type.c_str(), std::to_string(in.dims[0]).c_str(), voxmesh::backend_name(c.backend),
                                  c.device.c_str(), c.threads);
                 std::fflush(stderr);
-                Result r = measure(in, c, settings);
+                Result r = settings.interleave ? std::move(interleaved[ci]) : measure(in, c, settings);
                 if (r.status == "interrupted") break;
                 if (!no_floor && !g_interrupted) {
                     auto it = floors.find(c.threads);

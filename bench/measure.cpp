@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <thread>
 
@@ -137,8 +138,9 @@ bool rss_reset_works() {
 
 // ---- one combination -----------------------------------------------------------------------
 
-Result measure(const Input& input, const Combo& combo, const Settings& settings) {
-    Result r;
+Runner::Runner(const Input& input, const Combo& combo, const Settings& settings)
+    : settings_(settings), view_(input.volume.view()), per_run_rss_(rss_reset_works()) {
+    Result& r = result_;
     r.field = input.field;
     r.type = input.type;
     r.dims = input.dims;
@@ -149,86 +151,84 @@ Result measure(const Input& input, const Combo& combo, const Settings& settings)
     r.threads = combo.threads;
     r.normals = settings.normals;
     r.reuse_mesh = settings.reuse_mesh;
+    r.interleaved = settings.interleave;
     r.repeat = settings.repeat;
     r.warmup = settings.warmup;
     r.volume_mb = double(input.volume.byte_size()) / (1024.0 * 1024.0);
-    const bool per_run_rss = rss_reset_works();
-    r.rss_scope = per_run_rss ? "run" : "process";
+    r.rss_scope = per_run_rss_ ? "run" : "process";
 
-    voxmesh::Options options;
-    options.iso = input.iso;
-    options.backend = combo.backend;
-    options.threads = combo.threads;
-    options.normals = settings.normals;
-    options.devices = combo.devices;
-    const voxmesh::VolumeView view = input.volume.view();
+    options_.iso = input.iso;
+    options_.backend = combo.backend;
+    options_.threads = combo.threads;
+    options_.normals = settings.normals;
+    options_.devices = combo.devices;
+}
 
-    std::vector<double> classify, scan, generate, total, kernel, transfer;
-    auto record_stats = [&](const voxmesh::Stats& stats) {
-        classify.push_back(stats.times.classify);
-        scan.push_back(stats.times.scan);
-        generate.push_back(stats.times.generate);
-        total.push_back(stats.times.total);
-        double k = 0, t = 0;
-        std::string names;
-        for (const auto& d : stats.devices) {
-            k += d.kernel_s;
-            t += d.transfer_s;
-            if (!names.empty()) names += "+";
-            names += d.name;
-        }
-        kernel.push_back(k);
-        transfer.push_back(t);
-        r.device_names = names;
-        r.backend_ran = voxmesh::backend_name(stats.backend);
-        for (const auto& w : stats.warnings)
-            if (std::find(r.warnings.begin(), r.warnings.end(), w) == r.warnings.end()) r.warnings.push_back(w);
-    };
+void Runner::record(const voxmesh::Stats& stats) {
+    Result& r = result_;
+    classify_.push_back(stats.times.classify);
+    scan_.push_back(stats.times.scan);
+    generate_.push_back(stats.times.generate);
+    total_.push_back(stats.times.total);
+    double k = 0, t = 0;
+    std::string names;
+    for (const auto& d : stats.devices) {
+        k += d.kernel_s;
+        t += d.transfer_s;
+        if (!names.empty()) names += "+";
+        names += d.name;
+    }
+    kernel_.push_back(k);
+    transfer_.push_back(t);
+    r.device_names = names;
+    r.backend_ran = voxmesh::backend_name(stats.backend);
+    for (const auto& w : stats.warnings)
+        if (std::find(r.warnings.begin(), r.warnings.end(), w) == r.warnings.end()) r.warnings.push_back(w);
+}
 
-    // --reuse-mesh: every run meshes into this one Mesh (extract_into), as a sculpting loop
-    // would; otherwise each run gets a new Mesh from extract(), freed after the timed call.
-    voxmesh::Mesh kept;
-    const auto run = [&](voxmesh::Stats& stats) {
-        if (!settings.reuse_mesh) return voxmesh::extract(view, options, stats);
-        voxmesh::extract_into(view, options, kept, stats);
-        return voxmesh::Mesh{};
-    };
+bool Runner::run(bool timed) {
+    Result& r = result_;
+    if (r.status != "ok") return false;
     try {
-        for (int i = 0; i < settings.warmup && !g_interrupted; ++i) {
-            voxmesh::Stats stats;
-            voxmesh::Mesh m = run(stats);
-            r.backend_ran = voxmesh::backend_name(stats.backend);
-        }
-        for (int i = 0; i < std::max(1, settings.repeat) && !g_interrupted; ++i) {
-            if (per_run_rss) reset_hwm();
-            const double rss_before = status_mb("VmRSS");
-            voxmesh::Stats stats;
-            const double t0 = now_s();
-            voxmesh::Mesh fresh = run(stats);
-            const double t1 = now_s();
-            const voxmesh::Mesh& m = settings.reuse_mesh ? kept : fresh;
-            const double hwm = status_mb("VmHWM");
-            r.times.push_back(t1 - t0);
-            record_stats(stats);
-            r.triangles = m.triangle_count();
-            r.vertices = m.vertex_count();
-            r.mesh_mb = double((m.positions.size() + m.normals.size()) * sizeof(float) +
-                               m.indices.size() * sizeof(std::uint32_t)) / (1024.0 * 1024.0);
-            r.peak_rss_mb = std::max(r.peak_rss_mb, hwm);
-            r.extract_rss_mb = std::max(r.extract_rss_mb, hwm - rss_before);
-        }  // the mesh is freed here, outside the timed region
+        // --reuse-mesh: every run meshes into the one kept Mesh (extract_into), as a sculpting
+        // loop would; otherwise each run gets a new Mesh from extract(), freed after the timing.
+        voxmesh::Mesh fresh;
+        voxmesh::Stats stats;
+        if (per_run_rss_ && timed) reset_hwm();
+        const double rss_before = status_mb("VmRSS");
+        const double t0 = now_s();
+        if (settings_.reuse_mesh) voxmesh::extract_into(view_, options_, kept_, stats);
+        else fresh = voxmesh::extract(view_, options_, stats);
+        const double t1 = now_s();
+        r.backend_ran = voxmesh::backend_name(stats.backend);
+        if (!timed) return true;
+        const double hwm = status_mb("VmHWM");
+        const voxmesh::Mesh& m = settings_.reuse_mesh ? kept_ : fresh;
+        r.times.push_back(t1 - t0);
+        record(stats);
+        r.triangles = m.triangle_count();
+        r.vertices = m.vertex_count();
+        r.mesh_mb = double((m.positions.size() + m.normals.size()) * sizeof(float) +
+                           m.indices.size() * sizeof(std::uint32_t)) / (1024.0 * 1024.0);
+        r.peak_rss_mb = std::max(r.peak_rss_mb, hwm);
+        r.extract_rss_mb = std::max(r.extract_rss_mb, hwm - rss_before);
+        return true;
     } catch (const voxmesh::Error& e) {
         // An engine or device that cannot run here (no OpenCL device, engine not built, ...).
         r.status = "unavailable";
         r.error = e.what();
-        r.times.clear();
-        return r;
     } catch (const std::exception& e) {
         r.status = "error";
         r.error = e.what();
-        r.times.clear();
-        return r;
     }
+    r.times.clear();
+    return false;
+}
+
+Result Runner::finish() {
+    Result r = std::move(result_);
+    kept_ = voxmesh::Mesh{};
+    if (r.status != "ok") return r;
     if (r.times.empty()) {
         r.status = "interrupted";
         return r;
@@ -236,14 +236,37 @@ Result measure(const Input& input, const Combo& combo, const Settings& settings)
     r.median_s = median(r.times);
     r.min_s = *std::min_element(r.times.begin(), r.times.end());
     r.max_s = *std::max_element(r.times.begin(), r.times.end());
-    r.classify_s = median(classify);
-    r.scan_s = median(scan);
-    r.generate_s = median(generate);
-    r.total_s = median(total);
-    r.kernel_s = median(kernel);
-    r.transfer_s = median(transfer);
+    r.classify_s = median(classify_);
+    r.scan_s = median(scan_);
+    r.generate_s = median(generate_);
+    r.total_s = median(total_);
+    r.kernel_s = median(kernel_);
+    r.transfer_s = median(transfer_);
     r.mvox_s = r.median_s > 0 ? double(r.samples()) / r.median_s / 1e6 : 0;
     return r;
+}
+
+Result measure(const Input& input, const Combo& combo, const Settings& settings) {
+    Runner runner(input, combo, settings);
+    for (int i = 0; i < settings.warmup && !g_interrupted; ++i)
+        if (!runner.run(false)) break;
+    for (int i = 0; i < std::max(1, settings.repeat) && !g_interrupted; ++i)
+        if (!runner.run(true)) break;
+    return runner.finish();
+}
+
+std::vector<Result> measure_interleaved(const Input& input, const std::vector<Combo>& combos,
+                                        const Settings& settings) {
+    std::vector<std::unique_ptr<Runner>> runners;
+    for (const Combo& c : combos) runners.push_back(std::make_unique<Runner>(input, c, settings));
+    const std::size_t n = runners.size();
+    for (int i = 0; i < settings.warmup && !g_interrupted; ++i)
+        for (auto& runner : runners) runner->run(false);
+    for (int i = 0; i < std::max(1, settings.repeat) && !g_interrupted; ++i)
+        for (std::size_t k = 0; k < n; ++k) runners[i % 2 ? n - 1 - k : k]->run(true);  // forward, then backward
+    std::vector<Result> out;
+    for (auto& runner : runners) out.push_back(runner->finish());
+    return out;
 }
 
 std::string Result::size_label() const {

@@ -116,13 +116,14 @@ void print_table(const std::vector<Result>& results) {
                 first = &r;
                 break;
             }
-        std::printf("\nmedian/min/max: end-to-end %s seconds over %d runs after %d warmup; x_floor: median / "
+        std::printf("\nmedian/min/max: end-to-end %s seconds over %d runs after %d warmup%s; x_floor: median / "
                     "streaming floor (one threaded read of the volume); speed: vs the fewest threads of the same "
                     "series; rss_MB: process peak RSS while extracting (%s); ext_MB: that peak minus RSS before the "
                     "call; over%%: ext_MB minus the mesh, in %% of volume + mesh (a fresh process: --repeat 1 "
                     "--warmup 0); classify/scan/generate: Stats pass medians; kernel/transfer: OpenCL device time.\n\n",
                     first->reuse_mesh ? "extract_into() (one Mesh reused across runs, --reuse-mesh)" : "extract()",
                     first->repeat, first->warmup,
+                    first->interleaved ? " (combinations of an input taking turns run by run, --interleave)" : "",
                     first->rss_scope == "run" ? "VmHWM reset before each run"
                                               : "lifetime peak: VmHWM could not be reset on this system");
     }
@@ -161,6 +162,7 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
           << json_escape(r.device) << "\",\"device_names\":\"" << json_escape(r.device_names)
           << "\",\"threads\":" << r.threads << ",\"normals\":" << (r.normals ? "true" : "false")
           << ",\"reuse_mesh\":" << (r.reuse_mesh ? "true" : "false")
+          << ",\"interleaved\":" << (r.interleaved ? "true" : "false")
           << ",\"repeat\":" << r.repeat << ",\"warmup\":" << r.warmup << ",\"status\":\"" << r.status
           << "\",\"error\":\"" << json_escape(r.error) << "\",\"median_s\":" << opt(r.median_s)
           << ",\"min_s\":" << opt(r.min_s) << ",\"max_s\":" << opt(r.max_s) << ",\"times_s\":[";
