@@ -18,13 +18,12 @@ trap 'rm -rf "$TMP"' EXIT
 # 1. Table 1 of the paper (sphere f32, 64..512 x 1,2,4,6,16 threads).
 "$BENCH" --paper --repeat "$REPEAT" --save "$OUT/paper.jsonl" > "$OUT/paper.txt"
 
-# 2. CPU vs OpenCL (PoCL on this CPU) vs hybrid, and thread scaling.
+# 2. CPU vs OpenCL (PoCL on this CPU) vs hybrid, and thread scaling; --interleave: an
+#    input's combinations take turns run by run, so their ratios see the same phases.
 "$BENCH" --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads "$THREADS" --backends cpu,opencl,hybrid \
-    --repeat "$REPEAT" --save "$OUT/backends.jsonl" > "$OUT/backends.txt"
-"$BENCH" --field sphere,gyroid --sizes 256,512 --threads 1,2,4,6,16 --repeat "$REPEAT" \
-    --save "$OUT/scaling.jsonl" > "$OUT/scaling.txt"
-"$BENCH" --field sphere,gyroid --type u8 --sizes 256,512 --threads 1,2 --repeat "$REPEAT" \
-    --save "$OUT/scaling_u8.jsonl" > "$OUT/scaling_u8.txt"
+    --repeat "$REPEAT" --interleave --save "$OUT/backends.jsonl" > "$OUT/backends.txt"
+"$BENCH" --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 1,2,4,6,16 --repeat "$REPEAT" \
+    --interleave --no-floor --save "$OUT/scaling.jsonl" > "$OUT/scaling.txt"
 
 # 2b. Memory: one extract per fresh process (over%: beyond the mesh, in % of volume + mesh).
 : > "$OUT/memory.txt"
