@@ -181,7 +181,6 @@ void Runner::record(const voxmesh::Stats& stats) {
     kernel_.push_back(k);
     transfer_.push_back(t);
     r.device_names = names;
-    r.backend_ran = voxmesh::backend_name(stats.backend);
     for (const auto& w : stats.warnings)
         if (std::find(r.warnings.begin(), r.warnings.end(), w) == r.warnings.end()) r.warnings.push_back(w);
 }

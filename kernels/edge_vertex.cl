@@ -1,6 +1,6 @@
-// What every marching-cubes kernel shares: the sample and arithmetic types, and the vertex
-// of a sample's crossed edges, computed with the formula of src/core/edge_vertex.hpp. The host puts
-// this file in front of marching_cubes.cl and sculpt_blocks.cl when it builds them.
+// What every marching-cubes kernel shares: the sample and arithmetic types, and the vertices
+// of a sample's crossed edges, computed with the formula of src/core/edge_vertex.hpp. The
+// host puts this file in front of marching_cubes.cl and sculpt_blocks.cl when it builds them.
 //
 // Build options chosen by the host:
 //   -DVOXEL_T=<uchar|char|ushort|short|uint|int|float|double>  the sample type

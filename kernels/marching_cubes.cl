@@ -229,7 +229,7 @@ inline uint scanned_count(__global const uint* base, uint r, uint rows, uint end
 
 // One work-item per meta row with crossings: the vertex id of the first edge of each of its
 // words, counted from the row's first vertex vbase[r], into wbase (what the triangles look
-// up; word_id is ushort where rows have at most 65536 edges, set by the host, else uint),
+// up; word_id is ushort, set by the host, where a row has at most 683 words, else uint),
 // and for owned rows its vertices at ids vbase[r]... (vend: the total after the last meta
 // row, for the last row's span). Rows without crossings leave wbase unwritten: no triangle
 // refers to them.
@@ -295,9 +295,8 @@ inline uint edge_id(uint base, EdgeMasks m, uint b, uint axis) {
 // (y + dy, z + dz), indexed k = dy + 2 dz; a triangle corner on the edge from sample
 // x = 32 q + b + dx of row k has the id of its word's first vertex plus the crossed edges
 // before it in that word. Only the word groups classify_rows marked are visited, and words
-// without a non-uniform cell there are skipped. case_corners: per
-// case the triangle count, then each corner as dx | k << 1 | axis << 3 (the host's
-// case_corner_table).
+// without a non-uniform cell there are skipped. case_corners: per case the triangle count,
+// then each corner as dx | k << 1 | axis << 3 (the host's case_corner_table).
 __kernel void generate_triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz,
                                  const uint words, const uint begin, const uint cell_rows, const uint rows,
                                  const uint tend, __global const uint* tbase, __global const uint* vbase,
@@ -312,16 +311,16 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
     __global const uint* row[4];
     __global const uint* ry[4];
     __global const uint* rz[4];
+    __global const word_id* word_base[4];  // word q of row k's first vertex id: row_first[k] + word_base[k][q]
+    uint row_first[4];
     for (uint k = 0; k < 4; ++k) {
         const uint rk = r + (k & 1u) + (k >> 1) * ny;
         row[k] = bits + rk * words;
         ry[k] = row_y(bits, rk, j + (k & 1u), ny, words);
         rz[k] = row_z(bits, rk, z + (k >> 1), ny, nz, words);
+        word_base[k] = wbase + rk * words;
+        row_first[k] = vbase[rk];
     }
-    // Word q of row k's first vertex id is row_first[k] + wbase[first_word + rk_offset[k] + q].
-    const uint first_word = r * words;
-    const uint rk_offset[4] = {0u, words, ny * words, (ny + 1u) * words};
-    const uint row_first[4] = {vbase[r], vbase[r + 1], vbase[r + ny], vbase[r + ny + 1]};
     __global uint* out = indices + 3 * t;
     const uint group = word_group(words);
     for (ulong g = cell_groups[r]; g; g &= g - 1) {
@@ -344,12 +343,11 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
                         const uint k = code >> 1 & 3u;
                         const uint axis = code >> 3;
                         const uint x = b + (code & 1u);
-                        __global const word_id* word_base = wbase + first_word + rk_offset[k] + q;
                         if (x < 32) {
-                            id[e] = edge_id(row_first[k] + word_base[0], m[k], x, axis);
+                            id[e] = edge_id(row_first[k] + word_base[k][q], m[k], x, axis);
                         } else {  // the first sample of the next word
                             const EdgeMasks next = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
-                            id[e] = edge_id(row_first[k] + word_base[1], next, 0, axis);
+                            id[e] = edge_id(row_first[k] + word_base[k][q + 1], next, 0, axis);
                         }
                     }
                     out[0] = id[0];

@@ -106,19 +106,9 @@ void discover(Registry& r) {
     for (std::size_t i = 0; i < r.devices.size(); ++i) r.devices[i]->info.index = static_cast<int>(i);
 }
 
-std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
-
-}  // namespace
-
-Device::Device(const cl::Device& dev, DeviceInfo description)
-    : info(std::move(description)), device(dev), context(dev), queue(context, dev, CL_QUEUE_PROFILING_ENABLE) {
-    case_table = constant_buffer(context, kCaseTable, sizeof(kCaseTable));
-    cell_edge = constant_buffer(context, kCellEdge, sizeof(kCellEdge));
-    pair_to_case = constant_buffer(context, kColumnPairToCase.data(), kColumnPairToCase.size());
-    static const std::array<std::uint8_t, 256 * 16> corners = case_corner_table();
-    case_corners = constant_buffer(context, corners.data(), corners.size());
-}
-
+// Per case, 16 bytes: the triangle count, then each triangle corner's edge as one byte
+// dx | dy << 1 | dz << 2 | axis << 3 (kCellEdge of the case table's edge number), so that a
+// kernel finds a corner's sample and axis with one load instead of two dependent ones.
 std::array<std::uint8_t, 256 * 16> case_corner_table() {
     std::array<std::uint8_t, 256 * 16> table{};
     for (std::size_t c = 0; c < 256; ++c) {
@@ -130,6 +120,19 @@ std::array<std::uint8_t, 256 * 16> case_corner_table() {
         }
     }
     return table;
+}
+
+std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
+
+}  // namespace
+
+Device::Device(const cl::Device& dev, DeviceInfo description)
+    : info(std::move(description)), device(dev), context(dev), queue(context, dev, CL_QUEUE_PROFILING_ENABLE) {
+    case_table = constant_buffer(context, kCaseTable, sizeof(kCaseTable));
+    cell_edge = constant_buffer(context, kCellEdge, sizeof(kCellEdge));
+    pair_to_case = constant_buffer(context, kColumnPairToCase.data(), kColumnPairToCase.size());
+    static const std::array<std::uint8_t, 256 * 16> corners = case_corner_table();
+    case_corners = constant_buffer(context, corners.data(), corners.size());
 }
 
 cl::Program Device::build(const std::string& source, const std::string& options) {

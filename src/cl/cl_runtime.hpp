@@ -39,11 +39,6 @@ struct EventLog {
 };
 double event_seconds(const cl::Event& event);
 
-// Per case, 16 bytes: the triangle count, then each triangle corner's edge as one byte
-// dx | dy << 1 | dz << 2 | axis << 3 (kCellEdge of the case table's edge number), so that a
-// kernel finds a corner's sample and axis with one load instead of two dependent ones.
-std::array<std::uint8_t, 256 * 16> case_corner_table();
-
 class Device {
 public:
     Device(const cl::Device& device, DeviceInfo info);
