@@ -169,7 +169,7 @@ inline WordSpan cell_row_words(const RowInfo& a, const RowInfo& b) {
 
 template <class T>
 void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T threshold, std::size_t a, std::size_t b,
-                     RowInfo* rows, std::vector<Word>* plane_bits) {
+                     RowInfo* rows, PlaneCounts* plane_counts, std::vector<Word>* plane_bits) {
     const std::size_t nx = volume.dims[0], ny = volume.dims[1], nz = volume.dims[2];
     PlaneBits<T> bits(volume, threshold);
     const std::size_t words = bits.stride();
@@ -215,6 +215,15 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
                 }
                 info[j].triangles = count;
             }
+        }
+        // The plane's sums while its rows are in cache. Cost: a plane's bits plus its vertices
+        // and triangles, and a pass over the words of each row with crossings.
+        PlaneCounts& sums = plane_counts[k - plan.range.begin];
+        sums.cost = static_cast<double>(nx * ny) / 16;
+        for (std::size_t j = 0; j < ny; ++j) {
+            sums.vertices += info[j].vertices;
+            sums.triangles += info[j].triangles;
+            sums.cost += 24.0 * info[j].vertices + 4.0 * info[j].triangles + (info[j].empty() ? 0 : nx / 4.0);
         }
         std::swap(here, up);
     }
@@ -352,14 +361,16 @@ private:
 
     void build_edges(std::size_t z, const BitPlane& plane, const BitPlane* up, unsigned half, bool write_vertices) {
         const RowInfo* rows = meta_rows(z);
-        const std::uint32_t* bases = plan_.vertex_base.data() + (z - plan_.range.begin) * ny_;
+        // Rows in order: each row's first vertex follows the previous row's last.
+        std::uint32_t row_first = static_cast<std::uint32_t>(plan_.planes[z - plan_.range.begin].first_vertex);
         for (std::size_t j = 0; j < ny_; ++j) {
+            const std::uint32_t base = row_first;
+            row_first += rows[j].vertices;
             if (rows[j].empty()) continue;
             const Word* row = plane.row(j);
             const Word* next_y = plane.row(j + 1 < ny_ ? j + 1 : j);  // the row itself: no edge
             const Word* next_z = (up ? *up : plane).row(j);
             Id* id = ids_.row(half, j);
-            const std::uint32_t base = bases[j];
             std::uint32_t next_id = base;
             const WordSpan span = row_words(rows[j]);
             for (std::size_t q = span.begin; q < span.end; ++q) {
@@ -384,21 +395,25 @@ private:
 
     void emit_triangles(std::size_t k) {
         const RowInfo* rows = meta_rows(k);
-        const std::uint64_t* tri_base = plan_.triangle_base.data() + (k - plan_.range.begin) * ny_;
+        const RowInfo* upper_rows = meta_rows(k + 1);
         const bool flip = options_.inside_below;
-        const std::uint32_t vertex_base = out_.vertex_base;  // a local: the index stores cannot change it
         const std::ptrdiff_t* slot = ids_.slots(lower_);
         const unsigned* row_of = ids_.rows_of();
-        const std::uint32_t* lower_bases = plan_.vertex_base.data() + (k - plan_.range.begin) * ny_;
-        const std::uint32_t* upper_bases = lower_bases + ny_;
+        // The first vertex (global id) of rows j of planes k and k + 1, and the first triangle
+        // of cell row j, advanced row by row from the planes' scan results.
+        const PlaneCounts& lower = plan_.planes[k - plan_.range.begin];
+        std::uint32_t lower_first = out_.vertex_base + static_cast<std::uint32_t>(lower.first_vertex);
+        std::uint32_t upper_first = out_.vertex_base + static_cast<std::uint32_t>((&lower)[1].first_vertex);
+        std::uint32_t* out = out_.indices + 3 * lower.first_triangle;
         for (std::size_t j = 0; j + 1 < ny_; ++j) {
+            const std::uint32_t row_base[4] = {lower_first, lower_first + rows[j].vertices, upper_first,
+                                               upper_first + upper_rows[j].vertices};
+            lower_first = row_base[1];
+            upper_first = row_base[3];
             if (!cell_row_active(rows[j], rows[j + 1])) continue;
             const Word *a = planes_[0].row(j), *b = planes_[0].row(j + 1),
                        *c = planes_[1].row(j), *d = planes_[1].row(j + 1);
             const Id* row_ids = ids_.row(lower_, j);
-            const std::uint32_t row_base[4] = {vertex_base + lower_bases[j], vertex_base + lower_bases[j + 1],
-                                               vertex_base + upper_bases[j], vertex_base + upper_bases[j + 1]};
-            std::uint32_t* out = out_.indices + 3 * tri_base[j];
             // First the row's cell cases, asking for the lines of each cell's corner ids (one
             // per row of ids; written a plane ago, they are mostly in L3 by now); then its
             // triangles. Reading the ids right after the case took the lookups' whole latency
@@ -530,36 +545,32 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
         plan.meta_planes = std::min(range.end + 1, nz) - range.begin;
         reserve_huge(plan.rows, plan.meta_planes * ny);
         plan.rows.assign(plan.meta_planes * ny, RowInfo{});
+        plan.planes.assign(plan.meta_planes, PlaneCounts{});
         if (sizeof(T) >= 2) plan.plane_bits.resize(plan.meta_planes);
         const unsigned slabs = slab_count(threads, plan.meta_planes, kClassifySlabsPerThread);
         const auto cuts = even_split(plan.meta_planes, slabs);
         run_slabs(slabs, threads, [&](unsigned w, unsigned) {
             classify_planes<T>(plan, volume, threshold.value, range.begin + cuts[w], range.begin + cuts[w + 1],
-                               plan.rows.data(), plan.plane_bits.empty() ? nullptr : plan.plane_bits.data());
+                               plan.rows.data(), plan.planes.data(),
+                               plan.plane_bits.empty() ? nullptr : plan.plane_bits.data());
         });
     });
     if (plan.uniform) return plan;
     const auto t1 = Clock::now();
     plan.classify_seconds = std::chrono::duration<double>(t1 - t0).count();
 
-    // Scan: exclusive prefix sums of the row counts give every vertex and triangle its index.
-    reserve_huge(plan.vertex_base, plan.rows.size());
-    reserve_huge(plan.triangle_base, plan.rows.size());
-    plan.vertex_base.resize(plan.rows.size());
-    plan.triangle_base.resize(plan.rows.size());
+    // Scan: exclusive prefix sums of the plane sums give every plane its first vertex and
+    // triangle (generate walks each plane's rows from there).
     std::uint64_t vertices = 0, triangles = 0;
-    const std::size_t owned_rows = (range.end - range.begin) * ny;
-    for (std::size_t r = 0; r < plan.rows.size(); ++r) {
-        if (r == owned_rows) plan.vertices = vertices;
-        if (vertices > std::numeric_limits<std::uint32_t>::max())
-            throw Error("the mesh would have more than 2^32-1 vertices; 32-bit indices cannot address it "
-                        "(mesh a sub-volume or a coarser volume)");
-        plan.vertex_base[r] = static_cast<std::uint32_t>(vertices);
-        plan.triangle_base[r] = triangles;
-        vertices += plan.rows[r].vertices;
-        triangles += plan.rows[r].triangles;
+    const std::size_t owned_planes = range.end - range.begin;
+    for (std::size_t p = 0; p < plan.meta_planes; ++p) {
+        if (p == owned_planes) plan.vertices = vertices;
+        plan.planes[p].first_vertex = vertices;
+        plan.planes[p].first_triangle = triangles;
+        vertices += plan.planes[p].vertices;
+        triangles += plan.planes[p].triangles;
     }
-    if (owned_rows == plan.rows.size()) plan.vertices = vertices;
+    if (owned_planes == plan.meta_planes) plan.vertices = vertices;
     if (vertices > std::numeric_limits<std::uint32_t>::max())
         throw Error("the mesh would have more than 2^32-1 vertices; 32-bit indices cannot address it "
                     "(mesh a sub-volume or a coarser volume)");
@@ -571,17 +582,10 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
 void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Options& options, unsigned threads,
                   const MeshOut& out) {
     if (plan.uniform || plan.triangles == 0) return;
-    const std::size_t ny = volume.dims[1], planes = plan.range.end - plan.range.begin;
-    // Balance by work, not planes: a plane costs its bits plus its vertices and triangles.
-    std::vector<double> cost(planes, 0.0);
-    for (std::size_t p = 0; p < planes; ++p) {
-        double c = static_cast<double>(volume.dims[0] * ny) / 16;
-        for (std::size_t j = 0; j < ny; ++j) {
-            const RowInfo& r = plan.rows[p * ny + j];
-            c += 24.0 * r.vertices + 4.0 * r.triangles + (r.empty() ? 0 : volume.dims[0] / 4.0);
-        }
-        cost[p] = c;
-    }
+    const std::size_t planes = plan.range.end - plan.range.begin;
+    // Balance by work (classify's estimate per plane), not by planes.
+    std::vector<double> cost(planes);
+    for (std::size_t p = 0; p < planes; ++p) cost[p] = plan.planes[p].cost;
     threads = std::max(threads, 1u);
     const unsigned slabs = slab_count(threads, planes, kGenerateSlabsPerThread);
     const auto cuts = balanced_split(cost, slabs);

@@ -35,7 +35,16 @@ struct RowInfo {
     std::uint32_t uniform_bit() const { return last; }  // only for an empty row
 };
 
-// Classify + scan result for one z-range: per-row counts and their exclusive prefix sums.
+// One meta plane's rows summed by classify, and where its first vertex (local id) and first
+// triangle go, from the scan. Generate derives each row's bases by walking the plane's rows
+// in order, so there is no per-row table of bases and the scan is over planes, not rows.
+struct PlaneCounts {
+    std::uint64_t vertices = 0, triangles = 0;
+    std::uint64_t first_vertex = 0, first_triangle = 0;
+    double cost = 0;  // generate's work on the plane, an estimate to balance slabs by
+};
+
+// Classify + scan result for one z-range: per-row counts, per-plane sums and their prefix sums.
 struct CpuChunkPlan {
     ZRange range;
     std::size_t meta_planes = 0;             // planes with RowInfo: the range plus plane `end` if it exists
@@ -45,8 +54,7 @@ struct CpuChunkPlan {
     // for samples of 2 bytes or more only, where they cost at most 1/16 of the volume; 8-bit
     // samples are cheaper to pack again than to keep.
     std::vector<std::vector<Word>> plane_bits;
-    std::vector<std::uint32_t> vertex_base;  // local id of each row's first vertex
-    std::vector<std::uint64_t> triangle_base;
+    std::vector<PlaneCounts> planes;         // meta_planes
     std::uint64_t vertices = 0;   // owned by the range (excludes plane `end`)
     std::uint64_t triangles = 0;
     bool uniform = false;         // no sample can cross iso: nothing to generate
