@@ -1,5 +1,5 @@
 // Large arrays that are written once right after they are allocated (the mesh, per-row
-// metadata, row bases) pay one page fault per 4 KiB on first touch, and on a VM a
+// metadata) pay one page fault per 4 KiB on first touch, and on a VM a
 // fault costs microseconds: 40 MB cost ~30 ms of faults here. Asking for transparent huge
 // pages on such an array (Linux, THP in "madvise" mode, the common default) cuts that to a
 // fault per 2 MiB. Only advice: where THP is off or unsupported nothing changes.
