@@ -402,8 +402,9 @@ private:
         // The first vertex (global id) of rows j of planes k and k + 1, and the first triangle
         // of cell row j, advanced row by row from the planes' scan results.
         const PlaneCounts& lower = plan_.planes[k - plan_.range.begin];
+        const PlaneCounts& upper = plan_.planes[k + 1 - plan_.range.begin];
         std::uint32_t lower_first = out_.vertex_base + static_cast<std::uint32_t>(lower.first_vertex);
-        std::uint32_t upper_first = out_.vertex_base + static_cast<std::uint32_t>((&lower)[1].first_vertex);
+        std::uint32_t upper_first = out_.vertex_base + static_cast<std::uint32_t>(upper.first_vertex);
         std::uint32_t* out = out_.indices + 3 * lower.first_triangle;
         for (std::size_t j = 0; j + 1 < ny_; ++j) {
             const std::uint32_t row_base[4] = {lower_first, lower_first + rows[j].vertices, upper_first,
