@@ -21,7 +21,8 @@
 // (src/core/case_tables.cpp) as __constant buffers:
 //   case_table:   16 bytes per case, triangle count then 15 signed edge numbers;
 //   case_corners: 16 bytes per case, triangle count then each corner's edge as
-//                 dx | dy << 1 | dz << 2 | axis << 3 (built from case_table and cell_edge).
+//                 dx | dy << 1 | dz << 2 | axis << 3 (the host builds it from its case and
+//                 cell-edge tables).
 
 #define CAT2(a, b) a##b
 #define CAT(a, b) CAT2(a, b)

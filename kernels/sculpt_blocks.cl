@@ -136,8 +136,8 @@ __kernel void block_vertices(__global const voxel* data, __global const uint* me
 
 // The triangles of the cell row (y, z), at tbase's slot, with block-local vertex ids.
 __kernel void block_triangles(__global const voxel* data, __global const uint* meta, const voxel thr,
-                              __constant uchar* pair_to_case, __constant uchar* case_table,
-                              __constant uchar* cell_edge, const int inside_below, __global const uchar* codes,
+                              __constant uchar* pair_to_case, __constant uchar* case_corners,
+                              const int inside_below, __global const uchar* codes,
                               __global const uint* vid, __global const uint* vbase, __global const uint* tbase,
                               __global uint* indices) {
     const uint b = (uint)get_global_id(1);
@@ -154,14 +154,16 @@ __kernel void block_triangles(__global const voxel* data, __global const uint* m
         const uint next = column(data, &k, x + 1, y, z, thr);
         const uint c = pair_to_case[col | next << 4];
         col = next;
-        const uint count = case_table[16 * c];
+        __constant uchar* corners = case_corners + 16 * c;
+        const uint count = corners[0];
         for (uint q = 0; q < count; ++q) {
             uint id[3];
             for (uint e = 0; e < 3; ++e) {
-                __constant uchar* ce = cell_edge + 4 * case_table[16 * c + 1 + 3 * q + e];
-                const uint s = k.sample + (x + ce[0]) + k.lx * (y + ce[1]) + plane * (z + ce[2]);
+                const uint corner = corners[1 + 3 * q + e];  // dx | dy << 1 | dz << 2 | axis << 3
+                const uint s = k.sample + (x + (corner & 1u)) + k.lx * (y + (corner >> 1 & 1u)) +
+                               plane * (z + (corner >> 2 & 1u));
                 const uint code = codes[s];
-                const uint axis = ce[3];
+                const uint axis = corner >> 3;
                 id[e] = vid[s] - block_first_vertex +
                         (axis == 0 ? 0u : axis == 1 ? (code & 1) : (code & 1) + (code >> 1 & 1));
             }

@@ -249,7 +249,7 @@ void OpenclBlockMesher::run_batch(std::span<const BlockBox> boxes, std::size_t f
         if (triangles > 0) {
             cl::Buffer& indices = d.buffer(kIndices, triangles * 12);
             cl::Kernel& t = d.sculpt_kernel(options_, "block_triangles");
-            set_args(t, staged, meta, ArgBytes{threshold_}, d.pair_to_case, d.case_table, d.cell_edge,
+            set_args(t, staged, meta, ArgBytes{threshold_}, d.pair_to_case, d.case_corners,
                      static_cast<cl_int>(setup_.inside_below), codes, vid, vcount, tcount, indices);
             d.queue.enqueueNDRangeKernel(t, cl::NullRange, global, local);
             d.queue.enqueueReadBuffer(indices, CL_FALSE, 0, triangles * 12, indices_.data());

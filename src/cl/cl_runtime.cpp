@@ -9,7 +9,6 @@
 namespace voxmesh::detail::cl_engine {
 
 static_assert(sizeof(CaseEntry) == 16, "kernels read the case table as 16 bytes per case");
-static_assert(sizeof(CellEdge) == 4, "kernels read cell edges as 4 bytes each");
 static_assert(sizeof(kColumnPairToCase) == 256, "kernels read the column-pair table as 256 bytes");
 
 namespace {
@@ -129,7 +128,6 @@ std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m;
 Device::Device(const cl::Device& dev, DeviceInfo description)
     : info(std::move(description)), device(dev), context(dev), queue(context, dev, CL_QUEUE_PROFILING_ENABLE) {
     case_table = constant_buffer(context, kCaseTable, sizeof(kCaseTable));
-    cell_edge = constant_buffer(context, kCellEdge, sizeof(kCellEdge));
     pair_to_case = constant_buffer(context, kColumnPairToCase.data(), kColumnPairToCase.size());
     static const std::array<std::uint8_t, 256 * 16> corners = case_corner_table();
     case_corners = constant_buffer(context, corners.data(), corners.size());
