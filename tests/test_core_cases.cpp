@@ -340,6 +340,41 @@ TEST_CASE("rows around machine-word lengths match the oracle", "[core]") {
     }
 }
 
+TEST_CASE("8-bit rows with long uniform runs between crossings match the oracle", "[core]") {
+    // Packed inside bits, the spans between a row's first and last crossing, and the words
+    // skipped as uniform: runs of inside and of outside samples over several words,
+    // crossings on word boundaries, a row's partial last word inside, and rows of more
+    // than 64 words (where a row's word set shares its last bit) must all come out exact.
+    for (std::size_t nx : {130u, 257u, 4096u, 4097u}) {
+        const Dims dims{nx, 5, 4};
+        for (std::uint32_t seed : {3u, 4u}) {
+            INFO("nx " << nx << " seed " << seed);
+            const std::vector<double> noise = vmtest::random_doubles(dims, seed, 0, 9);
+            std::vector<std::uint8_t> u8(noise.size());
+            for (std::size_t row = 0; row < dims[1] * dims[2]; ++row) {
+                // Inside from `from` to the row's end or to `to`, the rest outside; a few
+                // noisy samples around word boundaries.
+                const std::size_t from = (row * 67 + 13 * seed) % nx, to = row % 3 == 0 ? nx : (from + nx / 3) % nx;
+                for (std::size_t x = 0; x < nx; ++x) {
+                    const bool inside = from <= to ? x >= from && x < to : x >= from || x < to;
+                    std::uint8_t v = inside ? 200 : 10;
+                    if (x % 64 == 63 || x % 64 == 0) v = static_cast<std::uint8_t>(noise[row * nx + x] * 25);
+                    u8[row * nx + x] = v;
+                }
+            }
+            const std::vector<double> values(u8.begin(), u8.end());
+            for (double iso : {100.5, 112.5}) {
+                vmtest::RefOptions ro;
+                ro.iso = iso;
+                const vmtest::RefMesh ref = vmtest::reference_mc(values, dims, ro);
+                CHECK(ref.triangle_count() > 0);
+                for (unsigned threads : {1u, 2u})
+                    require_matches(voxmesh::extract(vmtest::view_of(u8, dims), cpu_options(iso, threads)), ref);
+            }
+        }
+    }
+}
+
 TEST_CASE("rows around the width where 16-bit vertex ids give way to 32-bit match the oracle", "[core]") {
     // The generator numbers a row's vertices from the row's first in 16 bits while a row has
     // at most 65536 edges (nx <= 21845) and in 32 bits beyond.
