@@ -545,9 +545,7 @@ Mesh Engine::assemble(std::vector<std::vector<Piece>>& results) {
         vertices += pieces[i]->vertices;
         triangles += pieces[i]->mesh.indices.size() / 3;
     }
-    if (vertices > std::numeric_limits<std::uint32_t>::max())
-        throw Error("the mesh would have more than 2^32-1 vertices; 32-bit indices cannot address it "
-                    "(mesh a sub-volume or a coarser volume)");
+    check_vertex_count(vertices);
     Mesh mesh = take_storage();
     allocate_output(mesh, vertices, triangles, options_.normals, threads_);
     const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(threads_, std::max<std::size_t>(pieces.size(), 1)));

@@ -518,6 +518,11 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
     });
 }
 
+void throw_too_many_vertices() {
+    throw Error("the mesh would have more than 2^32-1 vertices; 32-bit indices cannot address it "
+                "(mesh a sub-volume or a coarser volume)");
+}
+
 void validate_volume(const VolumeView& volume) {
     for (int d = 0; d < 3; ++d)
         if (volume.dims[d] < 2)
@@ -572,9 +577,7 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
         triangles += plan.planes[p].triangles;
     }
     if (owned_planes == plan.meta_planes) plan.vertices = vertices;
-    if (vertices > std::numeric_limits<std::uint32_t>::max())
-        throw Error("the mesh would have more than 2^32-1 vertices; 32-bit indices cannot address it "
-                    "(mesh a sub-volume or a coarser volume)");
+    check_vertex_count(vertices);
     plan.triangles = triangles;
     plan.scan_seconds = seconds_since(t1);
     return plan;

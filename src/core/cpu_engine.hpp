@@ -86,4 +86,11 @@ Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats,
 // Throws Error unless every dimension is >= 2, data is set and the size is addressable.
 void validate_volume(const VolumeView& volume);
 
+// Throws Error when a mesh of `vertices` vertices cannot be indexed by 32-bit indices. Every
+// engine assembling vertex ids (CPU, OpenCL, sculpting) asks here, so they refuse alike.
+[[noreturn]] void throw_too_many_vertices();
+inline void check_vertex_count(std::uint64_t vertices) {
+    if (vertices > std::numeric_limits<std::uint32_t>::max()) throw_too_many_vertices();
+}
+
 }  // namespace voxmesh::detail

@@ -533,9 +533,7 @@ struct Sculpt::Impl {
                     if (a.owned_row_count.empty()) continue;
                     const std::uint32_t cnt = a.owned_row_count[lz * a.owned_rows_y + ly];
                     for (std::uint32_t i = 0; i < cnt; ++i) {
-                        if (total_vertices >= std::numeric_limits<std::uint32_t>::max())
-                            throw Error("the mesh would have more than 2^32-1 vertices; 32-bit indices cannot "
-                                        "address it (mesh a sub-volume or a coarser volume)");
+                        detail::check_vertex_count(total_vertices + 1);
                         a.owned_gid[a.vertex_cursor++] = static_cast<std::uint32_t>(total_vertices++);
                     }
                 }
