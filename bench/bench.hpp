@@ -63,6 +63,7 @@ struct Result {
 
     double peak_rss_mb = 0;     // process peak while extracting (VmHWM after a reset)
     double extract_rss_mb = 0;  // that peak minus the RSS just before extract()
+    double setup_rss_mb = -1;   // --setup-first: that call's peak minus the RSS before it (-1: not done)
     std::string rss_scope;      // "run" (VmHWM reset per run) or "process" (lifetime peak)
     double volume_mb = 0, mesh_mb = 0;
 
@@ -76,6 +77,9 @@ struct Settings {
     bool quiet = false;
     bool reuse_mesh = false;  // extract_into() one Mesh kept across runs, instead of extract()
     bool interleave = false;  // an input's combinations take turns run by run (measure_interleaved)
+    // Before its runs, each combination meshes the volume's first 3 z-planes once: set-up (the
+    // OpenCL runtime, program builds) is paid there, so a first run's memory is extraction's.
+    bool setup_first = false;
 };
 
 // ---- measure.cpp ----
@@ -96,6 +100,7 @@ class Runner {
 public:
     Runner(const Input& input, const Combo& combo, const Settings& settings);
     bool run(bool timed);  // false once the combination failed (status and error set)
+    void setup();          // --setup-first: the volume's first 3 z-planes meshed once, untimed
     Result finish();       // medians of the timed runs
 
 private:

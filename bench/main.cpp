@@ -106,6 +106,9 @@ int main(int argc, char** argv) {
                  "mesh every run into one kept Mesh with extract_into() (no fresh output pages), not extract()");
     app.add_flag("--interleave", settings.interleave,
                  "an input's combinations take turns run by run (robust ratios on a machine whose speed drifts)");
+    app.add_flag("--setup-first", settings.setup_first,
+                 "before its runs, each combination meshes the volume's first 3 z-planes once (OpenCL runtime and "
+                 "program builds paid there; its memory is printed as a note)");
     app.add_flag("--paper", paper, "the paper's Table 1 grid: sizes 64..512 x threads 1,2,4,6,16 on the CPU");
     app.add_flag("--sculpt", sculpt,
                  "sculpting: a built-in stroke path over a sphere, update latency p50/p95/p99 beside a full re-mesh "

@@ -224,6 +224,22 @@ bool Runner::run(bool timed) {
     return false;
 }
 
+void Runner::setup() {
+    Result& r = result_;
+    if (!settings_.setup_first || r.status != "ok") return;
+    voxmesh::VolumeView first_planes = view_;
+    first_planes.dims[2] = std::min<std::size_t>(first_planes.dims[2], 3);
+    try {
+        if (per_run_rss_) reset_hwm();
+        const double rss_before = status_mb("VmRSS");
+        voxmesh::Stats stats;
+        voxmesh::extract(first_planes, options_, stats);
+        r.setup_rss_mb = status_mb("VmHWM") - rss_before;
+    } catch (const std::exception&) {
+        // The timed runs report what cannot run here.
+    }
+}
+
 Result Runner::finish() {
     Result r = std::move(result_);
     kept_ = voxmesh::Mesh{};
@@ -247,6 +263,7 @@ Result Runner::finish() {
 
 Result measure(const Input& input, const Combo& combo, const Settings& settings) {
     Runner runner(input, combo, settings);
+    runner.setup();
     for (int i = 0; i < settings.warmup && !g_interrupted; ++i)
         if (!runner.run(false)) break;
     for (int i = 0; i < std::max(1, settings.repeat) && !g_interrupted; ++i)
@@ -259,6 +276,7 @@ std::vector<Result> measure_interleaved(const Input& input, const std::vector<Co
     std::vector<std::unique_ptr<Runner>> runners;
     for (const Combo& c : combos) runners.push_back(std::make_unique<Runner>(input, c, settings));
     const std::size_t n = runners.size();
+    for (auto& runner : runners) runner->setup();
     for (int i = 0; i < settings.warmup && !g_interrupted; ++i)
         for (auto& runner : runners) runner->run(false);
     for (int i = 0; i < std::max(1, settings.repeat) && !g_interrupted; ++i)

@@ -105,6 +105,9 @@ void print_table(const std::vector<Result>& results) {
                     r.device.c_str(), r.threads, r.median_s, r.min_s, r.max_s, r.mvox_s, r.triangles, r.floor_s,
                     r.floor_ratio, speed.c_str(), r.peak_rss_mb, r.extract_rss_mb, over, r.classify_s, r.scan_s,
                     r.generate_s, kernel.c_str(), transfer.c_str());
+        if (r.setup_rss_mb >= 0)
+            std::printf("    note: set-up (--setup-first, the first 3 z-planes meshed once before the runs) took %.0f MB\n",
+                        r.setup_rss_mb);
         for (const auto& w : r.warnings) std::printf("    note: %s\n", w.c_str());
     }
     bool any = false;
@@ -176,7 +179,8 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
           << ",\"floor_ratio\":" << opt(r.floor_ratio)
           << ",\"speedup\":" << (r.speedup > 0 ? num(r.speedup) : "null")
           << ",\"speedup_base_threads\":" << r.speedup_base_threads << ",\"peak_rss_mb\":" << opt(r.peak_rss_mb)
-          << ",\"extract_rss_mb\":" << opt(r.extract_rss_mb) << ",\"rss_scope\":\"" << r.rss_scope
+          << ",\"extract_rss_mb\":" << opt(r.extract_rss_mb)
+          << ",\"setup_rss_mb\":" << (r.setup_rss_mb >= 0 ? num(r.setup_rss_mb) : "null") << ",\"rss_scope\":\"" << r.rss_scope
           << "\",\"volume_mb\":" << num(r.volume_mb) << ",\"mesh_mb\":" << opt(r.mesh_mb) << ",\"warnings\":[";
         for (std::size_t i = 0; i < r.warnings.size(); ++i) o << (i ? "," : "") << '"' << json_escape(r.warnings[i]) << '"';
         o << "]}";

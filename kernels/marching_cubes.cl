@@ -297,11 +297,12 @@ inline uint edge_id(uint base, EdgeMasks m, uint b, uint axis) {
 // x = 32 q + b + dx of row k has the id of its word's first vertex plus the crossed edges
 // before it in that word. Only the word groups classify_rows marked are visited, and words
 // without a non-uniform cell there are skipped. case_corners: per case the triangle count,
-// then each corner as dx | k << 1 | axis << 3 (the host's case_corner_table).
+// then each corner as dx | k << 1 | axis << 3 (the host's case_corner_table). Ids are the
+// chunk's plus vertex_offset, its first vertex's id in the mesh.
 __kernel void generate_triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz,
                                  const uint words, const uint begin, const uint cell_rows, const uint rows,
                                  const uint tend, __global const uint* tbase, __global const uint* vbase,
-                                 __global const word_id* wbase, __global const ulong* cell_groups,
+                                 const uint vertex_offset, __global const word_id* wbase, __global const ulong* cell_groups,
                                  __constant uchar* case_corners, const int inside_below, __global uint* indices) {
     const uint r = (uint)get_global_id(0);
     if (r >= cell_rows || scanned_count(tbase, r, rows, tend) == 0) return;
@@ -320,7 +321,7 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
         ry[k] = row_y(bits, rk, j + (k & 1u), ny, words);
         rz[k] = row_z(bits, rk, z + (k >> 1), ny, nz, words);
         word_base[k] = wbase + rk * words;
-        row_first[k] = vbase[rk];
+        row_first[k] = vertex_offset + vbase[rk];
     }
     __global uint* out = indices + 3 * t;
     const uint group = word_group(words);

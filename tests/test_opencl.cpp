@@ -217,7 +217,7 @@ TEST_CASE("OpenCL with copies in and out (a discrete GPU's path) matches the CPU
     const Pretend discrete(detail::opencl_pretend_discrete);
     Grid g{{45, 38, 41}, {1, 0.75, 1.25}, {2, -3, 1}};
     const std::vector<float> f = torus(g);
-    for (std::size_t planes : {0, 6}) {  // one chunk; chunks whose pieces are assembled
+    for (std::size_t planes : {0, 6}) {  // one chunk; several, each copied out into its place
         INFO("chunk_planes " << planes);
         Options o;
         o.chunk_planes = planes;
@@ -338,6 +338,41 @@ TEST_CASE("OpenCL tiny chunks and a small memory budget give the same mesh", "[o
     o.memory_budget = 100;
     require_same(cpu, run(v, o, Backend::OpenCL, &stats), v);
     CHECK(!stats.warnings.empty());
+}
+
+TEST_CASE("OpenCL on a host-memory device keeps its working buffers to a share of the volume", "[opencl]") {
+    if (!have_device()) return;
+    if (!list_devices()[0].host_memory) {
+        WARN("device 0 does not share host memory: this test is SKIPPED");
+        return;
+    }
+    // 8-bit samples: the inside bits alone are 1/8 of the volume, and with the word bases and
+    // row counts more than one chunk may hold; the device counts several chunks, then packs
+    // each again (but the last) to generate it straight into its place in the mesh.
+    Grid g{{512, 256, 256}};
+    std::vector<std::uint8_t> u8(g.size());
+    std::size_t i = 0;
+    for (std::size_t z = 0; z < g.dims[2]; ++z)
+        for (std::size_t y = 0; y < g.dims[1]; ++y)
+            for (std::size_t x = 0; x < g.dims[0]; ++x) {
+                const double dx = double(x) - 255.5, dy = double(y) - 130.0, dz = double(z) - 126.0;
+                const double r = std::sqrt(dx * dx + 4 * dy * dy + 4 * dz * dz);  // an ellipsoid
+                u8[i++] = static_cast<std::uint8_t>(std::clamp(128.0 + 2.0 * (200.0 - r), 0.0, 255.0));
+            }
+    const VolumeView v = view_of(u8.data(), ScalarType::U8, g);
+    Options o;
+    o.iso = 127.5;
+    const Mesh cpu = run(v, o, Backend::Cpu);
+    REQUIRE(cpu.triangle_count() > 100000);
+    for (bool normals : {true, false}) {
+        INFO("normals " << normals);
+        o.normals = normals;
+        Stats stats;
+        const Mesh cl = run(v, o, Backend::OpenCL, &stats);
+        REQUIRE(stats.devices.size() == 1);
+        CHECK(stats.devices[0].chunks >= 2);
+        require_same(normals ? cpu : run(v, o, Backend::Cpu), cl, v);
+    }
 }
 
 TEST_CASE("Hybrid runs the CPU engine and OpenCL on one queue", "[opencl]") {
@@ -575,7 +610,7 @@ TEST_CASE("OpenCL extract_into gives extract()'s mesh in a reused mesh's storage
     mesh.positions.assign(900000, -7.f);
     mesh.normals.assign(900000, 3.f);
     mesh.indices.assign(1200000, 0xdeadbeefu);
-    for (std::size_t chunk_planes : {0u, 5u}) {  // one chunk (written in place), several (assembled)
+    for (std::size_t chunk_planes : {0u, 5u}) {  // one chunk, several (each written at its offsets)
         for (bool normals : {true, false}) {
             INFO("chunk_planes " << chunk_planes << " normals " << normals);
             Options o;

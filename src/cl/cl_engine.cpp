@@ -1,7 +1,8 @@
 // The OpenCL engine: z-chunks from one shared queue, pulled by every selected device (and by
 // the CPU engine in Hybrid), each chunk meshed by the bit-row kernels of marching_cubes.cl
-// (classify: pack + per-row counts, scan over rows, generate: vertices + triangles), and the
-// chunks assembled into the canonical mesh.
+// (classify: pack + per-row counts, scan over rows, generate: vertices + triangles). Every
+// chunk is counted first; then the mesh is allocated once and each chunk generates straight
+// into it at its offsets (no per-chunk meshes, no copy).
 //
 // A chunk is a z-range [begin, end) with the CPU engine's ownership rule (cpu_engine.hpp):
 // it owns the vertices of sample planes [begin, end) and the triangles of cell planes
@@ -63,10 +64,22 @@ struct ChunkShape {
     std::size_t data_samples;
 };
 
-struct Piece {  // one meshed z-range, with chunk-local vertex ids
+// One z-range meshed by one worker in two phases. Every worker first counts its ranges
+// (classify + scan); once all counts are known the mesh is allocated once, at its final
+// size, and every range is generated straight into it at its offsets: no range is meshed
+// into a mesh of its own and copied, so the mesh exists once, however many chunks there are.
+struct Piece {
     ZRange range;
-    std::uint64_t vertices = 0;  // owned; indices may refer to the next chunk's first plane too
-    Mesh mesh;
+    unsigned worker = 0;   // who counted it and generates it: a device job's index, or the CPU worker
+    bool on_cpu = false;   // counted by the CPU engine (Hybrid's CPU worker, or a device's fallback)
+    unsigned cpu_threads = 1;
+    CpuChunkPlan plan;     // on_cpu: the CPU engine's classify + scan
+    // On a device: the scanned per-row vertex and triangle counts and the word groups of each
+    // cell row, kept on the device between the phases.
+    cl::Buffer vbase, tbase, cell_groups;
+    std::uint64_t all_vertices = 0;  // on a device: the range's id space, plane `end`'s vertices included
+    std::uint64_t vertices = 0, triangles = 0;          // owned by the range
+    std::uint64_t first_vertex = 0, first_triangle = 0;  // where they go in the mesh
 };
 
 const char* cl_type_name(ScalarType type) {
@@ -85,9 +98,19 @@ const char* cl_type_name(ScalarType type) {
 
 bool is_integer(ScalarType type) { return type != ScalarType::F32 && type != ScalarType::F64; }
 
+bool same_range(ZRange a, ZRange b) { return a.end > a.begin && a.begin == b.begin && a.end == b.end; }
+
 std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
 
 constexpr std::size_t kLocalSize = 256;  // work-group size of marching_cubes.cl launches, where allowed
+
+// A device that shares host memory holds its working buffers (bits, word bases, row counts)
+// in the process's memory: automatic chunks keep them within this share of the volume's
+// bytes (at least kMinWorkingBytes), so that meshing stays within volume + mesh + 10 %.
+// Where a device gets several chunks, generate packs a chunk's bits again (one more read of
+// its samples) instead of keeping every chunk's bits.
+constexpr double kHostWorkingShare = 0.07;
+constexpr std::size_t kMinWorkingBytes = std::size_t{4} << 20;
 
 // What one call needs to know about a device: how samples reach it and the kernel arguments
 // that do not change from chunk to chunk.
@@ -97,11 +120,18 @@ struct DeviceJob {
     bool fp64 = false;                         // kernels interpolate in double
     bool convert = false;                      // f64 without cl_khr_fp64: converted to f32 per chunk
     bool cpu_only = false;                     // converted, but iso is out of float range
+    bool host_memory = false;                  // the mesh is written in place; buffers live in host memory
+    bool zero_copy = false;                    // ... and the kernels read the caller's samples in place
     std::string options;
     std::vector<unsigned char> threshold;      // bytes of a device_type value
     std::size_t limit = 0;                     // bytes one chunk may use
     std::size_t local = kLocalSize;            // work-group size of every launch
     std::size_t word_id_bytes = 4;             // of the per-word vertex id bases (2 or 4)
+    std::size_t pieces_counted = 0;            // this call; the first uses the kept row buffers
+    // The range whose samples / bits the kData / kBits buffers hold now (empty: none), and
+    // those buffers' handles then: generate uploads or packs again only when they differ.
+    ZRange data_of, bits_of;
+    cl_mem data_mem = nullptr, bits_mem = nullptr;
     DeviceStats stats;
     double pass_seconds[3] = {0, 0, 0};
 };
@@ -127,29 +157,36 @@ private:
     ZRange worst_range(std::size_t planes) const {
         return planes >= nz_ ? ZRange{0, nz_} : ZRange{1, std::min(1 + planes, nz_)};
     }
+    std::size_t working_bytes(const DeviceJob& job, const ChunkShape& s) const;
     std::size_t fixed_bytes(const DeviceJob& job, const ChunkShape& s) const;
     bool fits(const DeviceJob& job, const ChunkShape& s) const;
     std::vector<ZRange> make_chunks(const std::vector<DeviceJob>& jobs) const;
-    void device_worker(DeviceJob& job);
-    void process(DeviceJob& job, ZRange range, std::vector<Piece>& out);
-    Piece run_on_device(DeviceJob& job, ZRange range);
-    Piece run_on_cpu(ZRange range, unsigned threads);
-    void cpu_worker();
-    Mesh assemble(std::vector<std::vector<Piece>>& results);
+    // Phase 1: count.
+    void device_count_worker(DeviceJob& job, unsigned worker);
+    void count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Piece>& out);
+    void count_on_device(DeviceJob& job, Piece& piece);
+    Piece count_on_cpu(ZRange range, unsigned worker, unsigned threads);
+    void cpu_count_worker(unsigned worker);
+    // Phase 2: generate into the mesh.
+    void generate_pieces(std::vector<DeviceJob>& jobs, unsigned worker, Mesh& mesh);
+    void generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh);
+    void generate_on_cpu(Piece& piece, Mesh& mesh);
+    cl::Buffer samples_on_device(DeviceJob& job, const Piece& piece, const ChunkShape& s, EventLog& log);
+    void pack_bits(DeviceJob& job, const Piece& piece, const ChunkShape& s, const cl::Buffer& data, EventLog& log);
+    void launch(DeviceJob& job, cl::Kernel& k, std::size_t n, Pass pass, EventLog& log);
+    void add_times(DeviceJob& job, const EventLog& log);
     void warn(const std::string& message);
     bool next_chunk(std::size_t& index);
-    Mesh take_storage();
 
     const VolumeView& volume_;
     const Options& options_;
     bool hybrid_;
-    Mesh storage_;  // the caller's arrays to reuse: for the one piece of a single chunk, or the assembled mesh
-    std::atomic<bool> storage_taken_{false};
+    Mesh storage_;  // the caller's arrays for the mesh to reuse
     std::size_t nx_, ny_, nz_, plane_;
     unsigned threads_;
 
     std::vector<ZRange> chunks_;
-    std::vector<std::vector<Piece>> results_;
+    std::vector<std::vector<Piece>> results_;  // per chunk, its pieces in z order
     std::atomic<std::size_t> next_{0};
     std::atomic<bool> abort_{false};
     std::mutex mutex_;  // warnings_, fallback_ stats
@@ -157,12 +194,6 @@ private:
     DeviceStats cpu_stats_, fallback_stats_;
     double cpu_pass_seconds_[3] = {0, 0, 0};
 };
-
-// The caller's storage for the first taker; an empty mesh after that.
-Mesh Engine::take_storage() {
-    if (storage_taken_.exchange(true)) return Mesh{};
-    return std::move(storage_);
-}
 
 void Engine::warn(const std::string& message) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -194,12 +225,15 @@ std::vector<std::shared_ptr<Device>> Engine::select_devices() const {
     return chosen;
 }
 
+// The caller holds the device's mutex (run() holds every selected device's for the call).
 void Engine::prepare(DeviceJob& job) {
     const DeviceInfo& info = job.device->info;
     job.stats.name = info.name;
     job.fp64 = info.fp64 && !g_pretend_no_fp64;
     job.convert = volume_.type == ScalarType::F64 && !job.fp64;
     job.device_type = job.convert ? ScalarType::F32 : volume_.type;
+    job.host_memory = info.host_memory && !g_pretend_discrete;
+    job.zero_copy = job.host_memory && !job.convert;
     job.options = std::string("-cl-std=CL1.2 -DVOXEL_T=") + cl_type_name(job.device_type);
     if (is_integer(job.device_type)) job.options += " -DVOXEL_INTEGER";
     if (job.device->info.type == DeviceType::Cpu) job.options += " -DCPU_PREFETCH";
@@ -222,7 +256,6 @@ void Engine::prepare(DeviceJob& job) {
     // Build now, in the caller's thread, so that a build failure surfaces at once. Programs
     // are cached per device and options: only the first call pays for them.
     const auto t0 = Clock::now();
-    std::lock_guard<std::mutex> lock(job.device->mutex);
     const std::size_t built = job.device->programs_built;
     for (const char* name : {"classify_pack", "classify_rows", "generate_vertices", "generate_triangles"}) {
         const std::size_t most =
@@ -252,11 +285,15 @@ ChunkShape Engine::shape(ZRange range) const {
     return s;
 }
 
-// Device bytes of a chunk, outputs excluded: samples, bits, a vertex id per row word, two
-// counts and a word-group mask per row (+ the scan's block sums).
+// Device bytes of a chunk besides its samples and outputs: bits, a vertex id per row word,
+// two counts and a word-group mask per row (+ the scan's block sums).
+std::size_t Engine::working_bytes(const DeviceJob& job, const ChunkShape& s) const {
+    return s.bit_words * 4 + s.rows * s.words * job.word_id_bytes + s.rows * 16 + s.rows / 128 + 64;
+}
+
+// Device bytes of a chunk, outputs excluded.
 std::size_t Engine::fixed_bytes(const DeviceJob& job, const ChunkShape& s) const {
-    return s.data_samples * scalar_size(job.device_type) + s.bit_words * 4 + s.rows * s.words * job.word_id_bytes +
-           s.rows * 16 + s.rows / 128 + 64;
+    return s.data_samples * scalar_size(job.device_type) + working_bytes(job, s);
 }
 
 // Whether a chunk can fit the device before its outputs are known: the fixed part must
@@ -273,18 +310,28 @@ std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) cons
     if (options_.chunk_planes > 0) {
         planes = options_.chunk_planes;
     } else {
-        // Largest chunk every device can take; with several workers, about four chunks
-        // each so that faster workers pull more.
+        // Largest chunk every device can take (a device in host memory: within its share of
+        // the volume's bytes); with several workers, about four chunks each so that faster
+        // workers pull more. Chunks of about equal size.
+        const std::size_t volume_bytes = nx_ * ny_ * nz_ * scalar_size(volume_.type);
+        const std::size_t host_working = std::max(
+            kMinWorkingBytes, static_cast<std::size_t>(kHostWorkingShare * static_cast<double>(volume_bytes)));
         for (const DeviceJob& job : jobs) {
+            const auto ok = [&](std::size_t n) {
+                const ChunkShape s = shape(worst_range(n));
+                return fits(job, s) && (!job.host_memory || working_bytes(job, s) <= host_working);
+            };
             std::size_t lo = 1, hi = nz_;
             while (lo < hi) {
                 const std::size_t mid = (lo + hi + 1) / 2;
-                if (fits(job, shape(worst_range(mid)))) lo = mid; else hi = mid - 1;
+                if (ok(mid)) lo = mid; else hi = mid - 1;
             }
             planes = std::min(planes, lo);
         }
         const std::size_t workers = jobs.size() + (hybrid_ ? 1 : 0);
         if (workers > 1) planes = std::min(planes, std::max<std::size_t>(1, (nz_ + 4 * workers - 1) / (4 * workers)));
+        const std::size_t count = (nz_ + planes - 1) / planes;
+        planes = (nz_ + count - 1) / count;
     }
     planes = std::max<std::size_t>(planes, 1);
     std::vector<ZRange> chunks;
@@ -298,167 +345,13 @@ bool Engine::next_chunk(std::size_t& index) {
     return index < chunks_.size();
 }
 
-Piece Engine::run_on_cpu(ZRange range, unsigned threads) {
-    Piece piece;
-    piece.range = range;
-    CpuChunkPlan plan = cpu_classify(volume_, options_, range, threads);
-    piece.vertices = plan.vertices;
-    if (chunks_.size() == 1) piece.mesh = take_storage();
-    allocate_output(piece.mesh, plan.vertices, plan.triangles, options_.normals, threads);
-    cpu_generate(plan, volume_, options_, threads,
-                 MeshOut{piece.mesh.positions.data(), options_.normals ? piece.mesh.normals.data() : nullptr,
-                         piece.mesh.indices.data(), 0});
-    return piece;
+void Engine::launch(DeviceJob& job, cl::Kernel& k, std::size_t n, Pass pass, EventLog& log) {
+    // Fixed work-group size: PoCL compiles a kernel once per local size it is launched with.
+    job.device->queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(round_up(n, job.local)),
+                                           cl::NDRange(job.local), nullptr, &log.add(pass));
 }
 
-Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
-    Device& d = *job.device;
-    const ChunkShape s = shape(range);
-    const DeviceInfo& info = d.info;
-    if (!fits(job, s)) {
-        if (s.planes > 1) throw TooBig{};
-        if (s.data_samples > kMaxChunkSamples || s.data_samples * scalar_size(job.device_type) > info.max_allocation ||
-            fixed_bytes(job, s) > job.limit)
-            throw TooBig{};
-    }
-    const std::size_t sample_bytes = scalar_size(job.device_type);
-    const std::size_t first_sample = (range.begin - s.zlo) * plane_;  // of plane `begin` in the device's samples
-
-    EventLog log;
-    std::vector<float> converted;
-    Piece piece;
-    piece.range = range;
-    const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
-    // Fixed work-group size: PoCL compiles a kernel once per local size it is launched with.
-    const auto launch = [&](cl::Kernel& k, std::size_t n, Pass pass) {
-        d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(round_up(n, job.local)), cl::NDRange(job.local),
-                                     nullptr, &log.add(pass));
-    };
-    try {
-        // Upload the planes, in place (or converted from f64 keeping every inside bit). A device
-        // that shares the host's memory reads the caller's samples where they are.
-        const bool host_memory = info.host_memory && !g_pretend_discrete;
-        const bool zero_copy = host_memory && !job.convert;
-        cl::Buffer in_place;
-        cl::Buffer& data = zero_copy ? in_place : d.buffer(kData, s.data_samples * sample_bytes);
-        const auto* bytes =
-            static_cast<const unsigned char*>(volume_.data) + s.zlo * plane_ * scalar_size(volume_.type);
-        if (job.convert) {
-            const double* src = reinterpret_cast<const double*>(bytes);
-            float thr;
-            std::memcpy(&thr, job.threshold.data(), sizeof(thr));
-            converted.resize(s.data_samples);
-            for (std::size_t i = 0; i < s.data_samples; ++i) {
-                const double v = src[i];
-                float f = static_cast<float>(std::clamp(v, -static_cast<double>(FLT_MAX), static_cast<double>(FLT_MAX)));
-                if (!std::isfinite(v)) f = std::numeric_limits<float>::quiet_NaN();  // refused in the kernel
-                else if (v >= options_.iso && !(f >= thr)) f = thr;
-                else if (v < options_.iso && f >= thr) f = std::nextafter(thr, -std::numeric_limits<float>::infinity());
-                converted[i] = f;
-            }
-            bytes = reinterpret_cast<const unsigned char*>(converted.data());
-        }
-        if (zero_copy)
-            in_place = cl::Buffer(d.context, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, s.data_samples * sample_bytes,
-                                  const_cast<unsigned char*>(bytes));  // read only: the kernels never write it
-        else
-            d.queue.enqueueWriteBuffer(data, CL_FALSE, 0, s.data_samples * sample_bytes, bytes, nullptr,
-                                       &log.add(Pass::Transfer));
-        cl::Buffer& bits = d.buffer(kBits, s.bit_words * 4);
-        cl::Buffer& vbase = d.buffer(kVBase, s.rows * 4);  // per row: counts, then their prefix sums
-        cl::Buffer& tbase = d.buffer(kTBase, s.rows * 4);
-        cl::Buffer& cell_groups = d.buffer(kCellGroups, s.rows * 8);  // per cell row: word groups to visit
-        cl::Buffer& nan = d.buffer(kNan, sizeof(cl_int));
-        const cl_int no_nan = INT_MAX;
-        d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
-
-        cl::Kernel& pack = d.mc_kernel(job.options, "classify_pack");
-        set_args(pack, data, ArgBytes{job.threshold}, u(nx_), u(ny_), u(s.words), u(range.begin), u(first_sample),
-                 u(s.bit_rows), bits, nan);
-        launch(pack, s.bit_rows, Pass::Classify);
-
-        cl::Kernel& count = d.mc_kernel(job.options, "classify_rows");
-        set_args(count, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin), u(s.cell_end), u(s.rows),
-                 d.case_table, vbase, tbase, cell_groups);
-        launch(count, s.rows, Pass::Classify);
-
-        const std::uint64_t all_vertices = scan(d, vbase, s.rows, log);
-        const std::uint64_t triangles = scan(d, tbase, s.rows, log);
-        cl_int nan_plane = INT_MAX;
-        d.queue.enqueueReadBuffer(nan, CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr, &log.add(Pass::Transfer));
-        if (nan_plane != INT_MAX)
-            throw Error("volume has NaN or infinite samples (first seen in z-plane " + std::to_string(nan_plane) +
-                        "); replace them with finite values before meshing");
-        if (all_vertices > std::numeric_limits<std::uint32_t>::max() ||
-            triangles > std::numeric_limits<std::uint32_t>::max())
-            throw TooBig{};
-        std::uint64_t vertices = all_vertices;
-        if (s.owned_rows < s.rows) {  // plane `end`'s first vertex id: its first row's base
-            cl_uint v = 0;
-            d.queue.enqueueReadBuffer(vbase, CL_TRUE, s.owned_rows * 4, sizeof(v), &v, nullptr,
-                                      &log.add(Pass::Transfer));
-            vertices = v;
-        }
-        // Outputs, sized by the scan totals.
-        const std::size_t out_bytes = vertices * (12 + (options_.normals ? 12 : 0)) + triangles * 12;
-        if (vertices * 12 > info.max_allocation || triangles * 12 > info.max_allocation ||
-            fixed_bytes(job, s) + out_bytes > job.limit) {
-            if (s.planes > 1) throw TooBig{};
-        }
-        piece.vertices = vertices;
-        if (chunks_.size() == 1) piece.mesh = take_storage();
-        allocate_output(piece.mesh, vertices, triangles, options_.normals, threads_);
-        // Where the device shares host memory, the kernels write the mesh where it will stay.
-        const auto output = [&](unsigned slot, auto& host, std::size_t bytes) -> cl::Buffer {
-            if (host_memory)
-                return cl::Buffer(d.context, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, host.data());
-            return d.buffer(slot, bytes);
-        };
-        const auto fetch = [&](const cl::Buffer& buffer, auto& host, std::size_t bytes) {
-            if (host_memory) {  // a mapped USE_HOST_PTR buffer is the host array, up to date
-                void* p = d.queue.enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_READ, 0, bytes);
-                d.queue.enqueueUnmapMemObject(buffer, p, nullptr, &log.add(Pass::Transfer));
-            } else {
-                d.queue.enqueueReadBuffer(buffer, CL_FALSE, 0, bytes, host.data(), nullptr, &log.add(Pass::Transfer));
-            }
-        };
-        // Per meta row and word, the id of the word's first vertex: written with the vertices.
-        cl::Buffer& word_base = d.buffer(kWordBase, s.rows * s.words * job.word_id_bytes);
-        if (all_vertices > 0) {
-            cl::Buffer positions = vertices > 0 ? output(kPositions, piece.mesh.positions, vertices * 12)
-                                                : d.buffer(kPositions, 16);
-            cl::Buffer normals = options_.normals && vertices > 0
-                                     ? output(kNormals, piece.mesh.normals, vertices * 12)
-                                     : d.buffer(kNormals, 16);
-            cl::Kernel& k = d.mc_kernel(job.options, "generate_vertices");
-            set_args(k, data, bits, ArgBytes{job.threshold},
-                     ArgVertexFormula{options_.iso, is_integer(job.device_type), job.fp64, volume_.origin,
-                                      volume_.spacing},
-                     u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin), u(first_sample), u(s.owned_rows), u(s.rows),
-                     u(all_vertices), vbase, static_cast<cl_int>(options_.inside_below),
-                     static_cast<cl_int>(options_.normals), positions, normals, word_base);
-            launch(k, s.rows, Pass::Generate);
-            if (vertices > 0) fetch(positions, piece.mesh.positions, vertices * 12);
-            if (options_.normals && vertices > 0) fetch(normals, piece.mesh.normals, vertices * 12);
-        }
-        if (triangles > 0) {
-            cl::Buffer indices = output(kIndices, piece.mesh.indices, triangles * 12);
-            cl::Kernel& k = d.mc_kernel(job.options, "generate_triangles");
-            set_args(k, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin), u(s.cell_rows), u(s.rows),
-                     u(triangles), tbase, vbase, word_base, cell_groups, d.case_corners,
-                     static_cast<cl_int>(options_.inside_below), indices);
-            launch(k, s.cell_rows, Pass::Generate);
-            fetch(indices, piece.mesh.indices, triangles * 12);
-        }
-        d.queue.finish();
-    } catch (...) {
-        // Nothing may still read from or write into host memory we are about to free.
-        try {
-            d.queue.finish();
-        } catch (const cl::Error&) {
-        }
-        throw;
-    }
+void Engine::add_times(DeviceJob& job, const EventLog& log) {
     for (const auto& [pass, event] : log.events) {
         const double s = event_seconds(event);
         if (pass == Pass::Transfer) {
@@ -468,15 +361,153 @@ Piece Engine::run_on_device(DeviceJob& job, ZRange range) {
             job.pass_seconds[static_cast<int>(pass)] += s;
         }
     }
+}
+
+// The piece's sample planes on the device: the caller's samples in place where the device
+// shares host memory, else uploaded (or converted from f64 keeping every inside bit) into
+// the kData buffer, unless it holds them already.
+cl::Buffer Engine::samples_on_device(DeviceJob& job, const Piece& piece, const ChunkShape& s, EventLog& log) {
+    Device& d = *job.device;
+    const std::size_t sample_bytes = scalar_size(job.device_type);
+    const auto* bytes = static_cast<const unsigned char*>(volume_.data) + s.zlo * plane_ * scalar_size(volume_.type);
+    if (job.zero_copy)  // read only: the kernels never write it
+        return cl::Buffer(d.context, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, s.data_samples * sample_bytes,
+                          const_cast<unsigned char*>(bytes));
+    cl::Buffer& data = d.buffer(kData, s.data_samples * sample_bytes);
+    if (same_range(job.data_of, piece.range) && job.data_mem == data()) return data;
+    std::vector<float> converted;
+    if (job.convert) {
+        const double* src = reinterpret_cast<const double*>(bytes);
+        float thr;
+        std::memcpy(&thr, job.threshold.data(), sizeof(thr));
+        converted.resize(s.data_samples);
+        for (std::size_t i = 0; i < s.data_samples; ++i) {
+            const double v = src[i];
+            float f = static_cast<float>(std::clamp(v, -static_cast<double>(FLT_MAX), static_cast<double>(FLT_MAX)));
+            if (!std::isfinite(v)) f = std::numeric_limits<float>::quiet_NaN();  // refused in the kernel
+            else if (v >= options_.iso && !(f >= thr)) f = thr;
+            else if (v < options_.iso && f >= thr) f = std::nextafter(thr, -std::numeric_limits<float>::infinity());
+            converted[i] = f;
+        }
+        bytes = reinterpret_cast<const unsigned char*>(converted.data());
+    }
+    // Blocking when converted: `converted` is freed on return.
+    d.queue.enqueueWriteBuffer(data, job.convert ? CL_TRUE : CL_FALSE, 0, s.data_samples * sample_bytes, bytes,
+                               nullptr, &log.add(Pass::Transfer));
+    job.data_of = piece.range;
+    job.data_mem = data();
+    return data;
+}
+
+// classify_pack: the piece's inside bits into kBits (its NaN test into kNan).
+void Engine::pack_bits(DeviceJob& job, const Piece& piece, const ChunkShape& s, const cl::Buffer& data,
+                       EventLog& log) {
+    Device& d = *job.device;
+    const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
+    cl::Buffer& bits = d.buffer(kBits, s.bit_words * 4);
+    cl::Buffer& nan = d.buffer(kNan, sizeof(cl_int));
+    const cl_int no_nan = INT_MAX;
+    d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
+    const std::size_t first_sample = (piece.range.begin - s.zlo) * plane_;  // of plane `begin` in the device's samples
+    cl::Kernel& pack = d.mc_kernel(job.options, "classify_pack");
+    set_args(pack, data, ArgBytes{job.threshold}, u(nx_), u(ny_), u(s.words), u(piece.range.begin), u(first_sample),
+             u(s.bit_rows), bits, nan);
+    launch(job, pack, s.bit_rows, Pass::Classify, log);
+    job.bits_of = piece.range;
+    job.bits_mem = bits();
+}
+
+void Engine::count_on_device(DeviceJob& job, Piece& piece) {
+    Device& d = *job.device;
+    const ZRange range = piece.range;
+    const ChunkShape s = shape(range);
+    const DeviceInfo& info = d.info;
+    if (!fits(job, s)) {
+        if (s.planes > 1) throw TooBig{};
+        if (s.data_samples > kMaxChunkSamples || s.data_samples * scalar_size(job.device_type) > info.max_allocation ||
+            fixed_bytes(job, s) > job.limit)
+            throw TooBig{};
+    }
+    const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
+    EventLog log;
+    try {
+        const cl::Buffer data = samples_on_device(job, piece, s, log);
+        pack_bits(job, piece, s, data, log);
+        // Per row: counts, then their prefix sums; per cell row: word groups to visit. The
+        // device's first piece of a call uses the kept buffers, further pieces their own.
+        if (job.pieces_counted == 0) {
+            piece.vbase = d.buffer(kVBase, s.rows * 4);
+            piece.tbase = d.buffer(kTBase, s.rows * 4);
+            piece.cell_groups = d.buffer(kCellGroups, s.rows * 8);
+        } else {
+            piece.vbase = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.rows * 4);
+            piece.tbase = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.rows * 4);
+            piece.cell_groups = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.rows * 8);
+        }
+        job.pieces_counted += 1;
+        cl::Kernel& rows = d.mc_kernel(job.options, "classify_rows");
+        set_args(rows, d.buffer(kBits, s.bit_words * 4), u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin),
+                 u(s.cell_end), u(s.rows), d.case_table, piece.vbase, piece.tbase, piece.cell_groups);
+        launch(job, rows, s.rows, Pass::Classify, log);
+
+        piece.all_vertices = scan(d, piece.vbase, s.rows, log);
+        piece.triangles = scan(d, piece.tbase, s.rows, log);
+        cl_int nan_plane = INT_MAX;
+        d.queue.enqueueReadBuffer(d.buffer(kNan, sizeof(cl_int)), CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr,
+                                  &log.add(Pass::Transfer));
+        if (nan_plane != INT_MAX)
+            throw Error("volume has NaN or infinite samples (first seen in z-plane " + std::to_string(nan_plane) +
+                        "); replace them with finite values before meshing");
+        if (piece.all_vertices > std::numeric_limits<std::uint32_t>::max() ||
+            piece.triangles > std::numeric_limits<std::uint32_t>::max())
+            throw TooBig{};
+        piece.vertices = piece.all_vertices;
+        if (s.owned_rows < s.rows) {  // plane `end`'s first vertex id: its first row's base
+            cl_uint v = 0;
+            d.queue.enqueueReadBuffer(piece.vbase, CL_TRUE, s.owned_rows * 4, sizeof(v), &v, nullptr,
+                                      &log.add(Pass::Transfer));
+            piece.vertices = v;
+        }
+        // Outputs in device memory, sized by the scan totals, must fit beside the rest.
+        const std::size_t out_bytes = piece.vertices * (12 + (options_.normals ? 12 : 0)) + piece.triangles * 12;
+        if (!job.host_memory && (piece.vertices * 12 > info.max_allocation || piece.triangles * 12 > info.max_allocation ||
+                                 fixed_bytes(job, s) + out_bytes > job.limit)) {
+            if (s.planes > 1) throw TooBig{};
+        }
+        d.queue.finish();
+    } catch (...) {
+        // Nothing may still read from host memory we are about to free.
+        try {
+            d.queue.finish();
+        } catch (const cl::Error&) {
+        }
+        throw;
+    }
+    add_times(job, log);
+}
+
+Piece Engine::count_on_cpu(ZRange range, unsigned worker, unsigned threads) {
+    Piece piece;
+    piece.range = range;
+    piece.worker = worker;
+    piece.on_cpu = true;
+    piece.cpu_threads = threads;
+    piece.plan = cpu_classify(volume_, options_, range, threads);
+    piece.vertices = piece.plan.vertices;
+    piece.triangles = piece.plan.triangles;
     return piece;
 }
 
-void Engine::process(DeviceJob& job, ZRange range, std::vector<Piece>& out) {
+void Engine::count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Piece>& out) {
     const std::size_t planes = range.end - range.begin;
     if (!job.cpu_only) {
         bool too_big = false;
         try {
-            out.push_back(run_on_device(job, range));
+            Piece piece;
+            piece.range = range;
+            piece.worker = worker;
+            count_on_device(job, piece);
+            out.push_back(std::move(piece));
             job.stats.chunks += 1;
             job.stats.voxels += planes * plane_;
             return;
@@ -487,80 +518,170 @@ void Engine::process(DeviceJob& job, ZRange range, std::vector<Piece>& out) {
                 throw Error("OpenCL error on device '" + job.device->info.name + "' in " + e.what() + ": " +
                             error_name(e.err()));
             job.device->drop_buffers();
+            job.bits_of = job.data_of = ZRange{};
             too_big = true;
         }
         if (too_big && planes > 1) {
             warn("a " + std::to_string(planes) + "-plane chunk does not fit OpenCL device '" + job.device->info.name +
                  "' (out of memory, max allocation or memory budget); using smaller chunks");
             const ZRange a{range.begin, range.begin + planes / 2}, b{range.begin + planes / 2, range.end};
-            process(job, a, out);
-            process(job, b, out);
+            count(job, worker, a, out);
+            count(job, worker, b, out);
             return;
         }
         warn("OpenCL device '" + job.device->info.name + "' cannot hold even one z-plane of this volume within " +
              "its memory limits; those chunks run on the CPU engine");
     }
     const auto t0 = Clock::now();
-    out.push_back(run_on_cpu(range, 1));
+    out.push_back(count_on_cpu(range, worker, 1));
     std::lock_guard<std::mutex> lock(mutex_);
     fallback_stats_.chunks += 1;
     fallback_stats_.voxels += planes * plane_;
     fallback_stats_.wall_s += seconds_since(t0);
 }
 
-void Engine::device_worker(DeviceJob& job) {
+void Engine::device_count_worker(DeviceJob& job, unsigned worker) {
     const auto t0 = Clock::now();
-    std::lock_guard<std::mutex> lock(job.device->mutex);
     std::size_t index;
-    while (next_chunk(index)) process(job, chunks_[index], results_[index]);
-    job.stats.wall_s = seconds_since(t0);
+    while (next_chunk(index)) count(job, worker, chunks_[index], results_[index]);
+    job.stats.wall_s += seconds_since(t0);
 }
 
-void Engine::cpu_worker() {
+void Engine::cpu_count_worker(unsigned worker) {
     const auto t0 = Clock::now();
     std::size_t index;
     while (next_chunk(index)) {
         const ZRange range = chunks_[index];
         const auto t = Clock::now();
-        results_[index].push_back(run_on_cpu(range, threads_));
-        cpu_pass_seconds_[2] += seconds_since(t);
+        results_[index].push_back(count_on_cpu(range, worker, threads_));
+        cpu_pass_seconds_[0] += seconds_since(t);
         cpu_stats_.chunks += 1;
         cpu_stats_.voxels += (range.end - range.begin) * plane_;
     }
-    cpu_stats_.wall_s = seconds_since(t0);
+    cpu_stats_.wall_s += seconds_since(t0);
 }
 
-Mesh Engine::assemble(std::vector<std::vector<Piece>>& results) {
-    std::vector<Piece*> pieces;
-    for (auto& chunk : results)
-        for (Piece& p : chunk) pieces.push_back(&p);
-    if (pieces.size() == 1) {  // one chunk: its ids are already global, nothing to copy
-        return std::move(pieces[0]->mesh);
-    }
-    std::vector<std::uint64_t> vbase(pieces.size()), tbase(pieces.size());
-    std::uint64_t vertices = 0, triangles = 0;
-    for (std::size_t i = 0; i < pieces.size(); ++i) {
-        vbase[i] = vertices;
-        tbase[i] = triangles;
-        vertices += pieces[i]->vertices;
-        triangles += pieces[i]->mesh.indices.size() / 3;
-    }
-    check_vertex_count(vertices);
-    Mesh mesh = take_storage();
-    allocate_output(mesh, vertices, triangles, options_.normals, threads_);
-    const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(threads_, std::max<std::size_t>(pieces.size(), 1)));
-    run_workers(workers, [&](unsigned w) {
-        for (std::size_t i = w; i < pieces.size(); i += workers) {
-            const Mesh& piece = pieces[i]->mesh;
-            std::copy(piece.positions.begin(), piece.positions.end(), mesh.positions.begin() + 3 * vbase[i]);
-            if (options_.normals)
-                std::copy(piece.normals.begin(), piece.normals.end(), mesh.normals.begin() + 3 * vbase[i]);
-            const auto base = static_cast<std::uint32_t>(vbase[i]);
-            std::transform(piece.indices.begin(), piece.indices.end(), mesh.indices.begin() + 3 * tbase[i],
-                           [base](std::uint32_t id) { return id + base; });
+void Engine::generate_on_cpu(Piece& piece, Mesh& mesh) {
+    cpu_generate(piece.plan, volume_, options_, piece.cpu_threads,
+                 MeshOut{mesh.positions.data() + 3 * piece.first_vertex,
+                         options_.normals ? mesh.normals.data() + 3 * piece.first_vertex : nullptr,
+                         mesh.indices.data() + 3 * piece.first_triangle,
+                         static_cast<std::uint32_t>(piece.first_vertex)});
+    piece.plan = CpuChunkPlan{};  // its rows and kept bits are not needed any more
+}
+
+void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
+    Device& d = *job.device;
+    const ChunkShape s = shape(piece.range);
+    const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
+    EventLog log;
+    try {
+        const cl::Buffer data = samples_on_device(job, piece, s, log);
+        cl::Buffer& bits = d.buffer(kBits, s.bit_words * 4);
+        if (!same_range(job.bits_of, piece.range) || job.bits_mem != bits()) pack_bits(job, piece, s, data, log);
+        const std::size_t first_sample = (piece.range.begin - s.zlo) * plane_;
+        // Where the device shares host memory, the kernels write the mesh where it stays.
+        const auto output = [&](unsigned slot, auto* host, std::size_t bytes) -> cl::Buffer {
+            if (job.host_memory) return cl::Buffer(d.context, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, host);
+            return d.buffer(slot, bytes);
+        };
+        const auto fetch = [&](const cl::Buffer& buffer, auto* host, std::size_t bytes) {
+            if (job.host_memory) {  // a mapped USE_HOST_PTR buffer is the host array, up to date
+                void* p = d.queue.enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_READ, 0, bytes);
+                d.queue.enqueueUnmapMemObject(buffer, p, nullptr, &log.add(Pass::Transfer));
+            } else {
+                d.queue.enqueueReadBuffer(buffer, CL_FALSE, 0, bytes, host, nullptr, &log.add(Pass::Transfer));
+            }
+        };
+        // Per meta row and word, the id of the word's first vertex: written with the vertices.
+        cl::Buffer& word_base = d.buffer(kWordBase, s.rows * s.words * job.word_id_bytes);
+        const std::uint64_t vertices = piece.vertices;
+        float* positions_at = mesh.positions.data() + 3 * piece.first_vertex;
+        float* normals_at = options_.normals ? mesh.normals.data() + 3 * piece.first_vertex : nullptr;
+        if (piece.all_vertices > 0) {
+            cl::Buffer positions = vertices > 0 ? output(kPositions, positions_at, vertices * 12) : d.buffer(kPositions, 16);
+            cl::Buffer normals =
+                options_.normals && vertices > 0 ? output(kNormals, normals_at, vertices * 12) : d.buffer(kNormals, 16);
+            cl::Kernel& k = d.mc_kernel(job.options, "generate_vertices");
+            set_args(k, data, bits, ArgBytes{job.threshold},
+                     ArgVertexFormula{options_.iso, is_integer(job.device_type), job.fp64, volume_.origin,
+                                      volume_.spacing},
+                     u(nx_), u(ny_), u(nz_), u(s.words), u(piece.range.begin), u(first_sample), u(s.owned_rows),
+                     u(s.rows), u(piece.all_vertices), piece.vbase, static_cast<cl_int>(options_.inside_below),
+                     static_cast<cl_int>(options_.normals), positions, normals, word_base);
+            launch(job, k, s.rows, Pass::Generate, log);
+            if (vertices > 0) fetch(positions, positions_at, vertices * 12);
+            if (options_.normals && vertices > 0) fetch(normals, normals_at, vertices * 12);
         }
-    });
-    return mesh;
+        if (piece.triangles > 0) {
+            std::uint32_t* indices_at = mesh.indices.data() + 3 * piece.first_triangle;
+            cl::Buffer indices = output(kIndices, indices_at, piece.triangles * 12);
+            cl::Kernel& k = d.mc_kernel(job.options, "generate_triangles");
+            set_args(k, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(piece.range.begin), u(s.cell_rows), u(s.rows),
+                     u(piece.triangles), piece.tbase, piece.vbase, u(piece.first_vertex), word_base, piece.cell_groups,
+                     d.case_corners, static_cast<cl_int>(options_.inside_below), indices);
+            launch(job, k, s.cell_rows, Pass::Generate, log);
+            fetch(indices, indices_at, piece.triangles * 12);
+        }
+        d.queue.finish();
+    } catch (...) {
+        // Nothing may still read from or write into host memory we are about to free.
+        try {
+            d.queue.finish();
+        } catch (const cl::Error&) {
+        }
+        throw;
+    }
+    piece.vbase = piece.tbase = piece.cell_groups = cl::Buffer();
+    add_times(job, log);
+}
+
+// Worker `worker` generates the pieces it counted. A device takes them last counted first:
+// that one's bits (and samples) are still on the device.
+void Engine::generate_pieces(std::vector<DeviceJob>& jobs, unsigned worker, Mesh& mesh) {
+    std::vector<Piece*> mine;
+    for (auto& chunk : results_)
+        for (Piece& p : chunk)
+            if (p.worker == worker) mine.push_back(&p);
+    if (worker >= jobs.size()) {  // Hybrid's CPU worker
+        const auto t0 = Clock::now();
+        for (Piece* p : mine) generate_on_cpu(*p, mesh);
+        cpu_pass_seconds_[2] += seconds_since(t0);
+        cpu_stats_.wall_s += seconds_since(t0);
+        return;
+    }
+    DeviceJob& job = jobs[worker];
+    const auto t0 = Clock::now();
+    std::stable_partition(mine.begin(), mine.end(), [](const Piece* p) { return !p->on_cpu; });
+    const auto on_device = std::count_if(mine.begin(), mine.end(), [](const Piece* p) { return !p->on_cpu; });
+    std::reverse(mine.begin(), mine.begin() + on_device);
+    for (Piece* p : mine) {
+        if (abort_) return;
+        if (p->on_cpu) {
+            const auto t = Clock::now();
+            generate_on_cpu(*p, mesh);
+            std::lock_guard<std::mutex> lock(mutex_);
+            fallback_stats_.wall_s += seconds_since(t);
+            continue;
+        }
+        try {
+            generate_on_device(job, *p, mesh);
+        } catch (const cl::Error& e) {
+            if (!is_out_of_memory(e.err()))
+                throw Error("OpenCL error on device '" + job.device->info.name + "' in " + e.what() + ": " +
+                            error_name(e.err()));
+            // Its counts are fixed now; the CPU engine meshes the same range to the same counts.
+            job.device->drop_buffers();
+            job.bits_of = job.data_of = ZRange{};
+            warn("OpenCL device '" + job.device->info.name + "' ran out of memory generating a chunk; it runs on " +
+                 "the CPU engine");
+            Piece cpu = count_on_cpu(p->range, worker, 1);
+            cpu.first_vertex = p->first_vertex;
+            cpu.first_triangle = p->first_triangle;
+            generate_on_cpu(cpu, mesh);
+        }
+    }
+    job.stats.wall_s += seconds_since(t0);
 }
 
 Mesh Engine::run(Stats& stats) {
@@ -574,7 +695,7 @@ Mesh Engine::run(Stats& stats) {
         }
     };
 
-    const auto chosen = select_devices();
+    auto chosen = select_devices();
     if (chosen.empty()) {
         const auto all = cl_engine::devices();
         const bool only_cpus = hybrid_ && !all.empty() && options_.device_type == DeviceType::Any &&
@@ -588,13 +709,20 @@ Mesh Engine::run(Stats& stats) {
         if (!hybrid_) throw Error(why + "; use Backend::Cpu, Backend::Auto or check the OpenCL installation (clinfo)");
         warn(why + "; the hybrid backend runs the CPU engine alone");
         report();
-        return cpu_extract(volume_, options_, stats, take_storage());
+        return cpu_extract(volume_, options_, stats, std::move(storage_));
     }
     // A threshold no sample can cross: nothing to mesh; the CPU engine only checks the samples.
     const bool uniform = dispatch_scalar(volume_.type, [&](auto tag) {
         return make_threshold<decltype(tag)>(options_.iso).uniform != Uniform::Mixed;
     });
-    if (uniform) return cpu_extract(volume_, options_, stats, take_storage());
+    if (uniform) return cpu_extract(volume_, options_, stats, std::move(storage_));
+
+    // The devices are this call's from counting to generating (a piece's counts and bits stay
+    // on its device between the phases); taken in one global order, so calls never deadlock.
+    std::vector<std::shared_ptr<Device>> by_address = chosen;
+    std::sort(by_address.begin(), by_address.end());
+    std::vector<std::unique_lock<std::mutex>> locks;
+    for (const auto& d : by_address) locks.emplace_back(d->mutex);
 
     std::vector<DeviceJob> jobs(chosen.size());
     for (std::size_t i = 0; i < chosen.size(); ++i) {
@@ -607,16 +735,34 @@ Mesh Engine::run(Stats& stats) {
     fallback_stats_.name = "cpu (fallback)";
 
     const unsigned workers = static_cast<unsigned>(jobs.size() + (hybrid_ ? 1 : 0));
-    run_workers(workers, [&](unsigned w) {
-        try {
-            if (w < jobs.size()) device_worker(jobs[w]);
-            else cpu_worker();
-        } catch (...) {
-            abort_ = true;
-            throw;
-        }
+    const auto each_worker = [&](auto&& work) {
+        run_workers(workers, [&](unsigned w) {
+            try {
+                work(w);
+            } catch (...) {
+                abort_ = true;
+                throw;
+            }
+        });
+    };
+    each_worker([&](unsigned w) {
+        if (w < jobs.size()) device_count_worker(jobs[w], w);
+        else cpu_count_worker(w);
     });
-    Mesh mesh = assemble(results_);
+
+    // Every piece's place in the canonical mesh: pieces in z order.
+    std::uint64_t vertices = 0, triangles = 0;
+    for (auto& chunk : results_)
+        for (Piece& p : chunk) {
+            p.first_vertex = vertices;
+            p.first_triangle = triangles;
+            vertices += p.vertices;
+            triangles += p.triangles;
+        }
+    check_vertex_count(vertices);
+    Mesh mesh = std::move(storage_);
+    allocate_output(mesh, vertices, triangles, options_.normals, threads_);
+    each_worker([&](unsigned w) { generate_pieces(jobs, w, mesh); });
 
     for (DeviceJob& job : jobs) {
         stats.devices.push_back(job.stats);
