@@ -85,14 +85,8 @@ inline uint pack_word(__global const voxel* s, const voxel thr, int* finite) {
     return w;
 }
 
-// One work-item per bit row: its nx samples into `words` words.
-__kernel void classify_pack(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint words,
-                            const uint begin, const uint first_sample, const uint rows, __global uint* bits,
-                            __global int* nan_plane) {
-    const uint r = (uint)get_global_id(0);
-    if (r >= rows) return;
-    __global const voxel* s = data + first_sample + r * nx;
-    __global uint* out = bits + r * words;
+// A row's nx samples at s into `words` words at out; 0 when a sample is not finite.
+inline int pack_row(__global const voxel* s, const voxel thr, const uint nx, const uint words, __global uint* out) {
     int finite = 1;
     const uint full = nx / 32;
     for (uint q = 0; q < full; ++q) out[q] = pack_word(s + 32 * q, thr, &finite);
@@ -105,7 +99,17 @@ __kernel void classify_pack(__global const voxel* data, const voxel thr, const u
         }
         out[full] = w;
     }
-    if (!finite) atomic_min(nan_plane, (int)(begin + r / ny));
+    return finite;
+}
+
+// One work-item per bit row: its nx samples into `words` words.
+__kernel void classify_pack(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint words,
+                            const uint begin, const uint first_sample, const uint rows, __global uint* bits,
+                            __global int* nan_plane) {
+    const uint r = (uint)get_global_id(0);
+    if (r >= rows) return;
+    if (!pack_row(data + first_sample + r * nx, thr, nx, words, bits + r * words))
+        atomic_min(nan_plane, (int)(begin + r / ny));
 }
 
 // Bit k of the result is bit k+1 of the row: the neighbour in +x.
@@ -226,6 +230,28 @@ __kernel void classify_rows(__global const uint* bits, const uint nx, const uint
 // Row r's count from an exclusive scan `base` over `rows` rows whose total is `end`.
 inline uint scanned_count(__global const uint* base, uint r, uint rows, uint end) {
     return (r + 1 < rows ? base[r + 1] : end) - base[r];
+}
+
+// classify_pack again, for a chunk already counted (its samples are known to be finite): a
+// meta row that owns no crossed edge has no crossed x-edge, so its samples are all inside or
+// all outside, and its words are filled from its first sample instead of packing them (on a
+// sphere half the rows: their samples are not read again). Bit rows past the meta rows
+// (plane end + 1) are packed.
+__kernel void classify_repack(__global const voxel* data, const voxel thr, const uint nx, const uint words,
+                              const uint first_sample, const uint rows, const uint meta_rows, const uint vend,
+                              __global const uint* vbase, __global uint* bits) {
+    const uint r = (uint)get_global_id(0);
+    if (r >= rows) return;
+    __global const voxel* s = data + first_sample + r * nx;
+    __global uint* out = bits + r * words;
+    if (r >= meta_rows || scanned_count(vbase, r, meta_rows, vend) != 0) {
+        pack_row(s, thr, nx, words, out);
+        return;
+    }
+    const uint fill = s[0] >= thr ? ~0u : 0u;
+    const uint full = nx / 32;
+    for (uint q = 0; q < full; ++q) out[q] = fill;
+    if (full < words) out[full] = fill & ((1u << (nx - 32 * full)) - 1u);
 }
 
 // One work-item per meta row with crossings: the vertex id of the first edge of each of its

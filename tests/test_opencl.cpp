@@ -228,6 +228,15 @@ TEST_CASE("OpenCL with copies in and out (a discrete GPU's path) matches the CPU
         o.normals = false;
         compare(view_of(u16.data(), ScalarType::U16, g), o);
     }
+    // A budget of about 10 planes a chunk: the first chunks stay resident between counting
+    // and generating, the later ones do not fit beside them and are uploaded and packed again.
+    Options o;
+    o.memory_budget = 45 * 38 * 4 * 2 * 12;
+    Stats stats;
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    require_same(run(v, o, Backend::Cpu), run(v, o, Backend::OpenCL, &stats), v);
+    REQUIRE(stats.devices.size() == 1);
+    CHECK(stats.devices[0].chunks >= 4);
 }
 #endif  // VOXMESH_HAS_OPENCL
 

@@ -77,6 +77,10 @@ struct Piece {
     // On a device: the scanned per-row vertex and triangle counts and the word groups of each
     // cell row, kept on the device between the phases.
     cl::Buffer vbase, tbase, cell_groups;
+    // A discrete device's own copy of the piece's samples and bits, resident between the
+    // phases while they fit (empty: the device's kept kData / kBits buffers, shared in turn).
+    cl::Buffer data, bits;
+    bool uploaded = false;  // into `data`
     std::uint64_t all_vertices = 0;  // on a device: the range's id space, plane `end`'s vertices included
     std::uint64_t vertices = 0, triangles = 0;          // owned by the range
     std::uint64_t first_vertex = 0, first_triangle = 0;  // where they go in the mesh
@@ -128,6 +132,7 @@ struct DeviceJob {
     std::size_t local = kLocalSize;            // work-group size of every launch
     std::size_t word_id_bytes = 4;             // of the per-word vertex id bases (2 or 4)
     std::size_t pieces_counted = 0;            // this call; the first uses the kept row buffers
+    std::size_t resident_bytes = 0;            // of pieces' own samples and bits
     // The range whose samples / bits the kData / kBits buffers hold now (empty: none), and
     // those buffers' handles then: generate uploads or packs again only when they differ.
     ZRange data_of, bits_of;
@@ -171,8 +176,8 @@ private:
     void generate_pieces(std::vector<DeviceJob>& jobs, unsigned worker, Mesh& mesh);
     void generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh);
     void generate_on_cpu(Piece& piece, Mesh& mesh);
-    cl::Buffer samples_on_device(DeviceJob& job, const Piece& piece, const ChunkShape& s, EventLog& log);
-    void pack_bits(DeviceJob& job, const Piece& piece, const ChunkShape& s, const cl::Buffer& data, EventLog& log);
+    cl::Buffer samples_on_device(DeviceJob& job, Piece& piece, const ChunkShape& s, EventLog& log);
+    cl::Buffer& bits_of(DeviceJob& job, Piece& piece, const ChunkShape& s);
     void launch(DeviceJob& job, cl::Kernel& k, std::size_t n, Pass pass, EventLog& log);
     void add_times(DeviceJob& job, const EventLog& log);
     void warn(const std::string& message);
@@ -257,7 +262,8 @@ void Engine::prepare(DeviceJob& job) {
     // are cached per device and options: only the first call pays for them.
     const auto t0 = Clock::now();
     const std::size_t built = job.device->programs_built;
-    for (const char* name : {"classify_pack", "classify_rows", "generate_vertices", "generate_triangles"}) {
+    for (const char* name :
+         {"classify_pack", "classify_rows", "classify_repack", "generate_vertices", "generate_triangles"}) {
         const std::size_t most =
             job.device->mc_kernel(job.options, name).getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(job.device->device);
         while (job.local > most && job.local > 1) job.local /= 2;
@@ -365,16 +371,17 @@ void Engine::add_times(DeviceJob& job, const EventLog& log) {
 
 // The piece's sample planes on the device: the caller's samples in place where the device
 // shares host memory, else uploaded (or converted from f64 keeping every inside bit) into
-// the kData buffer, unless it holds them already.
-cl::Buffer Engine::samples_on_device(DeviceJob& job, const Piece& piece, const ChunkShape& s, EventLog& log) {
+// its own buffer or the kData buffer, unless that holds them already.
+cl::Buffer Engine::samples_on_device(DeviceJob& job, Piece& piece, const ChunkShape& s, EventLog& log) {
     Device& d = *job.device;
     const std::size_t sample_bytes = scalar_size(job.device_type);
     const auto* bytes = static_cast<const unsigned char*>(volume_.data) + s.zlo * plane_ * scalar_size(volume_.type);
     if (job.zero_copy)  // read only: the kernels never write it
         return cl::Buffer(d.context, CL_MEM_READ_ONLY | CL_MEM_USE_HOST_PTR, s.data_samples * sample_bytes,
                           const_cast<unsigned char*>(bytes));
-    cl::Buffer& data = d.buffer(kData, s.data_samples * sample_bytes);
-    if (same_range(job.data_of, piece.range) && job.data_mem == data()) return data;
+    const bool own = piece.data() != nullptr;
+    cl::Buffer& data = own ? piece.data : d.buffer(kData, s.data_samples * sample_bytes);
+    if (own ? piece.uploaded : same_range(job.data_of, piece.range) && job.data_mem == data()) return data;
     std::vector<float> converted;
     if (job.convert) {
         const double* src = reinterpret_cast<const double*>(bytes);
@@ -394,27 +401,18 @@ cl::Buffer Engine::samples_on_device(DeviceJob& job, const Piece& piece, const C
     // Blocking when converted: `converted` is freed on return.
     d.queue.enqueueWriteBuffer(data, job.convert ? CL_TRUE : CL_FALSE, 0, s.data_samples * sample_bytes, bytes,
                                nullptr, &log.add(Pass::Transfer));
-    job.data_of = piece.range;
-    job.data_mem = data();
+    if (own) {
+        piece.uploaded = true;
+    } else {
+        job.data_of = piece.range;
+        job.data_mem = data();
+    }
     return data;
 }
 
-// classify_pack: the piece's inside bits into kBits (its NaN test into kNan).
-void Engine::pack_bits(DeviceJob& job, const Piece& piece, const ChunkShape& s, const cl::Buffer& data,
-                       EventLog& log) {
-    Device& d = *job.device;
-    const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
-    cl::Buffer& bits = d.buffer(kBits, s.bit_words * 4);
-    cl::Buffer& nan = d.buffer(kNan, sizeof(cl_int));
-    const cl_int no_nan = INT_MAX;
-    d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
-    const std::size_t first_sample = (piece.range.begin - s.zlo) * plane_;  // of plane `begin` in the device's samples
-    cl::Kernel& pack = d.mc_kernel(job.options, "classify_pack");
-    set_args(pack, data, ArgBytes{job.threshold}, u(nx_), u(ny_), u(s.words), u(piece.range.begin), u(first_sample),
-             u(s.bit_rows), bits, nan);
-    launch(job, pack, s.bit_rows, Pass::Classify, log);
-    job.bits_of = piece.range;
-    job.bits_mem = bits();
+// The buffer for the piece's inside bits: its own, or the kBits buffer.
+cl::Buffer& Engine::bits_of(DeviceJob& job, Piece& piece, const ChunkShape& s) {
+    return piece.bits() != nullptr ? piece.bits : job.device->buffer(kBits, s.bit_words * 4);
 }
 
 void Engine::count_on_device(DeviceJob& job, Piece& piece) {
@@ -431,8 +429,28 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
     const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
     EventLog log;
     try {
+        // A discrete device keeps further pieces' samples and bits in buffers of their own
+        // while they fit half its budget, so generate neither uploads nor packs them again.
+        const std::size_t own_bytes = s.data_samples * scalar_size(job.device_type) + s.bit_words * 4;
+        if (!job.host_memory && job.pieces_counted > 0 && job.resident_bytes + own_bytes <= job.limit / 2) {
+            piece.data = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.data_samples * scalar_size(job.device_type));
+            piece.bits = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.bit_words * 4);
+            job.resident_bytes += own_bytes;
+        }
         const cl::Buffer data = samples_on_device(job, piece, s, log);
-        pack_bits(job, piece, s, data, log);
+        cl::Buffer& bits = bits_of(job, piece, s);
+        cl::Buffer& nan = d.buffer(kNan, sizeof(cl_int));
+        const cl_int no_nan = INT_MAX;
+        d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
+        const std::size_t first_sample = (range.begin - s.zlo) * plane_;  // of plane `begin` in the device's samples
+        cl::Kernel& pack = d.mc_kernel(job.options, "classify_pack");
+        set_args(pack, data, ArgBytes{job.threshold}, u(nx_), u(ny_), u(s.words), u(range.begin), u(first_sample),
+                 u(s.bit_rows), bits, nan);
+        launch(job, pack, s.bit_rows, Pass::Classify, log);
+        if (piece.bits() == nullptr) {
+            job.bits_of = range;
+            job.bits_mem = bits();
+        }
         // Per row: counts, then their prefix sums; per cell row: word groups to visit. The
         // device's first piece of a call uses the kept buffers, further pieces their own.
         if (job.pieces_counted == 0) {
@@ -446,15 +464,14 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
         }
         job.pieces_counted += 1;
         cl::Kernel& rows = d.mc_kernel(job.options, "classify_rows");
-        set_args(rows, d.buffer(kBits, s.bit_words * 4), u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin),
+        set_args(rows, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin),
                  u(s.cell_end), u(s.rows), d.case_table, piece.vbase, piece.tbase, piece.cell_groups);
         launch(job, rows, s.rows, Pass::Classify, log);
 
         piece.all_vertices = scan(d, piece.vbase, s.rows, log);
         piece.triangles = scan(d, piece.tbase, s.rows, log);
         cl_int nan_plane = INT_MAX;
-        d.queue.enqueueReadBuffer(d.buffer(kNan, sizeof(cl_int)), CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr,
-                                  &log.add(Pass::Transfer));
+        d.queue.enqueueReadBuffer(nan, CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr, &log.add(Pass::Transfer));
         if (nan_plane != INT_MAX)
             throw Error("volume has NaN or infinite samples (first seen in z-plane " + std::to_string(nan_plane) +
                         "); replace them with finite values before meshing");
@@ -577,9 +594,17 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
     EventLog log;
     try {
         const cl::Buffer data = samples_on_device(job, piece, s, log);
-        cl::Buffer& bits = d.buffer(kBits, s.bit_words * 4);
-        if (!same_range(job.bits_of, piece.range) || job.bits_mem != bits()) pack_bits(job, piece, s, data, log);
+        cl::Buffer& bits = bits_of(job, piece, s);
         const std::size_t first_sample = (piece.range.begin - s.zlo) * plane_;
+        if (piece.bits() == nullptr && (!same_range(job.bits_of, piece.range) || job.bits_mem != bits())) {
+            // Packed again, but rows without crossings are filled, not read (classify_repack).
+            cl::Kernel& k = d.mc_kernel(job.options, "classify_repack");
+            set_args(k, data, ArgBytes{job.threshold}, u(nx_), u(s.words), u(first_sample), u(s.bit_rows), u(s.rows),
+                     u(piece.all_vertices), piece.vbase, bits);
+            launch(job, k, s.bit_rows, Pass::Classify, log);
+            job.bits_of = piece.range;
+            job.bits_mem = bits();
+        }
         // Where the device shares host memory, the kernels write the mesh where it stays.
         const auto output = [&](unsigned slot, auto* host, std::size_t bytes) -> cl::Buffer {
             if (job.host_memory) return cl::Buffer(d.context, CL_MEM_WRITE_ONLY | CL_MEM_USE_HOST_PTR, bytes, host);
@@ -632,7 +657,7 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
         }
         throw;
     }
-    piece.vbase = piece.tbase = piece.cell_groups = cl::Buffer();
+    piece.vbase = piece.tbase = piece.cell_groups = piece.data = piece.bits = cl::Buffer();
     add_times(job, log);
 }
 
