@@ -46,7 +46,11 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // while the last word starts at most 65535 edges in: 3 * 32 * (words - 1) <= 65535.
 constexpr std::size_t kMaxWordsFor16BitBases = 65535 / 96 + 1;  // 683 words, nx <= 21856
 
-enum : unsigned { kData, kBits, kVBase, kTBase, kCellGroups, kWordBase, kPositions, kNormals, kIndices, kNan };
+enum : unsigned { kData, kBits, kWordBase, kPositions, kNormals, kIndices, kNan };
+// Piece i's row buffers (counts, then their prefix sums; word groups) in a call: kept like the
+// others, so that calls after the first allocate nothing (for the first kKeptPieceRows
+// pieces; more take buffers of their own). Ids above the scan's.
+constexpr unsigned kPieceRows = 1000, kKeptPieceRows = 1024;
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
 std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
@@ -114,7 +118,7 @@ constexpr std::size_t kLocalSize = 256;  // work-group size of marching_cubes.cl
 // Where a device gets several chunks, generate packs a chunk's bits again (one more read of
 // its samples) instead of keeping every chunk's bits.
 constexpr double kHostWorkingShare = 0.07;
-constexpr std::size_t kMinWorkingBytes = std::size_t{4} << 20;
+constexpr std::size_t kMinWorkingBytes = std::size_t{6} << 20;
 
 // What one call needs to know about a device: how samples reach it and the kernel arguments
 // that do not change from chunk to chunk.
@@ -131,7 +135,7 @@ struct DeviceJob {
     std::size_t limit = 0;                     // bytes one chunk may use
     std::size_t local = kLocalSize;            // work-group size of every launch
     std::size_t word_id_bytes = 4;             // of the per-word vertex id bases (2 or 4)
-    std::size_t pieces_counted = 0;            // this call; the first uses the kept row buffers
+    std::size_t pieces_counted = 0;            // in this call
     std::size_t resident_bytes = 0;            // of pieces' own samples and bits
     // The range whose samples / bits the kData / kBits buffers hold now (empty: none), and
     // those buffers' handles then: generate uploads or packs again only when they differ.
@@ -451,12 +455,12 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
             job.bits_of = range;
             job.bits_mem = bits();
         }
-        // Per row: counts, then their prefix sums; per cell row: word groups to visit. The
-        // device's first piece of a call uses the kept buffers, further pieces their own.
-        if (job.pieces_counted == 0) {
-            piece.vbase = d.buffer(kVBase, s.rows * 4);
-            piece.tbase = d.buffer(kTBase, s.rows * 4);
-            piece.cell_groups = d.buffer(kCellGroups, s.rows * 8);
+        // Per row: counts, then their prefix sums; per cell row: word groups to visit.
+        if (job.pieces_counted < kKeptPieceRows) {
+            const auto slot = static_cast<unsigned>(kPieceRows + 3 * job.pieces_counted);
+            piece.vbase = d.buffer(slot, s.rows * 4);
+            piece.tbase = d.buffer(slot + 1, s.rows * 4);
+            piece.cell_groups = d.buffer(slot + 2, s.rows * 8);
         } else {
             piece.vbase = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.rows * 4);
             piece.tbase = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.rows * 4);
