@@ -25,11 +25,16 @@ trap 'rm -rf "$TMP"' EXIT
 "$BENCH" --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 1,2,4,6,16 --repeat "$REPEAT" \
     --interleave --no-floor --save "$OUT/scaling.jsonl" > "$OUT/scaling.txt"
 
-# 2b. Memory: one extract per fresh process (over%: beyond the mesh, in % of volume + mesh).
+# 2b. Memory: one extract per fresh process (over%: beyond the mesh, in % of volume + mesh),
+#     set-up included (memory.txt) and after set-up (--setup-first: the OpenCL runtime and
+#     programs come with meshing the first 3 z-planes once; memory_after_setup.txt).
 : > "$OUT/memory.txt"
+: > "$OUT/memory_after_setup.txt"
 for field in sphere gyroid; do for type in f32 u8; do for backend in cpu opencl; do
     "$BENCH" --field "$field" --type "$type" --sizes 512 --threads "$THREADS" --backends "$backend" \
         --repeat 1 --warmup 0 --no-floor -q >> "$OUT/memory.txt"
+    "$BENCH" --field "$field" --type "$type" --sizes 512 --threads "$THREADS" --backends "$backend" \
+        --repeat 1 --warmup 0 --no-floor -q --setup-first >> "$OUT/memory_after_setup.txt"
 done; done; done
 
 # 3. Peers on the very same samples: vtkFlyingEdges3D, vtkMarchingCubes, scikit-image.
