@@ -110,6 +110,23 @@ bool same_range(ZRange a, ZRange b) { return a.end > a.begin && a.begin == b.beg
 
 std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
 
+// Runs `enqueue` (work on d's queue) and waits for the queue. If anything throws, it still
+// waits for what was enqueued before rethrowing: no kernel may go on reading or writing host
+// memory (the caller's samples, the mesh) that is about to be freed.
+template <class F>
+void run_on_queue(Device& d, F&& enqueue) {
+    try {
+        enqueue();
+        d.queue.finish();
+    } catch (...) {
+        try {
+            d.queue.finish();
+        } catch (const cl::Error&) {
+        }
+        throw;
+    }
+}
+
 constexpr std::size_t kLocalSize = 256;  // work-group size of marching_cubes.cl launches, where allowed
 
 // A device that shares host memory holds its working buffers (bits, word bases, row counts)
@@ -182,6 +199,7 @@ private:
     void generate_on_cpu(Piece& piece, Mesh& mesh);
     cl::Buffer samples_on_device(DeviceJob& job, Piece& piece, const ChunkShape& s, EventLog& log);
     cl::Buffer& bits_of(DeviceJob& job, Piece& piece, const ChunkShape& s);
+    void recover_from_out_of_memory(DeviceJob& job, const cl::Error& e);
     void launch(DeviceJob& job, cl::Kernel& k, std::size_t n, Pass pass, EventLog& log);
     void add_times(DeviceJob& job, const EventLog& log);
     void warn(const std::string& message);
@@ -432,7 +450,7 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
     }
     const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
     EventLog log;
-    try {
+    run_on_queue(d, [&] {
         // A discrete device keeps further pieces' samples and bits in buffers of their own
         // while they fit half its budget, so generate neither uploads nor packs them again.
         const std::size_t own_bytes = s.data_samples * scalar_size(job.device_type) + s.bit_words * 4;
@@ -495,15 +513,7 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
                                  fixed_bytes(job, s) + out_bytes > job.limit)) {
             if (s.planes > 1) throw TooBig{};
         }
-        d.queue.finish();
-    } catch (...) {
-        // Nothing may still read from host memory we are about to free.
-        try {
-            d.queue.finish();
-        } catch (const cl::Error&) {
-        }
-        throw;
-    }
+    });
     add_times(job, log);
 }
 
@@ -517,6 +527,16 @@ Piece Engine::count_on_cpu(ZRange range, unsigned worker, unsigned threads) {
     piece.vertices = piece.plan.vertices;
     piece.triangles = piece.plan.triangles;
     return piece;
+}
+
+// An OpenCL error other than running out of memory ends the call; out of memory frees the
+// device's kept buffers (and forgets what they held) so that the caller can go smaller.
+void Engine::recover_from_out_of_memory(DeviceJob& job, const cl::Error& e) {
+    if (!is_out_of_memory(e.err()))
+        throw Error("OpenCL error on device '" + job.device->info.name + "' in " + e.what() + ": " +
+                    error_name(e.err()));
+    job.device->drop_buffers();
+    job.bits_of = job.data_of = ZRange{};
 }
 
 void Engine::count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Piece>& out) {
@@ -535,11 +555,7 @@ void Engine::count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Pi
         } catch (const TooBig&) {
             too_big = true;
         } catch (const cl::Error& e) {
-            if (!is_out_of_memory(e.err()))
-                throw Error("OpenCL error on device '" + job.device->info.name + "' in " + e.what() + ": " +
-                            error_name(e.err()));
-            job.device->drop_buffers();
-            job.bits_of = job.data_of = ZRange{};
+            recover_from_out_of_memory(job, e);
             too_big = true;
         }
         if (too_big && planes > 1) {
@@ -596,7 +612,7 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
     const ChunkShape s = shape(piece.range);
     const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
     EventLog log;
-    try {
+    run_on_queue(d, [&] {
         const cl::Buffer data = samples_on_device(job, piece, s, log);
         cl::Buffer& bits = bits_of(job, piece, s);
         const std::size_t first_sample = (piece.range.begin - s.zlo) * plane_;
@@ -652,15 +668,7 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
             launch(job, k, s.cell_rows, Pass::Generate, log);
             fetch(indices, indices_at, piece.triangles * 12);
         }
-        d.queue.finish();
-    } catch (...) {
-        // Nothing may still read from or write into host memory we are about to free.
-        try {
-            d.queue.finish();
-        } catch (const cl::Error&) {
-        }
-        throw;
-    }
+    });
     piece.vbase = piece.tbase = piece.cell_groups = piece.data = piece.bits = cl::Buffer();
     add_times(job, log);
 }
@@ -696,12 +704,8 @@ void Engine::generate_pieces(std::vector<DeviceJob>& jobs, unsigned worker, Mesh
         try {
             generate_on_device(job, *p, mesh);
         } catch (const cl::Error& e) {
-            if (!is_out_of_memory(e.err()))
-                throw Error("OpenCL error on device '" + job.device->info.name + "' in " + e.what() + ": " +
-                            error_name(e.err()));
+            recover_from_out_of_memory(job, e);
             // Its counts are fixed now; the CPU engine meshes the same range to the same counts.
-            job.device->drop_buffers();
-            job.bits_of = job.data_of = ZRange{};
             warn("OpenCL device '" + job.device->info.name + "' ran out of memory generating a chunk; it runs on " +
                  "the CPU engine");
             Piece cpu = count_on_cpu(p->range, worker, 1);
