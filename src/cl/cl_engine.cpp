@@ -457,7 +457,6 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
         if (!job.host_memory && job.pieces_counted > 0 && job.resident_bytes + own_bytes <= job.limit / 2) {
             piece.data = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.data_samples * scalar_size(job.device_type));
             piece.bits = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.bit_words * 4);
-            job.resident_bytes += own_bytes;
         }
         const cl::Buffer data = samples_on_device(job, piece, s, log);
         cl::Buffer& bits = bits_of(job, piece, s);
@@ -513,6 +512,7 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
                                  fixed_bytes(job, s) + out_bytes > job.limit)) {
             if (s.planes > 1) throw TooBig{};
         }
+        if (piece.data() != nullptr) job.resident_bytes += own_bytes;
     });
     add_times(job, log);
 }
