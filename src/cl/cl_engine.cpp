@@ -473,16 +473,13 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
             job.bits_mem = bits();
         }
         // Per row: counts, then their prefix sums; per cell row: word groups to visit.
-        if (job.pieces_counted < kKeptPieceRows) {
-            const auto slot = static_cast<unsigned>(kPieceRows + 3 * job.pieces_counted);
-            piece.vbase = d.buffer(slot, s.rows * 4);
-            piece.tbase = d.buffer(slot + 1, s.rows * 4);
-            piece.cell_groups = d.buffer(slot + 2, s.rows * 8);
-        } else {
-            piece.vbase = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.rows * 4);
-            piece.tbase = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.rows * 4);
-            piece.cell_groups = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.rows * 8);
-        }
+        const auto row_buffer = [&](unsigned part, std::size_t bytes) {
+            if (job.pieces_counted >= kKeptPieceRows) return cl::Buffer(d.context, CL_MEM_READ_WRITE, bytes);
+            return d.buffer(static_cast<unsigned>(kPieceRows + 3 * job.pieces_counted + part), bytes);
+        };
+        piece.vbase = row_buffer(0, s.rows * 4);
+        piece.tbase = row_buffer(1, s.rows * 4);
+        piece.cell_groups = row_buffer(2, s.rows * 8);
         job.pieces_counted += 1;
         cl::Kernel& rows = d.mc_kernel(job.options, "classify_rows");
         set_args(rows, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin),
@@ -689,9 +686,8 @@ void Engine::generate_pieces(std::vector<DeviceJob>& jobs, unsigned worker, Mesh
     }
     DeviceJob& job = jobs[worker];
     const auto t0 = Clock::now();
-    std::stable_partition(mine.begin(), mine.end(), [](const Piece* p) { return !p->on_cpu; });
-    const auto on_device = std::count_if(mine.begin(), mine.end(), [](const Piece* p) { return !p->on_cpu; });
-    std::reverse(mine.begin(), mine.begin() + on_device);
+    const auto device_end = std::stable_partition(mine.begin(), mine.end(), [](const Piece* p) { return !p->on_cpu; });
+    std::reverse(mine.begin(), device_end);
     for (Piece* p : mine) {
         if (abort_) return;
         if (p->on_cpu) {
