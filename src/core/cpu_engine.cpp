@@ -4,6 +4,7 @@
 #include "case_tables.hpp"
 #include "edge_vertex.hpp"
 #include "huge_pages.hpp"
+#include "normal_batch.hpp"
 #include "parallel.hpp"
 #include "scalar_dispatch.hpp"
 #include "threshold.hpp"
@@ -363,6 +364,8 @@ private:
         const RowInfo* rows = meta_rows(z);
         // Rows in order: each row's first vertex follows the previous row's last.
         std::uint32_t row_first = static_cast<std::uint32_t>(plan_.planes[z - plan_.range.begin].first_vertex);
+        NormalBatch* normals = write_vertices && out_.normals ? &normals_ : nullptr;
+        if (normals) normals->start(out_.normals + 3 * static_cast<std::size_t>(row_first));
         for (std::size_t j = 0; j < ny_; ++j) {
             const std::uint32_t base = row_first;
             row_first += rows[j].vertices;
@@ -381,7 +384,7 @@ private:
                     const unsigned c = static_cast<unsigned>((m.x >> r & 1) | (m.y >> r & 1) << 1 | (m.z >> r & 1) << 2);
                     if (write_vertices) {
                         const std::size_t at = 3 * static_cast<std::size_t>(next_id);
-                        vertex_.sample(i, j, z, c, out_.positions + at, out_.normals ? out_.normals + at : nullptr);
+                        vertex_.sample(i, j, z, c, out_.positions + at, normals);
                     }
                     // All three slots, without branches: a slot whose edge does not cross is never read.
                     for (unsigned axis = 0; axis < 3; ++axis) {
@@ -391,6 +394,7 @@ private:
                 }
             }
         }
+        if (normals) normals->flush();
     }
 
     void emit_triangles(std::size_t k) {
@@ -458,6 +462,7 @@ private:
     MeshOut out_;
     PlaneBits<T> bits_;
     EdgeVertex<T> vertex_;
+    NormalBatch normals_;
     std::size_t nx_, ny_, nz_, words_;
     BitPlane planes_[3];
     EdgeIds<Id> ids_;

@@ -22,6 +22,31 @@ inline void prefetch(const void* p) {
 #endif
 }
 
+// A vertex normal's fallback for a flat gradient: the axis of its edge (bits 0-1), plus
+// kFlatPositive where it points along +axis.
+constexpr unsigned kFlatPositive = 4;
+
+// n / |n| in float; the fallback where |n| is 0 or not finite. Batched code (normal_batch.hpp)
+// does the same operations lane by lane, so every path gives the same bits.
+inline void normalise_normal(const double n[3], unsigned flat, float* out) {
+    const double len2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    if (len2 > 0 && std::isfinite(len2)) {
+        const double inv = 1 / std::sqrt(len2);
+        for (unsigned d = 0; d < 3; ++d) out[d] = static_cast<float>(n[d] * inv);
+    } else {
+        for (unsigned d = 0; d < 3; ++d) out[d] = d == (flat & 3) ? (flat & kFlatPositive ? 1.f : -1.f) : 0.f;
+    }
+}
+
+// Normals written as they come, normalised one by one.
+struct DirectNormals {
+    float* next;
+    void push(const double n[3], unsigned flat) {
+        normalise_normal(n, flat, next);
+        next += 3;
+    }
+};
+
 template <class T>
 class EdgeVertex {
 public:
@@ -42,6 +67,14 @@ public:
     // normal[3v]; normal may be null. The sample's own value and gradient are shared by its
     // edges.
     void sample(std::size_t i, std::size_t j, std::size_t k, unsigned axes, float* position, float* normal) const {
+        DirectNormals direct{normal};
+        sample(i, j, k, axes, position, normal ? &direct : nullptr);
+    }
+
+    // The same, handing each vertex's normal, not yet normalised, to normals->push(n, flat)
+    // (see normalise_normal) in vertex order; normals may be null.
+    template <class Normals>
+    void sample(std::size_t i, std::size_t j, std::size_t k, unsigned axes, float* position, Normals* normal) const {
         const std::size_t at0[3] = {i, j, k};
         const std::size_t idx0 = i + j * stride_[1] + k * stride_[2];
         const double v0 = static_cast<double>(data_[idx0]);
@@ -81,8 +114,9 @@ public:
                     ++at1[axis];
                     gradient(idx1, at1, g1);
                 }
-                write_normal(g0, g1, t, axis, v0 >= iso_, normal);
-                normal += 3;
+                double n[3];
+                interpolated_normal(g0, g1, t, n);
+                normal->push(n, flat_normal(axis, v0 >= iso_));
             }
             for (unsigned d = 0; d < 3; ++d) position[d] = on_sample[d];
             position[axis] = static_cast<float>(origin_[axis] + (index[axis] + t) * spacing_[axis]);
@@ -96,22 +130,16 @@ private:
     // 1 <= p and p + 1 <= n - 2: p and its +1 neighbour both have two neighbours along the axis.
     static bool away_from_border(std::size_t p, std::size_t n) { return p >= 1 && p + 3 <= n; }
 
-    void write_normal(const double g0[3], const double g1[3], double t, unsigned axis, bool first_above,
-                      float* normal) const {
-        // Outward is toward decreasing values: the negated gradient (flipped for inside_below).
-        double n[3], len2 = 0;
-        for (unsigned d = 0; d < 3; ++d) {
-            n[d] = sign_ * (g0[d] + t * (g1[d] - g0[d]));
-            len2 += n[d] * n[d];
-        }
-        if (len2 > 0 && std::isfinite(len2)) {
-            const double inv = 1 / std::sqrt(len2);
-            for (unsigned d = 0; d < 3; ++d) normal[d] = static_cast<float>(n[d] * inv);
-        } else {
-            // Flat gradient: point along the edge, from its inside end to its outside end.
-            const bool first_inside = first_above != inside_below_;
-            for (unsigned d = 0; d < 3; ++d) normal[d] = d == axis ? (first_inside ? 1.f : -1.f) : 0.f;
-        }
+    // Outward is toward decreasing values: the negated gradient (flipped for inside_below).
+    void interpolated_normal(const double g0[3], const double g1[3], double t, double n[3]) const {
+        for (unsigned d = 0; d < 3; ++d) n[d] = sign_ * (g0[d] + t * (g1[d] - g0[d]));
+    }
+
+    // Where the gradient is flat the normal points along the edge, from its inside end to its
+    // outside end.
+    unsigned flat_normal(unsigned axis, bool first_above) const {
+        const bool first_inside = first_above != inside_below_;
+        return axis | (first_inside ? kFlatPositive : 0u);
     }
 
     void central_gradient(std::size_t idx, double g[3]) const {
