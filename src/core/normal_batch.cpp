@@ -21,11 +21,12 @@ void normalise_one(const double* x, const double* y, const double* z, const std:
 }
 
 #ifdef VOXMESH_NORMALS_AVX
-// Four normals a step: len2 = x*x + y*y + z*z in that order, 1 / sqrt(len2), products
-// rounded to float (IEEE square root and divide round exactly, no fused multiply-adds: the
-// scalar bits). Lanes whose len2 is 0 or not finite are redone by the scalar fallback.
-[[gnu::target("avx2")]] void normalise_avx(const double* x, const double* y, const double* z,
-                                           const std::uint8_t* flat, std::size_t count, float* out) {
+// Four normals a step, as many whole steps as count holds; returns how many it normalised.
+// len2 = x*x + y*y + z*z in that order, 1 / sqrt(len2), products rounded to float (IEEE
+// square root and divide round exactly, no fused multiply-adds: the scalar bits). Lanes
+// whose len2 is 0 or not finite are redone by the scalar fallback.
+[[gnu::target("avx2")]] std::size_t normalise_avx(const double* x, const double* y, const double* z,
+                                                  const std::uint8_t* flat, std::size_t count, float* out) {
     const __m256d one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd(), max = _mm256_set1_pd(DBL_MAX);
     std::size_t v = 0;
     for (; v + 4 <= count; v += 4) {
@@ -47,7 +48,7 @@ void normalise_one(const double* x, const double* y, const double* z, const std:
             for (unsigned l = 0; l < 4; ++l)
                 if (bad >> l & 1) normalise_one(x, y, z, flat, v + l, out);
     }
-    for (; v < count; ++v) normalise_one(x, y, z, flat, v, out);
+    return v;
 }
 #endif
 
@@ -55,11 +56,12 @@ void normalise_one(const double* x, const double* y, const double* z, const std:
 
 void normalise_normals(const double* x, const double* y, const double* z, const std::uint8_t* flat,
                        std::size_t count, float* out) {
+    std::size_t v = 0;
 #ifdef VOXMESH_NORMALS_AVX
     static const bool avx = cpu_has_avx2_bmi2();
-    if (avx) return normalise_avx(x, y, z, flat, count, out);
+    if (avx) v = normalise_avx(x, y, z, flat, count, out);
 #endif
-    for (std::size_t v = 0; v < count; ++v) normalise_one(x, y, z, flat, v, out);
+    for (; v < count; ++v) normalise_one(x, y, z, flat, v, out);
 }
 
 }  // namespace voxmesh::detail
