@@ -54,6 +54,7 @@ struct Result {
     double classify_s = 0, scan_s = 0, generate_s = 0, total_s = 0;
     double kernel_s = 0, transfer_s = 0;  // summed over devices (OpenCL)
     std::string device_names;             // Stats::devices names, '+'-joined
+    double cpu_share = -1;                // Hybrid: median share of the samples the CPU engine meshed (-1: not Hybrid)
 
     std::size_t triangles = 0, vertices = 0;
     double mvox_s = 0;
@@ -112,7 +113,7 @@ private:
     bool per_run_rss_;
     Result result_;
     voxmesh::Mesh kept_;  // --reuse-mesh
-    std::vector<double> classify_, scan_, generate_, total_, kernel_, transfer_;
+    std::vector<double> classify_, scan_, generate_, total_, kernel_, transfer_, cpu_share_;
 };
 // Whether /proc/self/clear_refs can reset VmHWM (per-run peaks) on this system.
 bool rss_reset_works();

@@ -180,6 +180,14 @@ void Runner::record(const voxmesh::Stats& stats) {
     }
     kernel_.push_back(k);
     transfer_.push_back(t);
+    if (stats.backend == voxmesh::Backend::Hybrid) {
+        std::size_t cpu = 0, all = 0;
+        for (const auto& d : stats.devices) {
+            all += d.voxels;
+            if (d.name == "cpu") cpu += d.voxels;
+        }
+        if (all > 0) cpu_share_.push_back(double(cpu) / double(all));
+    }
     r.device_names = names;
     for (const auto& w : stats.warnings)
         if (std::find(r.warnings.begin(), r.warnings.end(), w) == r.warnings.end()) r.warnings.push_back(w);
@@ -256,6 +264,7 @@ Result Runner::finish() {
     r.generate_s = median(generate_);
     r.total_s = median(total_);
     r.kernel_s = median(kernel_);
+    if (!cpu_share_.empty()) r.cpu_share = median(cpu_share_);
     r.transfer_s = median(transfer_);
     r.mvox_s = r.median_s > 0 ? double(r.samples()) / r.median_s / 1e6 : 0;
     return r;

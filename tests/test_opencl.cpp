@@ -406,6 +406,53 @@ TEST_CASE("Hybrid runs the CPU engine and OpenCL on one queue", "[opencl]") {
     CHECK(voxels == g.size());
 }
 
+// A device far slower than the CPU worker, in counting (a slow bus) or in generating (slow
+// reads back): the device stops taking chunks and the CPU worker takes its counted pieces
+// over. Whoever meshes a chunk, the mesh is the CPU engine's.
+TEST_CASE("Hybrid hands chunks between a slow device and the CPU worker", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{48, 48, 96}};
+    const auto f = gyroid(g);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, Options{}, Backend::Cpu);
+    const Pretend discrete(detail::opencl_pretend_discrete);
+    struct Slow {
+        Slow(double device_count_s, double device_generate_s, double cpu_count_s) {
+            detail::opencl_pretend_slow(device_count_s, device_generate_s, cpu_count_s);
+        }
+        ~Slow() { detail::opencl_pretend_slow(0, 0, 0); }
+    };
+    const auto hybrid = [&](Stats& stats) {
+        Options o;
+        o.chunk_planes = 2;  // 48 chunks
+        o.devices = {0};
+        require_same(cpu, run(v, o, Backend::Hybrid, &stats), v);
+        REQUIRE(stats.devices.size() == 2);
+        CHECK(stats.devices[1].name == "cpu");
+        CHECK(stats.devices[0].voxels + stats.devices[1].voxels == g.size());
+        CHECK(stats.devices[0].chunks + stats.devices[1].chunks == 48);  // handed-over chunks are the CPU's
+    };
+    SECTION("counting on the device is slow: it stops taking chunks") {
+        const Slow slow(0.02, 0, 0);
+        Stats stats;
+        hybrid(stats);
+        CHECK(stats.devices[0].chunks + stats.devices[0].chunks_handed_over < 24);
+    }
+    SECTION("generating on the device is slow: the CPU worker takes its pieces over") {
+        // While the CPU worker's first run takes 12 x 2 ms, the device counts several chunks.
+        const Slow slow(0, 0.02, 0.002);
+        Stats stats;
+        hybrid(stats);
+        CHECK(stats.devices[0].chunks >= 1);  // the piece it was generating when the CPU came
+        CHECK(stats.devices[0].chunks_handed_over >= 1);
+    }
+    SECTION("both sides slow") {
+        const Slow slow(0.003, 0.003, 0.003);
+        Stats stats;
+        hybrid(stats);
+    }
+}
+
 TEST_CASE("Hybrid leaves out OpenCL devices that are the CPU itself unless they are named", "[opencl]") {
     if (!have_device()) return;
     const auto devices = list_devices();

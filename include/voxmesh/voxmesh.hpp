@@ -100,6 +100,10 @@ struct DeviceStats {
     double wall_s = 0;
     double setup_s = 0;         // OpenCL: kernel builds and set-up in this call (0 once cached)
     std::size_t programs_built = 0;  // OpenCL programs compiled in this call (0 once cached)
+    // Hybrid: chunks this device counted that the CPU worker, out of work of its own, meshed
+    // instead because that was quicker than waiting (counted in the CPU's `chunks` and `voxels`,
+    // not in this device's).
+    std::size_t chunks_handed_over = 0;
 };
 
 struct Stats {

@@ -14,6 +14,7 @@
 // read the caller's samples and write the mesh's arrays in place (CL_MEM_USE_HOST_PTR).
 
 #include "cl_runtime.hpp"
+#include "hybrid_schedule.hpp"
 
 #include "core/cpu_engine.hpp"
 #include "core/opencl_hook.hpp"
@@ -54,6 +55,12 @@ constexpr unsigned kPieceRows = 1000, kKeptPieceRows = 1024;
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
 std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
+// Test hook: a slower device (per chunk counted, per piece generated), a slower CPU worker.
+std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{0};
+
+void pretend_slow(const std::atomic<double>& seconds) {
+    if (const double s = seconds; s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(s));
+}
 
 // The kernels index samples with uint: a chunk's samples stay below 2^31.
 constexpr std::size_t kMaxChunkSamples = std::size_t(1) << 31;
@@ -160,6 +167,13 @@ struct DeviceJob {
     cl_mem data_mem = nullptr, bits_mem = nullptr;
     DeviceStats stats;
     double pass_seconds[3] = {0, 0, 0};
+    // Hybrid's estimates (Engine::queue_mutex_): seconds per chunk counted, per piece generated.
+    double count_chunk_s = 0, generate_piece_s = 0;
+    // The pieces it counted, in z order, while generating: it takes them from the back, the CPU
+    // worker may take them over from the front (Engine::queue_mutex_).
+    std::vector<Piece*> to_generate;
+    std::size_t generate_front = 0, generate_back = 0;
+    std::size_t taken_over = 0, taken_over_voxels = 0;  // by the CPU worker
 };
 
 class Engine {
@@ -189,12 +203,17 @@ private:
     std::vector<ZRange> make_chunks(const std::vector<DeviceJob>& jobs) const;
     // Phase 1: count.
     void device_count_worker(DeviceJob& job, unsigned worker);
+    bool take_front(DeviceJob& job, std::size_t& index);
+    bool take_back(std::size_t& first, std::size_t& count);
     void count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Piece>& out);
     void count_on_device(DeviceJob& job, Piece& piece);
     Piece count_on_cpu(ZRange range, unsigned worker, unsigned threads);
     void cpu_count_worker(unsigned worker);
     // Phase 2: generate into the mesh.
     void generate_pieces(std::vector<DeviceJob>& jobs, unsigned worker, Mesh& mesh);
+    void cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, Mesh& mesh);
+    Piece* take_over(std::vector<DeviceJob>& jobs, DeviceJob*& from, bool& wait);
+    void generate_counted_on_cpu(const Piece& counted, unsigned worker, unsigned threads, Mesh& mesh);
     void generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh);
     void generate_on_cpu(Piece& piece, Mesh& mesh);
     cl::Buffer samples_on_device(DeviceJob& job, Piece& piece, const ChunkShape& s, EventLog& log);
@@ -203,7 +222,6 @@ private:
     void launch(DeviceJob& job, cl::Kernel& k, std::size_t n, Pass pass, EventLog& log);
     void add_times(DeviceJob& job, const EventLog& log);
     void warn(const std::string& message);
-    bool next_chunk(std::size_t& index);
 
     const VolumeView& volume_;
     const Options& options_;
@@ -214,8 +232,14 @@ private:
 
     std::vector<ZRange> chunks_;
     std::vector<std::vector<Piece>> results_;  // per chunk, its pieces in z order
-    std::atomic<std::size_t> next_{0};
     std::atomic<bool> abort_{false};
+    // Chunks not taken yet: [lo_, hi_). Devices take from the front, Hybrid's CPU worker runs
+    // of chunks from the back (hybrid_schedule.hpp); the estimates beside them, in seconds.
+    std::mutex queue_mutex_;
+    std::size_t lo_ = 0, hi_ = 0;
+    std::vector<DeviceJob>* jobs_ = nullptr;
+    double cpu_count_chunk_s_ = 0, cpu_generate_chunk_s_ = 0;
+    Clock::time_point cpu_free_at_{};
     std::mutex mutex_;  // warnings_, fallback_ stats
     std::vector<std::string> warnings_;
     DeviceStats cpu_stats_, fallback_stats_;
@@ -357,7 +381,15 @@ std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) cons
             planes = std::min(planes, lo);
         }
         const std::size_t workers = jobs.size() + (hybrid_ ? 1 : 0);
-        if (workers > 1) planes = std::min(planes, std::max<std::size_t>(1, (nz_ + 4 * workers - 1) / (4 * workers)));
+        if (hybrid_) {
+            // Many small chunks, so that a device's last one ends close to the CPU worker's
+            // last run (which takes many chunks at once): about 64, of at least 2^20 samples
+            // where that still leaves 8.
+            const std::size_t enough = (std::size_t{1} << 20) / std::max<std::size_t>(plane_, 1) + 1;
+            planes = std::min({planes, std::max((nz_ + 63) / 64, enough), (nz_ + 7) / 8});
+        } else if (workers > 1) {
+            planes = std::min(planes, std::max<std::size_t>(1, (nz_ + 4 * workers - 1) / (4 * workers)));
+        }
         const std::size_t count = (nz_ + planes - 1) / planes;
         planes = (nz_ + count - 1) / count;
     }
@@ -367,10 +399,29 @@ std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) cons
     return chunks;
 }
 
-bool Engine::next_chunk(std::size_t& index) {
-    if (abort_) return false;
-    index = next_++;
-    return index < chunks_.size();
+bool Engine::take_front(DeviceJob& job, std::size_t& index) {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (abort_ || lo_ >= hi_) return false;
+    if (hybrid_) {
+        const double cpu_busy_s = std::chrono::duration<double>(cpu_free_at_ - Clock::now()).count();
+        if (!hybrid_device_takes(job.count_chunk_s, cpu_count_chunk_s_, cpu_busy_s, hi_ - lo_)) return false;
+    }
+    index = lo_++;
+    return true;
+}
+
+bool Engine::take_back(std::size_t& first, std::size_t& count) {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    if (abort_ || lo_ >= hi_) return false;
+    double device_rate = 0;
+    for (const DeviceJob& job : *jobs_)
+        if (job.count_chunk_s > 0) device_rate += 1.0 / job.count_chunk_s;
+    count = hybrid_cpu_run(hi_ - lo_, cpu_count_chunk_s_, device_rate);
+    hi_ -= count;
+    first = hi_;
+    cpu_free_at_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                      std::chrono::duration<double>(cpu_count_chunk_s_ * static_cast<double>(count)));
+    return true;
 }
 
 void Engine::launch(DeviceJob& job, cl::Kernel& k, std::size_t n, Pass pass, EventLog& log) {
@@ -449,6 +500,7 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
             throw TooBig{};
     }
     const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
+    pretend_slow(g_slow_count_s);
     EventLog log;
     run_on_queue(d, [&] {
         // A discrete device keeps further pieces' samples and bits in buffers of their own
@@ -577,20 +629,32 @@ void Engine::count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Pi
 void Engine::device_count_worker(DeviceJob& job, unsigned worker) {
     const auto t0 = Clock::now();
     std::size_t index;
-    while (next_chunk(index)) count(job, worker, chunks_[index], results_[index]);
+    while (take_front(job, index)) {
+        const auto t = Clock::now();
+        count(job, worker, chunks_[index], results_[index]);
+        const double s = seconds_since(t);
+        std::lock_guard<std::mutex> lock(queue_mutex_);
+        job.count_chunk_s = s;  // the latest: the first chunk also pays for first-touch set-up
+    }
     job.stats.wall_s += seconds_since(t0);
 }
 
+// Hybrid's CPU worker: runs of chunks from the back, each one piece meshed by all its threads
+// (kept with the run's first chunk; the others stay empty, so pieces remain in z order).
 void Engine::cpu_count_worker(unsigned worker) {
     const auto t0 = Clock::now();
-    std::size_t index;
-    while (next_chunk(index)) {
-        const ZRange range = chunks_[index];
+    std::size_t first, n;
+    while (take_back(first, n)) {
+        const ZRange range{chunks_[first].begin, chunks_[first + n - 1].end};
         const auto t = Clock::now();
-        results_[index].push_back(count_on_cpu(range, worker, threads_));
-        cpu_pass_seconds_[0] += seconds_since(t);
-        cpu_stats_.chunks += 1;
+        results_[first].push_back(count_on_cpu(range, worker, threads_));
+        if (g_slow_cpu_count_s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(g_slow_cpu_count_s * n));
+        const double s = seconds_since(t);
+        cpu_pass_seconds_[0] += s;
+        cpu_stats_.chunks += n;
         cpu_stats_.voxels += (range.end - range.begin) * plane_;
+        std::lock_guard<std::mutex> lock(queue_mutex_);
+        cpu_count_chunk_s_ = s / static_cast<double>(n);
     }
     cpu_stats_.wall_s += seconds_since(t0);
 }
@@ -608,6 +672,7 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
     Device& d = *job.device;
     const ChunkShape s = shape(piece.range);
     const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
+    pretend_slow(g_slow_generate_s);
     EventLog log;
     run_on_queue(d, [&] {
         const cl::Buffer data = samples_on_device(job, piece, s, log);
@@ -670,47 +735,115 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
     add_times(job, log);
 }
 
+// Meshes a piece a device counted on the CPU engine instead: counted again there, to the
+// same counts (both follow the canonical mesh), and generated at the piece's offsets.
+void Engine::generate_counted_on_cpu(const Piece& counted, unsigned worker, unsigned threads, Mesh& mesh) {
+    Piece cpu = count_on_cpu(counted.range, worker, threads);
+    if (cpu.vertices != counted.vertices || cpu.triangles != counted.triangles)
+        throw Error("internal error: the CPU engine counted z-planes [" + std::to_string(counted.range.begin) + ", " +
+                    std::to_string(counted.range.end) + ") differently from the OpenCL device");
+    cpu.first_vertex = counted.first_vertex;
+    cpu.first_triangle = counted.first_triangle;
+    generate_on_cpu(cpu, mesh);
+}
+
 // Worker `worker` generates the pieces it counted. A device takes them last counted first:
-// that one's bits (and samples) are still on the device.
+// that one's bits (and samples) are still on the device. In Hybrid the CPU worker may take
+// pieces over from the other end.
 void Engine::generate_pieces(std::vector<DeviceJob>& jobs, unsigned worker, Mesh& mesh) {
-    std::vector<Piece*> mine;
-    for (auto& chunk : results_)
-        for (Piece& p : chunk)
-            if (p.worker == worker) mine.push_back(&p);
-    if (worker >= jobs.size()) {  // Hybrid's CPU worker
-        const auto t0 = Clock::now();
-        for (Piece* p : mine) generate_on_cpu(*p, mesh);
-        cpu_pass_seconds_[2] += seconds_since(t0);
-        cpu_stats_.wall_s += seconds_since(t0);
-        return;
-    }
+    if (worker >= jobs.size()) return cpu_generate_worker(jobs, worker, mesh);
     DeviceJob& job = jobs[worker];
     const auto t0 = Clock::now();
-    const auto device_end = std::stable_partition(mine.begin(), mine.end(), [](const Piece* p) { return !p->on_cpu; });
-    std::reverse(mine.begin(), device_end);
-    for (Piece* p : mine) {
-        if (abort_) return;
-        if (p->on_cpu) {
-            const auto t = Clock::now();
-            generate_on_cpu(*p, mesh);
-            std::lock_guard<std::mutex> lock(mutex_);
-            fallback_stats_.wall_s += seconds_since(t);
-            continue;
+    for (;;) {
+        Piece* p = nullptr;
+        {
+            std::lock_guard<std::mutex> lock(queue_mutex_);
+            if (abort_ || job.generate_front == job.generate_back) break;
+            p = job.to_generate[--job.generate_back];
         }
+        const auto t = Clock::now();
         try {
             generate_on_device(job, *p, mesh);
         } catch (const cl::Error& e) {
             recover_from_out_of_memory(job, e);
-            // Its counts are fixed now; the CPU engine meshes the same range to the same counts.
             warn("OpenCL device '" + job.device->info.name + "' ran out of memory generating a chunk; it runs on " +
                  "the CPU engine");
-            Piece cpu = count_on_cpu(p->range, worker, 1);
-            cpu.first_vertex = p->first_vertex;
-            cpu.first_triangle = p->first_triangle;
-            generate_on_cpu(cpu, mesh);
+            generate_counted_on_cpu(*p, worker, 1, mesh);
+        }
+        const double s = seconds_since(t);
+        std::lock_guard<std::mutex> lock(queue_mutex_);
+        job.generate_piece_s = s;
+    }
+    // Chunks that did not fit the device, counted by the CPU engine (one thread each).
+    for (auto& chunk : results_)
+        for (Piece& p : chunk) {
+            if (abort_) return;
+            if (p.worker != worker || !p.on_cpu) continue;
+            const auto t = Clock::now();
+            generate_on_cpu(p, mesh);
+            std::lock_guard<std::mutex> lock(mutex_);
+            fallback_stats_.wall_s += seconds_since(t);
+        }
+    job.stats.wall_s += seconds_since(t0);
+}
+
+// A device's piece for the CPU worker to mesh, when taking it over is quicker than waiting for
+// the device (hybrid_schedule.hpp); null when there is none. `wait` is set while a device has
+// pieces left but no measured time yet.
+Piece* Engine::take_over(std::vector<DeviceJob>& jobs, DeviceJob*& from, bool& wait) {
+    std::lock_guard<std::mutex> lock(queue_mutex_);
+    wait = false;
+    if (abort_) return nullptr;
+    const double cpu_piece_s = cpu_count_chunk_s_ + cpu_generate_chunk_s_;
+    for (DeviceJob& job : jobs) {
+        const std::size_t left = job.generate_back - job.generate_front;
+        if (left == 0) continue;
+        if (job.generate_piece_s <= 0) {
+            wait = true;
+            continue;
+        }
+        const Piece* next = job.to_generate[job.generate_front];
+        const double chunks = static_cast<double>(next->range.end - next->range.begin) /
+                              static_cast<double>(std::max<std::size_t>(chunks_.front().end - chunks_.front().begin, 1));
+        if (hybrid_cpu_takes_over(cpu_piece_s * chunks, job.generate_piece_s, left)) {
+            from = &job;
+            return job.to_generate[job.generate_front++];
         }
     }
-    job.stats.wall_s += seconds_since(t0);
+    return nullptr;
+}
+
+void Engine::cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, Mesh& mesh) {
+    const auto t0 = Clock::now();
+    std::size_t chunks = 0;
+    for (auto& chunk : results_)
+        for (Piece& p : chunk)
+            if (p.worker == worker) {
+                chunks += (p.range.end - p.range.begin);
+                generate_on_cpu(p, mesh);
+            }
+    if (chunks > 0) {
+        const double per_plane = seconds_since(t0) / static_cast<double>(chunks);
+        std::lock_guard<std::mutex> lock(queue_mutex_);
+        cpu_generate_chunk_s_ = per_plane * static_cast<double>(chunks_.front().end - chunks_.front().begin);
+    }
+    for (;;) {
+        DeviceJob* from = nullptr;
+        bool wait = false;
+        Piece* p = take_over(jobs, from, wait);
+        if (p == nullptr) {
+            if (!wait) break;
+            std::this_thread::sleep_for(std::chrono::microseconds(50));
+            continue;
+        }
+        generate_counted_on_cpu(*p, worker, threads_, mesh);
+        p->vbase = p->tbase = p->cell_groups = p->data = p->bits = cl::Buffer();
+        std::lock_guard<std::mutex> lock(queue_mutex_);
+        from->taken_over += 1;
+        from->taken_over_voxels += (p->range.end - p->range.begin) * plane_;
+    }
+    cpu_pass_seconds_[2] += seconds_since(t0);
+    cpu_stats_.wall_s += seconds_since(t0);
 }
 
 Mesh Engine::run(Stats& stats) {
@@ -760,6 +893,9 @@ Mesh Engine::run(Stats& stats) {
     }
     chunks_ = make_chunks(jobs);
     results_.assign(chunks_.size(), {});
+    jobs_ = &jobs;
+    lo_ = 0;
+    hi_ = chunks_.size();
     cpu_stats_.name = "cpu";
     fallback_stats_.name = "cpu (fallback)";
 
@@ -791,9 +927,19 @@ Mesh Engine::run(Stats& stats) {
     check_vertex_count(vertices);
     Mesh mesh = std::move(storage_);
     allocate_output(mesh, vertices, triangles, options_.normals, threads_);
+    for (auto& chunk : results_)
+        for (Piece& p : chunk)
+            if (p.worker < jobs.size() && !p.on_cpu) jobs[p.worker].to_generate.push_back(&p);
+    for (DeviceJob& job : jobs) job.generate_back = job.to_generate.size();
     each_worker([&](unsigned w) { generate_pieces(jobs, w, mesh); });
 
     for (DeviceJob& job : jobs) {
+        // Pieces the CPU worker took over are the CPU's: it counted and generated them again.
+        job.stats.chunks -= job.taken_over;
+        job.stats.voxels -= job.taken_over_voxels;
+        job.stats.chunks_handed_over = job.taken_over;
+        cpu_stats_.chunks += job.taken_over;
+        cpu_stats_.voxels += job.taken_over_voxels;
         stats.devices.push_back(job.stats);
         for (int p = 0; p < 3; ++p) cpu_pass_seconds_[p] += job.pass_seconds[p];
     }
@@ -855,5 +1001,11 @@ void opencl_build_program(const std::string& source, const std::string& options,
 void opencl_pretend_no_fp64(bool pretend) { g_pretend_no_fp64 = pretend; }
 
 void opencl_pretend_discrete(bool pretend) { g_pretend_discrete = pretend; }
+
+void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s) {
+    g_slow_count_s = count_s;
+    g_slow_generate_s = generate_s;
+    g_slow_cpu_count_s = cpu_count_s;
+}
 
 }  // namespace voxmesh::detail

@@ -34,6 +34,10 @@ void opencl_pretend_no_fp64(bool pretend);
 // Treats every device as not sharing host memory: samples are copied in and the mesh read
 // back, the code path of discrete GPUs, on PoCL too.
 void opencl_pretend_discrete(bool pretend);
+// Makes every device spend this long more on each chunk it counts and on each piece it
+// generates, and Hybrid's CPU worker on each chunk it counts (0: off), so that the hand-over
+// between a device and the CPU worker runs in tests whatever the machine.
+void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s = 0);
 // Builds an OpenCL C program on device `device` the way the engine builds its kernels:
 // a failure throws Error with the device name and the build log.
 void opencl_build_program(const std::string& source, const std::string& options, int device = 0);

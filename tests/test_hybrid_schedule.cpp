@@ -1,0 +1,37 @@
+// Hybrid's sharing rules (src/cl/hybrid_schedule.hpp), on made-up rates.
+#include <catch2/catch.hpp>
+
+#include "cl/hybrid_schedule.hpp"
+
+using namespace voxmesh::detail;
+
+TEST_CASE("Hybrid: the CPU worker's runs follow its share of the throughput", "[hybrid]") {
+    CHECK(hybrid_cpu_run(0, 0, 0) == 0);
+    CHECK(hybrid_cpu_run(64, 0, 0) == 16);           // nothing measured: a quarter
+    CHECK(hybrid_cpu_run(3, 0, 0) == 1);             // at least one chunk
+    CHECK(hybrid_cpu_run(1, 0.001, 1000) == 1);      // the last chunk too
+    CHECK(hybrid_cpu_run(40, 0.001, 0) == 20);       // the device has not finished a chunk yet: half
+    CHECK(hybrid_cpu_run(60, 0.001, 200) == 50);     // 1000 chunks/s vs 200: five sixths
+    CHECK(hybrid_cpu_run(60, 0.004, 750) == 15);     // a device three times as fast: a quarter
+    CHECK(hybrid_cpu_run(10, 1e-9, 1) == 10);        // never more than is left
+}
+
+TEST_CASE("Hybrid: a device takes a chunk only if it ends no later than the CPU would", "[hybrid]") {
+    CHECK(hybrid_device_takes(0, 0.001, 0, 1));      // no measurement yet: take it
+    CHECK(hybrid_device_takes(0.01, 0, 0, 1));
+    // The CPU needs 1 ms a chunk: with 20 left it is busy for 20 ms, a 10 ms chunk fits.
+    CHECK(hybrid_device_takes(0.010, 0.001, 0, 20));
+    CHECK_FALSE(hybrid_device_takes(0.010, 0.001, 0, 5));
+    // ... or once the CPU's current run (8 ms more) is counted in.
+    CHECK(hybrid_device_takes(0.010, 0.001, 0.008, 5));
+    CHECK_FALSE(hybrid_device_takes(0.010, 0.001, -1, 5));  // a run that overran counts as none
+}
+
+TEST_CASE("Hybrid: the CPU worker takes a device's piece over only when that is quicker", "[hybrid]") {
+    CHECK_FALSE(hybrid_cpu_takes_over(0.001, 0, 4));  // the device's time is not known yet
+    CHECK_FALSE(hybrid_cpu_takes_over(0, 0.01, 4));
+    CHECK_FALSE(hybrid_cpu_takes_over(0.001, 0.01, 0));  // nothing left to take
+    CHECK(hybrid_cpu_takes_over(0.001, 0.01, 1));        // 1 ms here vs 10 ms there
+    CHECK_FALSE(hybrid_cpu_takes_over(0.015, 0.01, 1));  // the device is done with it first
+    CHECK(hybrid_cpu_takes_over(0.015, 0.01, 2));        // ... unless it has two to go
+}
