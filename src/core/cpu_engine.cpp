@@ -648,10 +648,4 @@ Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats,
     return mesh;
 }
 
-unsigned resolve_threads(unsigned requested) {
-    if (requested > 0) return requested;
-    const unsigned hw = std::thread::hardware_concurrency();
-    return hw > 0 ? hw : 1;
-}
-
 }  // namespace voxmesh::detail

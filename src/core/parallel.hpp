@@ -1,16 +1,23 @@
-// Runs f(0..n-1) on n std::threads (the caller runs worker 0) and rethrows the first
-// exception a worker threw.
+// Worker threads for the engines: run_workers, run_slabs and the thread count to use.
 #pragma once
 
 #include <algorithm>
 #include <atomic>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <thread>
 #include <vector>
 
 namespace voxmesh::detail {
 
+// Runs f(0..n-1) in parallel, worker 0 on the calling thread and the others on threads from
+// a process-wide cache of idle threads (parallel.cpp), and returns when all have returned.
+// f must not throw.
+void run_on_threads(unsigned n, const std::function<void(unsigned)>& f);
+
+// run_on_threads for any callable: rethrows the first exception a worker threw, after all
+// have returned.
 template <class F>
 void run_workers(unsigned n, F&& f) {
     if (n <= 1) {
@@ -19,19 +26,14 @@ void run_workers(unsigned n, F&& f) {
     }
     std::exception_ptr failure;
     std::mutex failure_mutex;
-    auto guarded = [&](unsigned w) {
+    run_on_threads(n, [&](unsigned w) {
         try {
             f(w);
         } catch (...) {
             std::lock_guard<std::mutex> lock(failure_mutex);
             if (!failure) failure = std::current_exception();
         }
-    };
-    std::vector<std::thread> pool;
-    pool.reserve(n - 1);
-    for (unsigned w = 1; w < n; ++w) pool.emplace_back(guarded, w);
-    guarded(0);
-    for (auto& t : pool) t.join();
+    });
     if (failure) std::rethrow_exception(failure);
 }
 
