@@ -35,3 +35,26 @@ TEST_CASE("Hybrid: the CPU worker takes a device's piece over only when that is 
     CHECK_FALSE(hybrid_cpu_takes_over(0.015, 0.01, 1));  // the device is done with it first
     CHECK(hybrid_cpu_takes_over(0.015, 0.01, 2));        // ... unless it has two to go
 }
+
+TEST_CASE("Hybrid: a planned split minimises count + generate over both sides", "[hybrid]") {
+    HybridRates r;
+    CHECK_FALSE(r.known());
+    r = {1, 1, 1, 1};  // equal sides: half each
+    REQUIRE(r.known());
+    CHECK(hybrid_device_chunks(10, 1, r) == 5);
+    // A device that counts slowly (copies over a bus) but generates fast: counting balances.
+    r = {1, 1, 10, 0.1};
+    CHECK(hybrid_device_chunks(64, 1, r) == 5);
+    // A CPU whose generate pass is long (few threads, a dense surface): the device counts past
+    // the balance of counting, here everything (2 x 10 + 0.2 x 10 beats any split).
+    r = {1, 5, 2, 0.2};
+    CHECK(hybrid_device_chunks(10, 1, r) == 10);
+    // A device far slower than the CPU keeps one chunk while that costs no more than the CPU's
+    // time for all the others (its rates stay measured), and none where it would cost more.
+    r = {1, 1, 100, 100};
+    CHECK(hybrid_device_chunks(64, 1, r) == 0);
+    CHECK(hybrid_device_chunks(100, 1, r) == 0);  // 200 on the device vs 99 x 2 on the CPU
+    CHECK(hybrid_device_chunks(101, 1, r) == 1);  // 200 vs 200
+    CHECK(hybrid_device_chunks(1, 1, r) == 0);
+    CHECK(hybrid_device_chunks(0, 1, r) == 0);
+}

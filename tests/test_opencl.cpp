@@ -453,6 +453,49 @@ TEST_CASE("Hybrid hands chunks between a slow device and the CPU worker", "[open
     }
 }
 
+// With automatic chunks, a call plans its split from what the previous call on the same
+// device and volume shape measured; the plan only moves work, never the mesh. A plan made
+// for a fast device that has turned slow is mended by the CPU worker taking its chunks.
+TEST_CASE("Hybrid's planned split from earlier calls gives the same mesh", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{48, 40, 120}};  // 8 automatic chunks
+    const auto f = gyroid(g);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, Options{}, Backend::Cpu);
+    Options o;
+    o.devices = {0};
+    const auto hybrid = [&](double device_count_s, double device_generate_s, double cpu_count_s) {
+        detail::opencl_pretend_slow(device_count_s, device_generate_s, cpu_count_s);
+        Stats stats;
+        Mesh m;
+        try {
+            m = run(v, o, Backend::Hybrid, &stats);
+        } catch (...) {
+            detail::opencl_pretend_slow(0, 0, 0);
+            throw;
+        }
+        detail::opencl_pretend_slow(0, 0, 0);
+        require_same(cpu, m, v);
+        REQUIRE(stats.devices.size() == 2);
+        CHECK(stats.devices[0].voxels + stats.devices[1].voxels == g.size());
+        return stats;
+    };
+    // A CPU worker slowed to 10 ms a chunk: after the first call the plan gives the device
+    // most chunks.
+    hybrid(0, 0, 0.01);
+    for (int call = 1; call < 3; ++call) {
+        INFO("call " << call);
+        CHECK(hybrid(0, 0, 0.01).devices[0].chunks >= 4);
+    }
+    // The device now far slower than that plan assumed (50 ms a piece): the CPU worker takes
+    // its planned run (none), then the device's last chunks one at a time while it is behind.
+    const Stats mended = hybrid(0.05, 0, 0);
+    CHECK(mended.devices[1].chunks >= 1);
+    CHECK(mended.devices[0].chunks < 8);
+    // Without the hooks the plan follows the rates measured again.
+    for (int call = 0; call < 2; ++call) hybrid(0, 0, 0);
+}
+
 TEST_CASE("Hybrid leaves out OpenCL devices that are the CPU itself unless they are named", "[opencl]") {
     if (!have_device()) return;
     const auto devices = list_devices();

@@ -31,7 +31,9 @@
 #include <cmath>
 #include <exception>
 #include <limits>
+#include <map>
 #include <set>
+#include <tuple>
 #include <thread>
 
 namespace voxmesh::detail {
@@ -61,6 +63,32 @@ std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{
 void pretend_slow(const std::atomic<double>& seconds) {
     if (const double s = seconds; s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(s));
 }
+
+// Hybrid's rates from earlier calls, per device, volume shape and settings (hybrid_schedule.hpp).
+struct RatesKey {
+    const Device* device;
+    ScalarType type;
+    bool normals;
+    unsigned threads;
+    std::size_t nx, ny, nz;
+    bool operator<(const RatesKey& o) const {
+        return std::tie(device, type, normals, threads, nx, ny, nz) <
+               std::tie(o.device, o.type, o.normals, o.threads, o.nx, o.ny, o.nz);
+    }
+};
+std::mutex g_rates_mutex;
+std::map<RatesKey, HybridRates> g_rates;
+constexpr std::size_t kMaxRates = 64;  // shapes remembered; the map starts over beyond that
+
+// Seconds and samples of one side's pass in this call.
+struct Measured {
+    double seconds = 0, samples = 0;
+    void add(double s, double n) {
+        seconds += s;
+        samples += n;
+    }
+    double per_sample(double before) const { return samples > 0 ? seconds / samples : before; }
+};
 
 // The kernels index samples with uint: a chunk's samples stay below 2^31.
 constexpr std::size_t kMaxChunkSamples = std::size_t(1) << 31;
@@ -174,6 +202,7 @@ struct DeviceJob {
     std::vector<Piece*> to_generate;
     std::size_t generate_front = 0, generate_back = 0;
     std::size_t taken_over = 0, taken_over_voxels = 0;  // by the CPU worker
+    Measured counted, generated;  // on the device, for the next call's plan
 };
 
 class Engine {
@@ -203,8 +232,14 @@ private:
     std::vector<ZRange> make_chunks(const std::vector<DeviceJob>& jobs) const;
     // Phase 1: count.
     void device_count_worker(DeviceJob& job, unsigned worker);
-    bool take_front(DeviceJob& job, std::size_t& index);
-    bool take_back(std::size_t& first, std::size_t& count);
+    bool take_front(DeviceJob& job, std::size_t& first, std::size_t& count);
+    // Chunks a piece covers (a run of them, or 1 for part of one), for the stats.
+    std::size_t chunks_in(ZRange r) const {
+        const std::size_t chunk = chunks_.front().end - chunks_.front().begin;
+        return std::max<std::size_t>(1, (r.end - r.begin + chunk / 2) / chunk);
+    }
+    enum class Take { Run, Later, Done };  // a run of chunks; none yet, ask again; none left
+    Take take_back(std::size_t& first, std::size_t& count);
     void count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Piece>& out);
     void count_on_device(DeviceJob& job, Piece& piece);
     Piece count_on_cpu(ZRange range, unsigned worker, unsigned threads);
@@ -240,6 +275,18 @@ private:
     std::vector<DeviceJob>* jobs_ = nullptr;
     double cpu_count_chunk_s_ = 0, cpu_generate_chunk_s_ = 0;
     Clock::time_point cpu_free_at_{};
+    // Hybrid with one device and rates from an earlier call: the device's planned chunks, how
+    // many it has taken, whether the CPU worker has taken its planned run.
+    static constexpr std::size_t kNoPlan = std::numeric_limits<std::size_t>::max();
+    std::size_t planned_device_chunks_ = kNoPlan, device_taken_ = 0;
+    bool cpu_run_planned_taken_ = false;
+    HybridRates rates_;  // the earlier call's (planned) or none
+    Measured cpu_counted_, cpu_generated_;
+    void plan_hybrid(const std::vector<DeviceJob>& jobs);
+    void remember_rates(const std::vector<DeviceJob>& jobs);
+    RatesKey rates_key(const DeviceJob& job) const {
+        return RatesKey{job.device.get(), volume_.type, options_.normals, threads_, nx_, ny_, nz_};
+    }
     std::mutex mutex_;  // warnings_, fallback_ stats
     std::vector<std::string> warnings_;
     DeviceStats cpu_stats_, fallback_stats_;
@@ -399,20 +446,52 @@ std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) cons
     return chunks;
 }
 
-bool Engine::take_front(DeviceJob& job, std::size_t& index) {
+bool Engine::take_front(DeviceJob& job, std::size_t& first, std::size_t& count) {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     if (abort_ || lo_ >= hi_) return false;
+    first = lo_;
+    count = 1;
+    if (planned_device_chunks_ != kNoPlan) {
+        // Its planned chunks, no more: half of those left at a time, as one piece (a piece
+        // costs a discrete GPU about a millisecond whatever its size), so that the CPU worker
+        // can still take the last ones should the device fall behind.
+        const std::size_t left = std::min(hi_ - lo_, planned_device_chunks_ - std::min(device_taken_, planned_device_chunks_));
+        if (left == 0) return false;
+        count = (left + 1) / 2;
+        device_taken_ += count;
+        lo_ += count;
+        return true;
+    }
     if (hybrid_) {
         const double cpu_busy_s = std::chrono::duration<double>(cpu_free_at_ - Clock::now()).count();
         if (!hybrid_device_takes(job.count_chunk_s, cpu_count_chunk_s_, cpu_busy_s, hi_ - lo_)) return false;
     }
-    index = lo_++;
+    lo_ += 1;
     return true;
 }
 
-bool Engine::take_back(std::size_t& first, std::size_t& count) {
+Engine::Take Engine::take_back(std::size_t& first, std::size_t& count) {
     std::lock_guard<std::mutex> lock(queue_mutex_);
-    if (abort_ || lo_ >= hi_) return false;
+    if (abort_ || lo_ >= hi_) return Take::Done;
+    const double chunk_samples = static_cast<double>((chunks_.front().end - chunks_.front().begin) * plane_);
+    if (planned_device_chunks_ != kNoPlan) {
+        const std::size_t left = hi_ - lo_, device_left = std::min(left, planned_device_chunks_ - device_taken_);
+        if (!cpu_run_planned_taken_) {  // everything the plan leaves the device, in one run
+            cpu_run_planned_taken_ = true;
+            count = left - device_left;
+        } else {
+            // Mending the plan: one of the device's chunks at a time, while the device would
+            // need longer for those it has left than the CPU for one.
+            const double device_s = jobs_->front().count_chunk_s > 0 ? jobs_->front().count_chunk_s
+                                                                     : rates_.device_count * chunk_samples;
+            const double cpu_s = cpu_count_chunk_s_ > 0 ? cpu_count_chunk_s_ : rates_.cpu_count * chunk_samples;
+            count = static_cast<double>(device_left) * device_s > cpu_s ? 1 : 0;
+        }
+        if (count == 0) return device_left > 0 ? Take::Later : Take::Done;
+        hi_ -= count;
+        first = hi_;
+        return Take::Run;
+    }
     double device_rate = 0;
     for (const DeviceJob& job : *jobs_)
         if (job.count_chunk_s > 0) device_rate += 1.0 / job.count_chunk_s;
@@ -421,7 +500,47 @@ bool Engine::take_back(std::size_t& first, std::size_t& count) {
     first = hi_;
     cpu_free_at_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                       std::chrono::duration<double>(cpu_count_chunk_s_ * static_cast<double>(count)));
-    return true;
+    return Take::Run;
+}
+
+// Hybrid with one device: where an earlier call on this device and volume shape measured
+// both sides, the split comes from those rates (hybrid_device_chunks).
+void Engine::plan_hybrid(const std::vector<DeviceJob>& jobs) {
+    if (!hybrid_ || jobs.size() != 1 || options_.chunk_planes > 0 || chunks_.empty()) return;
+    {
+        std::lock_guard<std::mutex> lock(g_rates_mutex);
+        const auto it = g_rates.find(rates_key(jobs.front()));
+        if (it == g_rates.end() || !it->second.known()) return;
+        rates_ = it->second;
+    }
+    const double chunk_samples = static_cast<double>((chunks_.front().end - chunks_.front().begin) * plane_);
+    planned_device_chunks_ = hybrid_device_chunks(chunks_.size(), chunk_samples, rates_);
+}
+
+// This call's rates, for the next call's plan; a side that did no work in a pass keeps the
+// earlier call's rate for it (a device's decaying).
+void Engine::remember_rates(const std::vector<DeviceJob>& jobs) {
+    if (!hybrid_ || jobs.size() != 1 || options_.chunk_planes > 0) return;
+    const DeviceJob& job = jobs.front();
+    std::lock_guard<std::mutex> lock(g_rates_mutex);
+    HybridRates& r = g_rates[rates_key(job)];
+    if (planned_device_chunks_ == kNoPlan) r = rates_;
+    r.cpu_count = cpu_counted_.per_sample(r.cpu_count);
+    r.cpu_generate = cpu_generated_.per_sample(r.cpu_generate);
+    r.device_count = job.counted.per_sample(r.device_count);
+    r.device_generate = job.generated.per_sample(r.device_generate);
+    if (job.counted.samples == 0) {
+        // Planned out: its rates grow more hopeful call by call until it gets a chunk to be
+        // measured by again, so that a device slow once (busy, a cold start) is not left out
+        // for good, while one that stays slow costs a call now and then.
+        r.device_count *= 0.8;
+        r.device_generate *= 0.8;
+    }
+    if (g_rates.size() > kMaxRates) {
+        const HybridRates keep = r;
+        g_rates.clear();
+        g_rates[rates_key(job)] = keep;
+    }
 }
 
 void Engine::launch(DeviceJob& job, cl::Kernel& k, std::size_t n, Pass pass, EventLog& log) {
@@ -598,7 +717,7 @@ void Engine::count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Pi
             piece.worker = worker;
             count_on_device(job, piece);
             out.push_back(std::move(piece));
-            job.stats.chunks += 1;
+            job.stats.chunks += chunks_in(range);
             job.stats.voxels += planes * plane_;
             return;
         } catch (const TooBig&) {
@@ -621,20 +740,22 @@ void Engine::count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Pi
     const auto t0 = Clock::now();
     out.push_back(count_on_cpu(range, worker, 1));
     std::lock_guard<std::mutex> lock(mutex_);
-    fallback_stats_.chunks += 1;
+    fallback_stats_.chunks += chunks_in(range);
     fallback_stats_.voxels += planes * plane_;
     fallback_stats_.wall_s += seconds_since(t0);
 }
 
 void Engine::device_count_worker(DeviceJob& job, unsigned worker) {
     const auto t0 = Clock::now();
-    std::size_t index;
-    while (take_front(job, index)) {
+    std::size_t first = 0, n = 0;
+    while (take_front(job, first, n)) {
+        const ZRange range{chunks_[first].begin, chunks_[first + n - 1].end};
         const auto t = Clock::now();
-        count(job, worker, chunks_[index], results_[index]);
+        count(job, worker, range, results_[first]);
         const double s = seconds_since(t);
         std::lock_guard<std::mutex> lock(queue_mutex_);
-        job.count_chunk_s = s;  // the latest: the first chunk also pays for first-touch set-up
+        job.count_chunk_s = s / static_cast<double>(n);  // the latest: the first also pays for set-up
+        job.counted.add(s, static_cast<double>((range.end - range.begin) * plane_));
     }
     job.stats.wall_s += seconds_since(t0);
 }
@@ -643,8 +764,12 @@ void Engine::device_count_worker(DeviceJob& job, unsigned worker) {
 // (kept with the run's first chunk; the others stay empty, so pieces remain in z order).
 void Engine::cpu_count_worker(unsigned worker) {
     const auto t0 = Clock::now();
-    std::size_t first, n;
-    while (take_back(first, n)) {
+    std::size_t first = 0, n = 0;
+    for (Take take; (take = take_back(first, n)) != Take::Done;) {
+        if (take == Take::Later) {
+            std::this_thread::sleep_for(std::chrono::microseconds(50));
+            continue;
+        }
         const ZRange range{chunks_[first].begin, chunks_[first + n - 1].end};
         const auto t = Clock::now();
         results_[first].push_back(count_on_cpu(range, worker, threads_));
@@ -655,6 +780,7 @@ void Engine::cpu_count_worker(unsigned worker) {
         cpu_stats_.voxels += (range.end - range.begin) * plane_;
         std::lock_guard<std::mutex> lock(queue_mutex_);
         cpu_count_chunk_s_ = s / static_cast<double>(n);
+        cpu_counted_.add(s, static_cast<double>((range.end - range.begin) * plane_));
     }
     cpu_stats_.wall_s += seconds_since(t0);
 }
@@ -773,6 +899,7 @@ void Engine::generate_pieces(std::vector<DeviceJob>& jobs, unsigned worker, Mesh
         const double s = seconds_since(t);
         std::lock_guard<std::mutex> lock(queue_mutex_);
         job.generate_piece_s = s;
+        job.generated.add(s, static_cast<double>((p->range.end - p->range.begin) * plane_));
     }
     // Chunks that did not fit the device, counted by the CPU engine (one thread each).
     for (auto& chunk : results_)
@@ -815,17 +942,19 @@ Piece* Engine::take_over(std::vector<DeviceJob>& jobs, DeviceJob*& from, bool& w
 
 void Engine::cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, Mesh& mesh) {
     const auto t0 = Clock::now();
-    std::size_t chunks = 0;
+    std::size_t planes = 0;
     for (auto& chunk : results_)
         for (Piece& p : chunk)
             if (p.worker == worker) {
-                chunks += (p.range.end - p.range.begin);
+                planes += p.range.end - p.range.begin;
                 generate_on_cpu(p, mesh);
             }
-    if (chunks > 0) {
-        const double per_plane = seconds_since(t0) / static_cast<double>(chunks);
+    if (planes > 0) {
+        const double s = seconds_since(t0);
+        cpu_generated_.add(s, static_cast<double>(planes * plane_));
         std::lock_guard<std::mutex> lock(queue_mutex_);
-        cpu_generate_chunk_s_ = per_plane * static_cast<double>(chunks_.front().end - chunks_.front().begin);
+        cpu_generate_chunk_s_ = s / static_cast<double>(planes) *
+                                static_cast<double>(chunks_.front().end - chunks_.front().begin);
     }
     for (;;) {
         DeviceJob* from = nullptr;
@@ -839,7 +968,7 @@ void Engine::cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, 
         generate_counted_on_cpu(*p, worker, threads_, mesh);
         p->vbase = p->tbase = p->cell_groups = p->data = p->bits = cl::Buffer();
         std::lock_guard<std::mutex> lock(queue_mutex_);
-        from->taken_over += 1;
+        from->taken_over += chunks_in(p->range);
         from->taken_over_voxels += (p->range.end - p->range.begin) * plane_;
     }
     cpu_pass_seconds_[2] += seconds_since(t0);
@@ -896,6 +1025,7 @@ Mesh Engine::run(Stats& stats) {
     jobs_ = &jobs;
     lo_ = 0;
     hi_ = chunks_.size();
+    plan_hybrid(jobs);
     cpu_stats_.name = "cpu";
     fallback_stats_.name = "cpu (fallback)";
 
@@ -932,6 +1062,7 @@ Mesh Engine::run(Stats& stats) {
             if (p.worker < jobs.size() && !p.on_cpu) jobs[p.worker].to_generate.push_back(&p);
     for (DeviceJob& job : jobs) job.generate_back = job.to_generate.size();
     each_worker([&](unsigned w) { generate_pieces(jobs, w, mesh); });
+    remember_rates(jobs);
 
     for (DeviceJob& job : jobs) {
         // Pieces the CPU worker took over are the CPU's: it counted and generated them again.

@@ -7,7 +7,9 @@
 // no further chunk, and once the CPU worker has meshed its own pieces it takes over a
 // device's counted pieces while that is quicker than waiting for the device.
 //
-// Times are seconds per chunk measured in this call; 0 means not measured yet.
+// Times are seconds per chunk measured in this call; 0 means not measured yet. Where an
+// earlier call on the same device and volume shape measured both sides, the split is planned
+// from those rates instead (hybrid_device_chunks) and the rules above only mend it.
 #pragma once
 
 #include <algorithm>
@@ -46,6 +48,38 @@ inline bool hybrid_device_takes(double device_chunk_s, double cpu_chunk_s, doubl
 inline bool hybrid_cpu_takes_over(double cpu_piece_s, double device_piece_s, std::size_t device_pieces_left) {
     if (cpu_piece_s <= 0 || device_piece_s <= 0 || device_pieces_left == 0) return false;
     return cpu_piece_s < device_piece_s * static_cast<double>(device_pieces_left);
+}
+
+// What a previous call on the same device, volume shape and settings measured, in seconds
+// per sample: counting and generating on the CPU worker and on the device (0: not measured).
+struct HybridRates {
+    double cpu_count = 0, cpu_generate = 0, device_count = 0, device_generate = 0;
+    bool known() const { return cpu_count > 0 && cpu_generate > 0 && device_count > 0 && device_generate > 0; }
+};
+
+// How many of `chunks` equal chunks (of `samples` samples each) the device should mesh so that
+// the call ends soonest. Every worker counts before anyone generates (the mesh is allocated in
+// between), so a call takes max(device count, CPU count) + max(device generate, CPU generate):
+// where the CPU's generate pass is the longer one, the device may count beyond the point
+// where counting alone is balanced. Evaluated for every split; ties go to the CPU.
+// A device planned out altogether still gets one chunk where that costs no more than the CPU
+// needs for all the others, so that its rates stay measured.
+inline std::size_t hybrid_device_chunks(std::size_t chunks, double samples, const HybridRates& r) {
+    std::size_t best = 0;
+    double best_s = 0;
+    for (std::size_t k = 0; k <= chunks; ++k) {
+        const double dev = static_cast<double>(k) * samples, cpu = static_cast<double>(chunks - k) * samples;
+        const double s = std::max(dev * r.device_count, cpu * r.cpu_count) +
+                         std::max(dev * r.device_generate, cpu * r.cpu_generate);
+        if (k == 0 || s < best_s) {
+            best = k;
+            best_s = s;
+        }
+    }
+    const double one_on_device = samples * (r.device_count + r.device_generate);
+    const double rest_on_cpu = static_cast<double>(chunks - 1) * samples * (r.cpu_count + r.cpu_generate);
+    if (best == 0 && chunks > 1 && one_on_device <= rest_on_cpu) best = 1;
+    return best;
 }
 
 }  // namespace voxmesh::detail
