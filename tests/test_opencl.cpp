@@ -238,6 +238,33 @@ TEST_CASE("OpenCL with copies in and out (a discrete GPU's path) matches the CPU
     REQUIRE(stats.devices.size() == 1);
     CHECK(stats.devices[0].chunks >= 4);
 }
+
+// Copies go through two pinned blocks in turns; with blocks of 1000 bytes (not a multiple of a
+// sample or a vertex) every upload and read-back runs through many of them.
+TEST_CASE("OpenCL copies through small pinned blocks give the same mesh", "[opencl]") {
+    if (!have_device()) return;
+    const Pretend discrete(detail::opencl_pretend_discrete);
+    struct SmallBlocks {
+        SmallBlocks() { detail::opencl_staging_block_bytes(1000); }
+        ~SmallBlocks() { detail::opencl_staging_block_bytes(0); }
+    } small;
+    Grid g{{37, 30, 33}, {1, 1, 1}, {0, 0, 0}};
+    const std::vector<float> f = gyroid(g);
+    for (std::size_t planes : {0, 5}) {
+        INFO("chunk_planes " << planes);
+        Options o;
+        o.chunk_planes = planes;
+        compare(view_of(f.data(), ScalarType::F32, g), o);
+        const auto u8 = to_type<std::uint8_t>(f, 100, 120);
+        o.iso = 120.5;
+        compare(view_of(u8.data(), ScalarType::U8, g), o);
+    }
+    Options o;
+    o.devices = {0};
+    o.chunk_planes = 3;
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    require_same(run(v, Options{}, Backend::Cpu), run(v, o, Backend::Hybrid), v);
+}
 #endif  // VOXMESH_HAS_OPENCL
 
 TEST_CASE("OpenCL matches the CPU engine on random odd-sized volumes", "[opencl]") {

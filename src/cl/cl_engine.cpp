@@ -15,6 +15,7 @@
 
 #include "cl_runtime.hpp"
 #include "hybrid_schedule.hpp"
+#include "pinned_staging.hpp"
 
 #include "core/cpu_engine.hpp"
 #include "core/opencl_hook.hpp"
@@ -54,6 +55,9 @@ enum : unsigned { kData, kBits, kWordBase, kPositions, kNormals, kIndices, kNan 
 // others, so that calls after the first allocate nothing (for the first kKeptPieceRows
 // pieces; more take buffers of their own). Ids above the scan's.
 constexpr unsigned kPieceRows = 1000, kKeptPieceRows = 1024;
+// Likewise a discrete device's resident samples and bits of piece i (above the row buffers'
+// ids): allocating device memory costs a GPU about a millisecond a piece.
+constexpr unsigned kPieceSamples = kPieceRows + 3 * kKeptPieceRows;
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
 std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
@@ -257,6 +261,12 @@ private:
     void launch(DeviceJob& job, cl::Kernel& k, std::size_t n, Pass pass, EventLog& log);
     void add_times(DeviceJob& job, const EventLog& log);
     void warn(const std::string& message);
+    // Host threads copying to and from a discrete device: the call's; in Hybrid, where those
+    // run the CPU worker, the cores it leaves (at least two).
+    unsigned copy_threads() const {
+        const unsigned cores = resolve_threads(0);
+        return hybrid_ ? std::max(2u, cores > threads_ ? cores - threads_ : 0u) : threads_;
+    }
 
     const VolumeView& volume_;
     const Options& options_;
@@ -280,6 +290,11 @@ private:
     static constexpr std::size_t kNoPlan = std::numeric_limits<std::size_t>::max();
     std::size_t planned_device_chunks_ = kNoPlan, device_taken_ = 0;
     bool cpu_run_planned_taken_ = false;
+    bool cpu_waiting_ = false;      // the CPU worker is done with its run and waits to mend the plan
+    bool device_declined_ = false;  // the device left its last planned chunks to the CPU worker
+    // Mending a plan: whether the device, at its measured pace, needs longer to count the
+    // `device_left` planned chunks it has not taken than the CPU worker to count and generate one.
+    bool device_behind(std::size_t device_left) const;
     HybridRates rates_;  // the earlier call's (planned) or none
     Measured cpu_counted_, cpu_generated_;
     void plan_hybrid(const std::vector<DeviceJob>& jobs);
@@ -452,12 +467,16 @@ bool Engine::take_front(DeviceJob& job, std::size_t& first, std::size_t& count) 
     first = lo_;
     count = 1;
     if (planned_device_chunks_ != kNoPlan) {
-        // Its planned chunks, no more: half of those left at a time, as one piece (a piece
-        // costs a discrete GPU about a millisecond whatever its size), so that the CPU worker
-        // can still take the last ones should the device fall behind.
+        // Its planned chunks, no more: three quarters of those left at a time, as one piece (a
+        // piece costs a discrete GPU a fraction of a millisecond whatever its size), so that
+        // the CPU worker can still take the last ones should the device fall behind.
         const std::size_t left = std::min(hi_ - lo_, planned_device_chunks_ - std::min(device_taken_, planned_device_chunks_));
         if (left == 0) return false;
-        count = (left + 1) / 2;
+        if (cpu_waiting_ && job.count_chunk_s > 0 && device_behind(left)) {  // the idle CPU is quicker
+            device_declined_ = true;
+            return false;
+        }
+        count = std::max<std::size_t>(1, left * 3 / 4);
         device_taken_ += count;
         lo_ += count;
         return true;
@@ -470,24 +489,30 @@ bool Engine::take_front(DeviceJob& job, std::size_t& first, std::size_t& count) 
     return true;
 }
 
+bool Engine::device_behind(std::size_t device_left) const {
+    const double chunk_samples = static_cast<double>((chunks_.front().end - chunks_.front().begin) * plane_);
+    const double device_s = jobs_->front().count_chunk_s > 0 ? jobs_->front().count_chunk_s
+                                                             : rates_.device_count * chunk_samples;
+    const double cpu_s = (cpu_count_chunk_s_ > 0 ? cpu_count_chunk_s_ : rates_.cpu_count * chunk_samples) +
+                         rates_.cpu_generate * chunk_samples;
+    return static_cast<double>(device_left) * device_s > cpu_s;
+}
+
 Engine::Take Engine::take_back(std::size_t& first, std::size_t& count) {
     std::lock_guard<std::mutex> lock(queue_mutex_);
     if (abort_ || lo_ >= hi_) return Take::Done;
-    const double chunk_samples = static_cast<double>((chunks_.front().end - chunks_.front().begin) * plane_);
     if (planned_device_chunks_ != kNoPlan) {
         const std::size_t left = hi_ - lo_, device_left = std::min(left, planned_device_chunks_ - device_taken_);
         if (!cpu_run_planned_taken_) {  // everything the plan leaves the device, in one run
             cpu_run_planned_taken_ = true;
             count = left - device_left;
-        } else {
-            // Mending the plan: one of the device's chunks at a time, while the device would
-            // need longer for those it has left than the CPU for one.
-            const double device_s = jobs_->front().count_chunk_s > 0 ? jobs_->front().count_chunk_s
-                                                                     : rates_.device_count * chunk_samples;
-            const double cpu_s = cpu_count_chunk_s_ > 0 ? cpu_count_chunk_s_ : rates_.cpu_count * chunk_samples;
-            count = static_cast<double>(device_left) * device_s > cpu_s ? 1 : 0;
+        } else if (device_declined_) {
+            count = left;
+        } else {  // mending the plan: one of the device's chunks at a time while it is behind
+            count = device_behind(device_left) ? 1 : 0;
         }
-        if (count == 0) return device_left > 0 ? Take::Later : Take::Done;
+        cpu_waiting_ = count == 0 && device_left > 0;
+        if (count == 0) return cpu_waiting_ ? Take::Later : Take::Done;
         hi_ -= count;
         first = hi_;
         return Take::Run;
@@ -590,9 +615,13 @@ cl::Buffer Engine::samples_on_device(DeviceJob& job, Piece& piece, const ChunkSh
         }
         bytes = reinterpret_cast<const unsigned char*>(converted.data());
     }
-    // Blocking when converted: `converted` is freed on return.
-    d.queue.enqueueWriteBuffer(data, job.convert ? CL_TRUE : CL_FALSE, 0, s.data_samples * sample_bytes, bytes,
-                               nullptr, &log.add(Pass::Transfer));
+    if (!job.host_memory) {  // through pinned blocks: returns once `bytes` may be freed
+        d.staging().upload(data, 0, bytes, s.data_samples * sample_bytes, copy_threads(), log);
+    } else {
+        // Blocking when converted: `converted` is freed on return.
+        d.queue.enqueueWriteBuffer(data, job.convert ? CL_TRUE : CL_FALSE, 0, s.data_samples * sample_bytes, bytes,
+                                   nullptr, &log.add(Pass::Transfer));
+    }
     if (own) {
         piece.uploaded = true;
     } else {
@@ -626,8 +655,12 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
         // while they fit half its budget, so generate neither uploads nor packs them again.
         const std::size_t own_bytes = s.data_samples * scalar_size(job.device_type) + s.bit_words * 4;
         if (!job.host_memory && job.pieces_counted > 0 && job.resident_bytes + own_bytes <= job.limit / 2) {
-            piece.data = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.data_samples * scalar_size(job.device_type));
-            piece.bits = cl::Buffer(d.context, CL_MEM_READ_WRITE, s.bit_words * 4);
+            const auto kept = [&](unsigned part, std::size_t bytes) {
+                if (job.pieces_counted >= kKeptPieceRows) return cl::Buffer(d.context, CL_MEM_READ_WRITE, bytes);
+                return d.buffer(static_cast<unsigned>(kPieceSamples + 2 * job.pieces_counted + part), bytes);
+            };
+            piece.data = kept(0, s.data_samples * scalar_size(job.device_type));
+            piece.bits = kept(1, s.bit_words * 4);
         }
         const cl::Buffer data = samples_on_device(job, piece, s, log);
         cl::Buffer& bits = bits_of(job, piece, s);
@@ -822,8 +855,8 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
             if (job.host_memory) {  // a mapped USE_HOST_PTR buffer is the host array, up to date
                 void* p = d.queue.enqueueMapBuffer(buffer, CL_TRUE, CL_MAP_READ, 0, bytes);
                 d.queue.enqueueUnmapMemObject(buffer, p, nullptr, &log.add(Pass::Transfer));
-            } else {
-                d.queue.enqueueReadBuffer(buffer, CL_FALSE, 0, bytes, host, nullptr, &log.add(Pass::Transfer));
+            } else {  // through pinned blocks, after the kernels enqueued before
+                d.staging().download(buffer, 0, host, bytes, copy_threads(), log);
             }
         };
         // Per meta row and word, the id of the word's first vertex: written with the vertices.
@@ -831,10 +864,12 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
         const std::uint64_t vertices = piece.vertices;
         float* positions_at = mesh.positions.data() + 3 * piece.first_vertex;
         float* normals_at = options_.normals ? mesh.normals.data() + 3 * piece.first_vertex : nullptr;
+        std::uint32_t* indices_at = mesh.indices.data() + 3 * piece.first_triangle;
+        // Both kernels first, then the reads: the triangles are computed while nothing waits.
+        cl::Buffer positions, normals, indices;
         if (piece.all_vertices > 0) {
-            cl::Buffer positions = vertices > 0 ? output(kPositions, positions_at, vertices * 12) : d.buffer(kPositions, 16);
-            cl::Buffer normals =
-                options_.normals && vertices > 0 ? output(kNormals, normals_at, vertices * 12) : d.buffer(kNormals, 16);
+            positions = vertices > 0 ? output(kPositions, positions_at, vertices * 12) : d.buffer(kPositions, 16);
+            normals = options_.normals && vertices > 0 ? output(kNormals, normals_at, vertices * 12) : d.buffer(kNormals, 16);
             cl::Kernel& k = d.mc_kernel(job.options, "generate_vertices");
             set_args(k, data, bits, ArgBytes{job.threshold},
                      ArgVertexFormula{options_.iso, is_integer(job.device_type), job.fp64, volume_.origin,
@@ -843,19 +878,18 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
                      u(s.rows), u(piece.all_vertices), piece.vbase, static_cast<cl_int>(options_.inside_below),
                      static_cast<cl_int>(options_.normals), positions, normals, word_base);
             launch(job, k, s.rows, Pass::Generate, log);
-            if (vertices > 0) fetch(positions, positions_at, vertices * 12);
-            if (options_.normals && vertices > 0) fetch(normals, normals_at, vertices * 12);
         }
         if (piece.triangles > 0) {
-            std::uint32_t* indices_at = mesh.indices.data() + 3 * piece.first_triangle;
-            cl::Buffer indices = output(kIndices, indices_at, piece.triangles * 12);
+            indices = output(kIndices, indices_at, piece.triangles * 12);
             cl::Kernel& k = d.mc_kernel(job.options, "generate_triangles");
             set_args(k, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(piece.range.begin), u(s.cell_rows), u(s.rows),
                      u(piece.triangles), piece.tbase, piece.vbase, u(piece.first_vertex), word_base, piece.cell_groups,
                      d.case_corners, static_cast<cl_int>(options_.inside_below), indices);
             launch(job, k, s.cell_rows, Pass::Generate, log);
-            fetch(indices, indices_at, piece.triangles * 12);
         }
+        if (vertices > 0) fetch(positions, positions_at, vertices * 12);
+        if (options_.normals && vertices > 0) fetch(normals, normals_at, vertices * 12);
+        if (piece.triangles > 0) fetch(indices, indices_at, piece.triangles * 12);
     });
     piece.vbase = piece.tbase = piece.cell_groups = piece.data = piece.bits = cl::Buffer();
     add_times(job, log);
@@ -1056,7 +1090,8 @@ Mesh Engine::run(Stats& stats) {
         }
     check_vertex_count(vertices);
     Mesh mesh = std::move(storage_);
-    allocate_output(mesh, vertices, triangles, options_.normals, threads_);
+    // Every worker waits for the mesh: in Hybrid the cores the CPU worker leaves help fill it.
+    allocate_output(mesh, vertices, triangles, options_.normals, hybrid_ ? threads_ + copy_threads() : threads_);
     for (auto& chunk : results_)
         for (Piece& p : chunk)
             if (p.worker < jobs.size() && !p.on_cpu) jobs[p.worker].to_generate.push_back(&p);
@@ -1132,6 +1167,8 @@ void opencl_build_program(const std::string& source, const std::string& options,
 void opencl_pretend_no_fp64(bool pretend) { g_pretend_no_fp64 = pretend; }
 
 void opencl_pretend_discrete(bool pretend) { g_pretend_discrete = pretend; }
+
+void opencl_staging_block_bytes(std::size_t bytes) { cl_engine::set_staging_block_bytes(bytes); }
 
 void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s) {
     g_slow_count_s = count_s;

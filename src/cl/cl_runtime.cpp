@@ -1,8 +1,10 @@
 #include "cl_runtime.hpp"
+#include "pinned_staging.hpp"
 
 #include "core/case_tables.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 
@@ -12,6 +14,9 @@ static_assert(sizeof(CaseEntry) == 16, "kernels read the case table as 16 bytes 
 static_assert(sizeof(kColumnPairToCase) == 256, "kernels read the column-pair table as 256 bytes");
 
 namespace {
+
+constexpr std::size_t kStagingBlockBytes = std::size_t{8} << 20;  // two of them per discrete device
+std::atomic<std::size_t> g_staging_block_bytes{kStagingBlockBytes};  // test hook: smaller blocks
 
 cl::Buffer constant_buffer(const cl::Context& context, const void* data, std::size_t bytes) {
     // CL_MEM_COPY_HOST_PTR only reads the host memory.
@@ -132,6 +137,19 @@ Device::Device(const cl::Device& dev, DeviceInfo description)
     static const std::array<std::uint8_t, 256 * 16> corners = case_corner_table();
     case_corners = constant_buffer(context, corners.data(), corners.size());
 }
+
+Device::~Device() = default;
+
+PinnedStaging& Device::staging() {
+    const std::size_t block = g_staging_block_bytes;
+    if (!staging_ || staging_->block_bytes() != block) {
+        staging_.reset();
+        staging_ = std::make_unique<PinnedStaging>(context, queue, block);
+    }
+    return *staging_;
+}
+
+void set_staging_block_bytes(std::size_t bytes) { g_staging_block_bytes = bytes > 0 ? bytes : kStagingBlockBytes; }
 
 cl::Program Device::build(const std::string& source, const std::string& options) {
     ++programs_built;

@@ -39,9 +39,14 @@ struct EventLog {
 };
 double event_seconds(const cl::Event& event);
 
+class PinnedStaging;
+// The size of each of a device's two pinned blocks (0: the default, 8 MiB); a test hook.
+void set_staging_block_bytes(std::size_t bytes);
+
 class Device {
 public:
     Device(const cl::Device& device, DeviceInfo info);
+    ~Device();
 
     DeviceInfo info;
     cl::Device device;
@@ -63,6 +68,8 @@ public:
     // A buffer of at least `bytes` for slot `id`, kept for the next chunk and call.
     cl::Buffer& buffer(unsigned id, std::size_t bytes);
     void drop_buffers();
+    // Pinned blocks for copies to and from host memory (pinned_staging.hpp), made on first use.
+    PinnedStaging& staging();
 
     // Builds `source` with `options`; on failure throws Error naming the device, with the log.
     cl::Program build(const std::string& source, const std::string& options);
@@ -75,6 +82,7 @@ private:
     cl::Kernel& kernel(const unsigned char* source, const std::string& options, const char* name);
     std::map<std::string, Program> programs_;
     std::map<unsigned, std::pair<cl::Buffer, std::size_t>> buffers_;
+    std::unique_ptr<PinnedStaging> staging_;
     std::size_t scan_local_ = 0;
 };
 

@@ -34,6 +34,9 @@ void opencl_pretend_no_fp64(bool pretend);
 // Treats every device as not sharing host memory: samples are copied in and the mesh read
 // back, the code path of discrete GPUs, on PoCL too.
 void opencl_pretend_discrete(bool pretend);
+// Copies to and from discrete devices go through pinned blocks of this many bytes (0: the
+// default), so that tests run many blocks through the double buffering.
+void opencl_staging_block_bytes(std::size_t bytes);
 // Makes every device spend this long more on each chunk it counts and on each piece it
 // generates, and Hybrid's CPU worker on each chunk it counts (0: off), so that the hand-over
 // between a device and the CPU worker runs in tests whatever the machine.
