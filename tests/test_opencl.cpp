@@ -212,58 +212,48 @@ TEST_CASE("OpenCL without fp64 (float interpolation, f64 converted per chunk) ma
     compare(view_of(f64.data(), ScalarType::F64, g), o);
 }
 
+// Copies go through two pinned blocks in turns: with the default blocks (one per copy here)
+// and with blocks of 1000 bytes, not a multiple of a sample or a vertex, so that every upload
+// and read-back runs through many of them.
 TEST_CASE("OpenCL with copies in and out (a discrete GPU's path) matches the CPU engine", "[opencl]") {
     if (!have_device()) return;
     const Pretend discrete(detail::opencl_pretend_discrete);
+    struct Blocks {
+        ~Blocks() { detail::opencl_staging_block_bytes(0); }
+    } restore;
     Grid g{{45, 38, 41}, {1, 0.75, 1.25}, {2, -3, 1}};
     const std::vector<float> f = torus(g);
-    for (std::size_t planes : {0, 6}) {  // one chunk; several, each copied out into its place
-        INFO("chunk_planes " << planes);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    for (std::size_t block : {0, 1000}) {
+        detail::opencl_staging_block_bytes(block);
+        for (std::size_t planes : {0, 6}) {  // one chunk; several, each copied out into its place
+            INFO("pinned block bytes " << block << ", chunk_planes " << planes);
+            Options o;
+            o.chunk_planes = planes;
+            compare(v, o);
+            const auto u16 = to_type<std::uint16_t>(f, 3000, 1000);
+            o.iso = 1100.5;
+            compare(view_of(u16.data(), ScalarType::U16, g), o);
+            o.normals = false;
+            compare(view_of(u16.data(), ScalarType::U16, g), o);
+            const auto u8 = to_type<std::uint8_t>(f, 100, 120);
+            o.iso = 120.5;
+            compare(view_of(u8.data(), ScalarType::U8, g), o);
+        }
         Options o;
-        o.chunk_planes = planes;
-        compare(view_of(f.data(), ScalarType::F32, g), o);
-        const auto u16 = to_type<std::uint16_t>(f, 3000, 1000);
-        o.iso = 1100.5;
-        compare(view_of(u16.data(), ScalarType::U16, g), o);
-        o.normals = false;
-        compare(view_of(u16.data(), ScalarType::U16, g), o);
+        o.devices = {0};
+        o.chunk_planes = 3;
+        require_same(run(v, Options{}, Backend::Cpu), run(v, o, Backend::Hybrid), v);
     }
     // A budget of about 10 planes a chunk: the first chunks stay resident between counting
     // and generating, the later ones do not fit beside them and are uploaded and packed again.
+    detail::opencl_staging_block_bytes(0);
     Options o;
     o.memory_budget = 45 * 38 * 4 * 2 * 12;
     Stats stats;
-    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
     require_same(run(v, o, Backend::Cpu), run(v, o, Backend::OpenCL, &stats), v);
     REQUIRE(stats.devices.size() == 1);
     CHECK(stats.devices[0].chunks >= 4);
-}
-
-// Copies go through two pinned blocks in turns; with blocks of 1000 bytes (not a multiple of a
-// sample or a vertex) every upload and read-back runs through many of them.
-TEST_CASE("OpenCL copies through small pinned blocks give the same mesh", "[opencl]") {
-    if (!have_device()) return;
-    const Pretend discrete(detail::opencl_pretend_discrete);
-    struct SmallBlocks {
-        SmallBlocks() { detail::opencl_staging_block_bytes(1000); }
-        ~SmallBlocks() { detail::opencl_staging_block_bytes(0); }
-    } small;
-    Grid g{{37, 30, 33}, {1, 1, 1}, {0, 0, 0}};
-    const std::vector<float> f = gyroid(g);
-    for (std::size_t planes : {0, 5}) {
-        INFO("chunk_planes " << planes);
-        Options o;
-        o.chunk_planes = planes;
-        compare(view_of(f.data(), ScalarType::F32, g), o);
-        const auto u8 = to_type<std::uint8_t>(f, 100, 120);
-        o.iso = 120.5;
-        compare(view_of(u8.data(), ScalarType::U8, g), o);
-    }
-    Options o;
-    o.devices = {0};
-    o.chunk_planes = 3;
-    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
-    require_same(run(v, Options{}, Backend::Cpu), run(v, o, Backend::Hybrid), v);
 }
 #endif  // VOXMESH_HAS_OPENCL
 
