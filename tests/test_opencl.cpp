@@ -423,6 +423,7 @@ TEST_CASE("Hybrid runs the CPU engine and OpenCL on one queue", "[opencl]") {
     CHECK(voxels == g.size());
 }
 
+#ifdef VOXMESH_HAS_OPENCL  // uses test hooks of the OpenCL build
 // A device far slower than the CPU worker, in counting (a slow bus) or in generating (slow
 // reads back): the device stops taking chunks and the CPU worker takes its counted pieces
 // over. Whoever meshes a chunk, the mesh is the CPU engine's.
@@ -512,6 +513,8 @@ TEST_CASE("Hybrid's planned split from earlier calls gives the same mesh", "[ope
     // Without the hooks the plan follows the rates measured again.
     for (int call = 0; call < 2; ++call) hybrid(0, 0, 0);
 }
+
+#endif  // VOXMESH_HAS_OPENCL
 
 TEST_CASE("Hybrid leaves out OpenCL devices that are the CPU itself unless they are named", "[opencl]") {
     if (!have_device()) return;
