@@ -9,6 +9,7 @@
 // never wait for each other's threads.
 #include "parallel.hpp"
 
+#include <atomic>
 #include <condition_variable>
 #include <functional>
 #include <memory>
@@ -102,16 +103,18 @@ void run_on_threads(unsigned n, const std::function<void(unsigned)>& f) {
         f(0);
         return;
     }
-    std::atomic<unsigned> pending{n - 1};
+    // The count lives with the tasks: the last one may still be notifying when the caller,
+    // seeing 0, returns.
+    const auto pending = std::make_shared<std::atomic<unsigned>>(n - 1);
     for (unsigned w = 1; w < n; ++w)
-        cache().post([&f, &pending, w] {
+        cache().post([&f, pending, w] {
             f(w);
-            if (pending.fetch_sub(1, std::memory_order_acq_rel) == 1) pending.notify_one();
+            if (pending->fetch_sub(1, std::memory_order_acq_rel) == 1) pending->notify_one();
         });
     f(0);
-    for (unsigned left = pending.load(std::memory_order_acquire); left != 0;
-         left = pending.load(std::memory_order_acquire))
-        pending.wait(left, std::memory_order_acquire);
+    for (unsigned left = pending->load(std::memory_order_acquire); left != 0;
+         left = pending->load(std::memory_order_acquire))
+        pending->wait(left, std::memory_order_acquire);
 }
 
 unsigned resolve_threads(unsigned requested) {
