@@ -64,7 +64,9 @@ enum class DeviceType { Any, Cpu, Gpu, Accelerator };
 struct Options {
     double iso = 0;
     Backend backend = Backend::Auto;
-    unsigned threads = 0;       // CPU worker threads; 0 = all cores
+    // CPU worker threads; 0 = all cores. Copies to a discrete GPU run on as many; Hybrid's on
+    // the cores its CPU worker leaves (at least 2).
+    unsigned threads = 0;
     bool normals = true;
     bool inside_below = false;  // flip: inside where value < iso (SDFs); winding and normals only
 
