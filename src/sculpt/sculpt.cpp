@@ -15,7 +15,6 @@
 
 #include "block_mesher.hpp"
 #include "device_blocks.hpp"
-#include "worker_pool.hpp"
 #include "core/cpu_engine.hpp"
 #include "core/parallel.hpp"
 #include "core/threshold.hpp"
@@ -157,7 +156,6 @@ struct Sculpt::Impl {
     std::vector<std::uint8_t> was_nonempty;  // per dirty-list entry, during update()
     std::vector<Scratch> scratch;            // per worker
     std::vector<double> plane_prev, plane_cur;  // smoothing: old values of planes z-1 and z
-    WorkerPool pool;                            // update() and mesh() workers, kept between calls
     std::unique_ptr<DeviceBlockMesher> device;  // set: update() re-meshes on this OpenCL device
     std::vector<BlockBox> device_boxes;         // the dirty blocks' boxes, for the device
 
@@ -382,7 +380,7 @@ struct Sculpt::Impl {
             using T = decltype(tag);
             const BlockMesher<T> m = mesher<T>();
             std::atomic<std::size_t> next{0};
-            pool.run(workers, [&](unsigned w) {
+            detail::run_workers(workers, [&](unsigned w) {
                 Scratch& s = scratch[w];
                 s.reserve_for(bs);
                 for (std::size_t i; (i = next.fetch_add(1, std::memory_order_relaxed)) < jobs;)
@@ -475,7 +473,7 @@ struct Sculpt::Impl {
         // 1. Per block: edge keys, ownership, row counts (parallel).
         {
             std::atomic<std::size_t> next{0};
-            pool.run(workers, [&](unsigned w) {
+            detail::run_workers(workers, [&](unsigned w) {
                 Scratch& s = scratch[w];
                 s.reserve_for(bs);
                 for (std::size_t j; (j = next.fetch_add(1, std::memory_order_relaxed)) < nonempty.size();) {
@@ -546,7 +544,7 @@ struct Sculpt::Impl {
         //    owned vertices' data copied into place (parallel).
         {
             std::atomic<std::size_t> next{0};
-            pool.run(workers, [&](unsigned) {
+            detail::run_workers(workers, [&](unsigned) {
                 for (std::size_t j; (j = next.fetch_add(1, std::memory_order_relaxed)) < nonempty.size();) {
                     const std::size_t b = nonempty[j];
                     Assembly& a = asm_[b];
@@ -640,7 +638,7 @@ Sculpt Sculpt::from_function(std::array<std::size_t, 3> dims, ScalarType type,
         T* data = static_cast<T*>(im.volume.data);
         const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(im.threads, dims[2]));
         std::atomic<bool> nan{false};
-        im.pool.run(workers, [&](unsigned w) {
+        detail::run_workers(workers, [&](unsigned w) {
             for (std::size_t z = dims[2] * w / workers; z < dims[2] * (w + 1) / workers; ++z)
                 for (std::size_t y = 0; y < dims[1]; ++y) {
                     T* row = data + (z * dims[1] + y) * dims[0];
