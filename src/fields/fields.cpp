@@ -4,21 +4,20 @@
 // stored as the requested scalar type. Integer types get a linear map of the field's native
 // range onto (part of) the type's range, clamped, rounded; their iso is the mapped iso moved
 // to the nearest half-integer so that no sample ever equals it. Generation runs on
-// std::threads over z-planes; every value depends only on (x, y, z, seed), so the result is
+// worker threads over z-planes; every value depends only on (x, y, z, seed), so the result is
 // the same for any thread count.
 #include <voxmesh/fields.hpp>
+
+#include "core/parallel.hpp"
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstring>
-#include <exception>
 #include <limits>
 #include <memory>
-#include <mutex>
 #include <numbers>
 #include <string>
-#include <thread>
 #include <type_traits>
 #include <vector>
 
@@ -312,28 +311,16 @@ void store_row(const float* in, T* out, std::size_t n, const Quantizer& q) {
 // Runs rows (y, z) of the volume on all cores; every z-plane is one work item.
 template <class T>
 void fill(const Generator& gen, std::size_t n, T* data, const Quantizer& q) {
-    const unsigned workers = std::max(1u, std::min<unsigned>(std::thread::hardware_concurrency(), unsigned(n)));
+    const unsigned workers = std::min<unsigned>(detail::resolve_threads(0), unsigned(std::max<std::size_t>(n, 1)));
     std::atomic<std::size_t> next{0};
-    std::exception_ptr failure;
-    std::mutex failure_mutex;
-    auto work = [&] {
-        try {
-            std::vector<float> buf(n);
-            for (std::size_t z; (z = next.fetch_add(1)) < n;)
-                for (std::size_t y = 0; y < n; ++y) {
-                    gen.row(y, z, buf.data());
-                    store_row(buf.data(), data + n * (y + n * z), n, q);
-                }
-        } catch (...) {
-            std::lock_guard<std::mutex> lock(failure_mutex);
-            if (!failure) failure = std::current_exception();
-        }
-    };
-    std::vector<std::thread> pool;
-    for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work);
-    work();
-    for (auto& t : pool) t.join();
-    if (failure) std::rethrow_exception(failure);
+    detail::run_workers(workers, [&](unsigned) {
+        std::vector<float> buf(n);
+        for (std::size_t z; (z = next.fetch_add(1)) < n;)
+            for (std::size_t y = 0; y < n; ++y) {
+                gen.row(y, z, buf.data());
+                store_row(buf.data(), data + n * (y + n * z), n, q);
+            }
+    });
 }
 
 template <class T>
