@@ -237,10 +237,12 @@ private:
     // Phase 1: count.
     void device_count_worker(DeviceJob& job, unsigned worker);
     bool take_front(DeviceJob& job, std::size_t& first, std::size_t& count);
+    // Planes and samples of a chunk (all but the last have the first's size).
+    std::size_t chunk_planes() const { return chunks_.front().end - chunks_.front().begin; }
+    double chunk_samples() const { return static_cast<double>(chunk_planes() * plane_); }
     // Chunks a piece covers (a run of them, or 1 for part of one), for the stats.
     std::size_t chunks_in(ZRange r) const {
-        const std::size_t chunk = chunks_.front().end - chunks_.front().begin;
-        return std::max<std::size_t>(1, (r.end - r.begin + chunk / 2) / chunk);
+        return std::max<std::size_t>(1, (r.end - r.begin + chunk_planes() / 2) / chunk_planes());
     }
     enum class Take { Run, Later, Done };  // a run of chunks; none yet, ask again; none left
     Take take_back(std::size_t& first, std::size_t& count);
@@ -283,7 +285,7 @@ private:
     std::mutex queue_mutex_;
     std::size_t lo_ = 0, hi_ = 0;
     std::vector<DeviceJob>* jobs_ = nullptr;
-    double cpu_count_chunk_s_ = 0, cpu_generate_chunk_s_ = 0;
+    double cpu_count_chunk_s_ = 0;  // the CPU worker's latest run, per chunk
     Clock::time_point cpu_free_at_{};
     // Hybrid with one device and rates from an earlier call: the device's planned chunks, how
     // many it has taken, whether the CPU worker has taken its planned run.
@@ -490,11 +492,10 @@ bool Engine::take_front(DeviceJob& job, std::size_t& first, std::size_t& count) 
 }
 
 bool Engine::device_behind(std::size_t device_left) const {
-    const double chunk_samples = static_cast<double>((chunks_.front().end - chunks_.front().begin) * plane_);
     const double device_s = jobs_->front().count_chunk_s > 0 ? jobs_->front().count_chunk_s
-                                                             : rates_.device_count * chunk_samples;
-    const double cpu_s = (cpu_count_chunk_s_ > 0 ? cpu_count_chunk_s_ : rates_.cpu_count * chunk_samples) +
-                         rates_.cpu_generate * chunk_samples;
+                                                             : rates_.device_count * chunk_samples();
+    const double cpu_s = (cpu_count_chunk_s_ > 0 ? cpu_count_chunk_s_ : rates_.cpu_count * chunk_samples()) +
+                         rates_.cpu_generate * chunk_samples();
     return static_cast<double>(device_left) * device_s > cpu_s;
 }
 
@@ -538,8 +539,7 @@ void Engine::plan_hybrid(const std::vector<DeviceJob>& jobs) {
         if (it == g_rates.end() || !it->second.known()) return;
         rates_ = it->second;
     }
-    const double chunk_samples = static_cast<double>((chunks_.front().end - chunks_.front().begin) * plane_);
-    planned_device_chunks_ = hybrid_device_chunks(chunks_.size(), chunk_samples, rates_);
+    planned_device_chunks_ = hybrid_device_chunks(chunks_.size(), chunk_samples(), rates_);
 }
 
 // This call's rates, for the next call's plan; a side that did no work in a pass keeps the
@@ -651,16 +651,19 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
     pretend_slow(g_slow_count_s);
     EventLog log;
     run_on_queue(d, [&] {
+        // This piece's buffer in slot `slot` of the device, kept for the next call (the first
+        // kKeptPieceRows pieces), or its own.
+        const auto piece_buffer = [&](std::size_t slot, std::size_t bytes) {
+            if (job.pieces_counted >= kKeptPieceRows) return cl::Buffer(d.context, CL_MEM_READ_WRITE, bytes);
+            return d.buffer(static_cast<unsigned>(slot), bytes);
+        };
         // A discrete device keeps further pieces' samples and bits in buffers of their own
         // while they fit half its budget, so generate neither uploads nor packs them again.
         const std::size_t own_bytes = s.data_samples * scalar_size(job.device_type) + s.bit_words * 4;
         if (!job.host_memory && job.pieces_counted > 0 && job.resident_bytes + own_bytes <= job.limit / 2) {
-            const auto kept = [&](unsigned part, std::size_t bytes) {
-                if (job.pieces_counted >= kKeptPieceRows) return cl::Buffer(d.context, CL_MEM_READ_WRITE, bytes);
-                return d.buffer(static_cast<unsigned>(kPieceSamples + 2 * job.pieces_counted + part), bytes);
-            };
-            piece.data = kept(0, s.data_samples * scalar_size(job.device_type));
-            piece.bits = kept(1, s.bit_words * 4);
+            const std::size_t slot = kPieceSamples + 2 * job.pieces_counted;
+            piece.data = piece_buffer(slot, s.data_samples * scalar_size(job.device_type));
+            piece.bits = piece_buffer(slot + 1, s.bit_words * 4);
         }
         const cl::Buffer data = samples_on_device(job, piece, s, log);
         cl::Buffer& bits = bits_of(job, piece, s);
@@ -677,13 +680,10 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
             job.bits_mem = bits();
         }
         // Per row: counts, then their prefix sums; per cell row: word groups to visit.
-        const auto row_buffer = [&](unsigned part, std::size_t bytes) {
-            if (job.pieces_counted >= kKeptPieceRows) return cl::Buffer(d.context, CL_MEM_READ_WRITE, bytes);
-            return d.buffer(static_cast<unsigned>(kPieceRows + 3 * job.pieces_counted + part), bytes);
-        };
-        piece.vbase = row_buffer(0, s.rows * 4);
-        piece.tbase = row_buffer(1, s.rows * 4);
-        piece.cell_groups = row_buffer(2, s.rows * 8);
+        const std::size_t rows_slot = kPieceRows + 3 * job.pieces_counted;
+        piece.vbase = piece_buffer(rows_slot, s.rows * 4);
+        piece.tbase = piece_buffer(rows_slot + 1, s.rows * 4);
+        piece.cell_groups = piece_buffer(rows_slot + 2, s.rows * 8);
         job.pieces_counted += 1;
         cl::Kernel& rows = d.mc_kernel(job.options, "classify_rows");
         set_args(rows, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin),
@@ -955,7 +955,8 @@ Piece* Engine::take_over(std::vector<DeviceJob>& jobs, DeviceJob*& from, bool& w
     std::lock_guard<std::mutex> lock(queue_mutex_);
     wait = false;
     if (abort_) return nullptr;
-    const double cpu_piece_s = cpu_count_chunk_s_ + cpu_generate_chunk_s_;
+    // Counting again and generating, per chunk; generate measured on its own pieces.
+    const double cpu_chunk_s = cpu_count_chunk_s_ + cpu_generated_.per_sample(0) * chunk_samples();
     for (DeviceJob& job : jobs) {
         const std::size_t left = job.generate_back - job.generate_front;
         if (left == 0) continue;
@@ -964,9 +965,8 @@ Piece* Engine::take_over(std::vector<DeviceJob>& jobs, DeviceJob*& from, bool& w
             continue;
         }
         const Piece* next = job.to_generate[job.generate_front];
-        const double chunks = static_cast<double>(next->range.end - next->range.begin) /
-                              static_cast<double>(std::max<std::size_t>(chunks_.front().end - chunks_.front().begin, 1));
-        if (hybrid_cpu_takes_over(cpu_piece_s * chunks, job.generate_piece_s, left)) {
+        const double chunks = static_cast<double>(next->range.end - next->range.begin) / static_cast<double>(chunk_planes());
+        if (hybrid_cpu_takes_over(cpu_chunk_s * chunks, job.generate_piece_s, left)) {
             from = &job;
             return job.to_generate[job.generate_front++];
         }
@@ -983,13 +983,7 @@ void Engine::cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, 
                 planes += p.range.end - p.range.begin;
                 generate_on_cpu(p, mesh);
             }
-    if (planes > 0) {
-        const double s = seconds_since(t0);
-        cpu_generated_.add(s, static_cast<double>(planes * plane_));
-        std::lock_guard<std::mutex> lock(queue_mutex_);
-        cpu_generate_chunk_s_ = s / static_cast<double>(planes) *
-                                static_cast<double>(chunks_.front().end - chunks_.front().begin);
-    }
+    if (planes > 0) cpu_generated_.add(seconds_since(t0), static_cast<double>(planes * plane_));
     for (;;) {
         DeviceJob* from = nullptr;
         bool wait = false;
