@@ -472,8 +472,11 @@ private:
 
 // Slabs per thread, pulled in order: a thread that finishes early (the cost model is an
 // estimate, and on a VM a core can stall) takes the next slab instead of waiting for the
-// slowest one. Each slab re-reads a plane or two at its start, so not too many.
-constexpr unsigned kClassifySlabsPerThread = 8, kGenerateSlabsPerThread = 16;
+// slowest one. Each slab packs a plane or two again at its ends and builds the ids of the
+// next slab's first plane, so not too many: 8 and 16 per thread cost 2 threads 3-5 % of the
+// total over 4 and 6 (in-process A/B, sphere and gyroid, 256³ and 512³), and 2 and 3
+// left gyroid's cores waiting on each other (+5 %).
+constexpr unsigned kClassifySlabsPerThread = 4, kGenerateSlabsPerThread = 6;
 
 // Slabs for `threads` requested threads over `planes` planes: one for a single thread, else
 // `per_thread` for each thread that actually runs (run_slabs caps them at the hardware's).
