@@ -21,7 +21,7 @@ namespace {
 using namespace cl_engine;
 
 // Buffer slots of a Device (the OpenCL engine uses 0..99, its scan 100+).
-enum : unsigned { kStage = 200, kMeta, kCodes, kVid, kVCount, kTCount, kPositions, kNormals, kIndices };
+enum : unsigned { kStage = 200, kMeta, kCodes, kVid, kVCount, kTCount, kPositions, kNormals, kIndices, kTotals };
 
 constexpr unsigned kMetaWords = 16;  // M_WORDS in sculpt_blocks.cl; the word layout is there
 constexpr std::size_t kBatchSamples = std::size_t(8) << 20;  // staged samples per batch (32 MiB of f32)
@@ -220,8 +220,12 @@ void OpenclBlockMesher::run_batch(std::span<const BlockBox> boxes, std::size_t f
     d.queue.enqueueNDRangeKernel(classify, cl::NullRange, global, local);
 
     // In place: vcount/tcount become every row's first vertex/triangle in the batch.
-    const std::uint64_t vertices = scan(d, vcount, rows, log);
-    const std::uint64_t triangles = scan(d, tcount, rows, log);
+    cl::Buffer& totals = d.buffer(kTotals, 2 * sizeof(cl_uint));
+    scan_into(d, vcount, rows, totals, 0, log);
+    scan_into(d, tcount, rows, totals, 1, log);
+    cl_uint got[2] = {};
+    d.queue.enqueueReadBuffer(totals, CL_TRUE, 0, sizeof(got), got);  // one wait for both totals
+    const std::uint64_t vertices = got[0], triangles = got[1];
     if (vertices > std::numeric_limits<cl_uint>::max() || 3 * triangles > std::numeric_limits<cl_uint>::max())
         throw Error("sculpt: an OpenCL batch has too many vertices (internal error)");
 

@@ -50,7 +50,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // while the last word starts at most 65535 edges in: 3 * 32 * (words - 1) <= 65535.
 constexpr std::size_t kMaxWordsFor16BitBases = 65535 / 96 + 1;  // 683 words, nx <= 21856
 
-enum : unsigned { kData, kBits, kWordBase, kPositions, kNormals, kIndices, kNan };
+enum : unsigned { kData, kBits, kWordBase, kPositions, kNormals, kIndices, kCounts };
 // Piece i's row buffers (counts, then their prefix sums; word groups) in a call: kept like the
 // others, so that calls after the first allocate nothing (for the first kKeptPieceRows
 // pieces; more take buffers of their own). Ids above the scan's.
@@ -667,13 +667,18 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
         }
         const cl::Buffer data = samples_on_device(job, piece, s, log);
         cl::Buffer& bits = bits_of(job, piece, s);
-        cl::Buffer& nan = d.buffer(kNan, sizeof(cl_int));
+        // What the host needs back, read at once after the scans: the first z-plane with a NaN
+        // (INT_MAX: none; classify_pack's nan_plane), the vertex and triangle totals, and plane
+        // `end`'s first vertex.
+        enum { kNanPlane, kVertexTotal, kTriangleTotal, kEndPlaneVertex, kCountWords };
+        cl::Buffer& counts = d.buffer(kCounts, kCountWords * sizeof(cl_uint));
         const cl_int no_nan = INT_MAX;
-        d.queue.enqueueFillBuffer(nan, no_nan, 0, sizeof(cl_int), nullptr, &log.add(Pass::Transfer));
+        d.queue.enqueueFillBuffer(counts, no_nan, kNanPlane * sizeof(cl_int), sizeof(cl_int), nullptr,
+                                  &log.add(Pass::Transfer));
         const std::size_t first_sample = (range.begin - s.zlo) * plane_;  // of plane `begin` in the device's samples
         cl::Kernel& pack = d.mc_kernel(job.options, "classify_pack");
         set_args(pack, data, ArgBytes{job.threshold}, u(nx_), u(ny_), u(s.words), u(range.begin), u(first_sample),
-                 u(s.bit_rows), bits, nan);
+                 u(s.bit_rows), bits, counts);
         launch(job, pack, s.bit_rows, Pass::Classify, log);
         if (piece.bits() == nullptr) {
             job.bits_of = range;
@@ -690,23 +695,24 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
                  u(s.cell_end), u(s.rows), d.case_table, piece.vbase, piece.tbase, piece.cell_groups);
         launch(job, rows, s.rows, Pass::Classify, log);
 
-        piece.all_vertices = scan(d, piece.vbase, s.rows, log);
-        piece.triangles = scan(d, piece.tbase, s.rows, log);
-        cl_int nan_plane = INT_MAX;
-        d.queue.enqueueReadBuffer(nan, CL_TRUE, 0, sizeof(nan_plane), &nan_plane, nullptr, &log.add(Pass::Transfer));
+        scan_into(d, piece.vbase, s.rows, counts, kVertexTotal, log);
+        scan_into(d, piece.tbase, s.rows, counts, kTriangleTotal, log);
+        if (s.owned_rows < s.rows)  // plane `end`'s first vertex id: its first row's base
+            d.queue.enqueueCopyBuffer(piece.vbase, counts, s.owned_rows * sizeof(cl_uint),
+                                      kEndPlaneVertex * sizeof(cl_uint), sizeof(cl_uint), nullptr,
+                                      &log.add(Pass::Transfer));
+        cl_uint got[kCountWords] = {};
+        d.queue.enqueueReadBuffer(counts, CL_TRUE, 0, sizeof(got), got, nullptr, &log.add(Pass::Transfer));
+        piece.all_vertices = got[kVertexTotal];
+        piece.triangles = got[kTriangleTotal];
+        const auto nan_plane = static_cast<cl_int>(got[kNanPlane]);
         if (nan_plane != INT_MAX)
             throw Error("volume has NaN or infinite samples (first seen in z-plane " + std::to_string(nan_plane) +
                         "); replace them with finite values before meshing");
         if (piece.all_vertices > std::numeric_limits<std::uint32_t>::max() ||
             piece.triangles > std::numeric_limits<std::uint32_t>::max())
             throw TooBig{};
-        piece.vertices = piece.all_vertices;
-        if (s.owned_rows < s.rows) {  // plane `end`'s first vertex id: its first row's base
-            cl_uint v = 0;
-            d.queue.enqueueReadBuffer(piece.vbase, CL_TRUE, s.owned_rows * 4, sizeof(v), &v, nullptr,
-                                      &log.add(Pass::Transfer));
-            piece.vertices = v;
-        }
+        piece.vertices = s.owned_rows < s.rows ? got[kEndPlaneVertex] : piece.all_vertices;
         // Outputs in device memory, sized by the scan totals, must fit beside the rest.
         const std::size_t out_bytes = piece.vertices * (12 + (options_.normals ? 12 : 0)) + piece.triangles * 12;
         if (!job.host_memory && (piece.vertices * 12 > info.max_allocation || piece.triangles * 12 > info.max_allocation ||

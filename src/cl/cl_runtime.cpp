@@ -251,8 +251,14 @@ double event_seconds(const cl::Event& event) {
     return end > start ? static_cast<double>(end - start) * 1e-9 : 0.0;
 }
 
-std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& log, unsigned level) {
-    if (n == 0) return 0;
+void scan_into(Device& d, const cl::Buffer& data, std::size_t n, const cl::Buffer& totals, std::size_t total_at,
+               EventLog& log, unsigned level) {
+    if (n == 0) {
+        const cl_uint zero = 0;
+        d.queue.enqueueFillBuffer(totals, zero, total_at * sizeof(cl_uint), sizeof(cl_uint), nullptr,
+                                  &log.add(Pass::Transfer));
+        return;
+    }
     const std::size_t local = d.scan_local_size();
     const std::size_t block = local * kScanItems;
     const std::size_t blocks = (n + block - 1) / block;
@@ -262,19 +268,25 @@ std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& l
     set_args(scan_blocks, data, static_cast<cl_uint>(n), sums, cl::Local(local * sizeof(cl_uint)));
     d.queue.enqueueNDRangeKernel(scan_blocks, cl::NullRange, cl::NDRange(blocks * local), cl::NDRange(local),
                                  nullptr, &log.add(Pass::Scan));
-    std::uint64_t total = 0;
-    if (blocks == 1) {
-        cl_uint value = 0;
-        d.queue.enqueueReadBuffer(sums, CL_TRUE, 0, sizeof(value), &value, nullptr, &log.add(Pass::Transfer));
-        total = value;
-    } else {
-        total = scan(d, sums, blocks, log, level + 1);
-        cl::Kernel& add = d.scan_kernel("scan_add");
-        set_args(add, data, static_cast<cl_uint>(n), sums);
-        d.queue.enqueueNDRangeKernel(add, cl::NullRange, cl::NDRange(blocks * local), cl::NDRange(local), nullptr,
-                                     &log.add(Pass::Scan));
+    if (blocks == 1) {  // the one block's sum is the total
+        d.queue.enqueueCopyBuffer(sums, totals, 0, total_at * sizeof(cl_uint), sizeof(cl_uint), nullptr,
+                                  &log.add(Pass::Transfer));
+        return;
     }
-    return total;
+    scan_into(d, sums, blocks, totals, total_at, log, level + 1);
+    cl::Kernel& add = d.scan_kernel("scan_add");
+    set_args(add, data, static_cast<cl_uint>(n), sums);
+    d.queue.enqueueNDRangeKernel(add, cl::NullRange, cl::NDRange(blocks * local), cl::NDRange(local), nullptr,
+                                 &log.add(Pass::Scan));
+}
+
+std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& log) {
+    if (n == 0) return 0;
+    cl::Buffer& total = d.buffer(kScanTotal, sizeof(cl_uint));
+    scan_into(d, data, n, total, 0, log);
+    cl_uint value = 0;
+    d.queue.enqueueReadBuffer(total, CL_TRUE, 0, sizeof(value), &value, nullptr, &log.add(Pass::Transfer));
+    return value;
 }
 
 cl_uint set_arg(cl::Kernel& k, cl_uint i, const ArgVertexFormula& a) {

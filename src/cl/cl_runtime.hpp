@@ -92,10 +92,14 @@ std::vector<std::shared_ptr<Device>> devices();
 // most 2), i.e. several OpenCL devices on a machine that has one.
 void split_devices(bool split);
 
-// Exclusive prefix sum of n uints in `data`, in place, on d's queue; returns the total.
-// Blocking (reads the total back). Buffer ids >= kScanBufferBase are used for block sums.
-constexpr unsigned kScanBufferBase = 100;
-std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& log, unsigned level = 0);
+// Exclusive prefix sum of n uints in `data`, in place, on d's queue (in order), and its
+// total copied to uint `total_at` of `totals` on the device: enqueued only, so that a caller
+// reads several totals back at once. Buffer ids >= kScanBufferBase are used for block sums.
+constexpr unsigned kScanBufferBase = 100, kScanTotal = kScanBufferBase - 1;
+void scan_into(Device& d, const cl::Buffer& data, std::size_t n, const cl::Buffer& totals, std::size_t total_at,
+               EventLog& log, unsigned level = 0);
+// The same, blocking: reads the total back and returns it.
+std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& log);
 
 // Kernel arguments in declaration order from index 0, so that no call site numbers them:
 //   set_args(kernel, buffer, cl_uint{n}, ArgBytes{threshold}, ArgVertexFormula{...}, ...)
