@@ -504,10 +504,14 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
         reserve_huge(array, n);
         array.resize(n);
     };
-    std::vector<Job> jobs{{12 * triangles, [&] { fill(mesh.indices, 3 * triangles); }},
-                          {12 * vertices, [&] { fill(mesh.positions, 3 * vertices); }}};
-    if (normals) jobs.push_back({12 * vertices, [&] { fill(mesh.normals, 3 * vertices); }});
+    // The bytes a resize writes: none where a reused mesh (extract_into) has the size already,
+    // and then no worker needs to start.
+    const auto to_write = [](const auto& array, std::size_t n) { return 4 * (n - std::min(n, array.size())); };
+    std::vector<Job> jobs{{to_write(mesh.indices, 3 * triangles), [&] { fill(mesh.indices, 3 * triangles); }},
+                          {to_write(mesh.positions, 3 * vertices), [&] { fill(mesh.positions, 3 * vertices); }}};
+    if (normals) jobs.push_back({to_write(mesh.normals, 3 * vertices), [&] { fill(mesh.normals, 3 * vertices); }});
     else mesh.normals.clear();  // a reused mesh may have had normals
+    std::sort(jobs.begin(), jobs.end(), [](const Job& a, const Job& b) { return a.bytes > b.bytes; });
     std::size_t total = 0;
     for (const Job& job : jobs) total += job.bytes;
     constexpr std::size_t kWorthThreads = std::size_t{8} << 20;
@@ -515,7 +519,7 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
         total < kWorthThreads ? 1u : std::min({threads, resolve_threads(0), static_cast<unsigned>(jobs.size())});
     std::vector<std::size_t> load(workers, 0);
     std::vector<unsigned> owner(jobs.size());
-    for (std::size_t i = 0; i < jobs.size(); ++i) {  // jobs are already largest first
+    for (std::size_t i = 0; i < jobs.size(); ++i) {  // largest first
         const auto least = std::min_element(load.begin(), load.end()) - load.begin();
         owner[i] = static_cast<unsigned>(least);
         load[least] += jobs[i].bytes;
