@@ -411,13 +411,13 @@ TEST_CASE("Hybrid runs the CPU engine and OpenCL on one queue", "[opencl]") {
     o.chunk_planes = 2;
     o.devices = {0};  // named: a CPU device (PoCL) joins Hybrid only when asked for
 #ifdef VOXMESH_HAS_OPENCL
-    // Both must take chunks whatever the machine's load: on a busy machine the CPU worker
-    // could otherwise count every chunk, or take over the device's, before the device's first
-    // finishes (PoCL runs on the same cores). 2 ms more per chunk the CPU worker counts.
-    struct SlowCpu {
-        SlowCpu() { detail::opencl_pretend_slow(0, 0, 0.002); }
-        ~SlowCpu() { detail::opencl_pretend_slow(0, 0, 0); }
-    } slow_cpu;
+    // Both must take chunks whatever the machine's load: on a busy machine one side could
+    // otherwise count all 48 chunks before the other's thread starts (PoCL runs on the same
+    // cores). 2 ms more per chunk counted, on both sides alike.
+    struct Paced {
+        Paced() { detail::opencl_pretend_slow(0.002, 0, 0.002); }
+        ~Paced() { detail::opencl_pretend_slow(0, 0, 0); }
+    } paced;
 #endif
     Stats stats;
     require_same(cpu, run(v, o, Backend::Hybrid, &stats), v);
