@@ -78,12 +78,22 @@ struct CellWord {
     // Case index of cell 64q + r (bit k set where corner k is inside). Below bit 63 a cell's
     // x and x+1 bits are neighbours in the rows' own words: four 2-bit pairs and a lookup.
     VOXMESH_HOT_INLINE unsigned cell_case(unsigned r) const {
-        if (r < 63)
-            return kRowPairsToCase[(corner[0] >> r & 3) | (corner[3] >> r & 3) << 2 | (corner[4] >> r & 3) << 4 |
-                                   (corner[7] >> r & 3) << 6];
+        if (r < 63) return kRowPairsToCase[row_pairs(r)];
         unsigned c = 0;
         for (unsigned k = 0; k < 8; ++k) c |= static_cast<unsigned>(corner[k] >> r & 1) << k;
         return c;
+    }
+
+    // The number of triangles of cell 64q + r.
+    VOXMESH_HOT_INLINE unsigned triangles(unsigned r) const {
+        return r < 63 ? kRowPairsToTriangles[row_pairs(r)] : kCaseTable[cell_case(r)].count;
+    }
+
+private:
+    // Rows a, b, c, d's bits r and r + 1 (r < 63), two bits each.
+    VOXMESH_HOT_INLINE unsigned row_pairs(unsigned r) const {
+        return static_cast<unsigned>((corner[0] >> r & 3) | (corner[3] >> r & 3) << 2 | (corner[4] >> r & 3) << 4 |
+                                     (corner[7] >> r & 3) << 6);
     }
 };
 

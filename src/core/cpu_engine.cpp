@@ -212,7 +212,7 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
                     if (!(nonuniform_words & word_bit(q))) continue;
                     const CellWord cell(ra, rb, rc, rd, q, words);
                     for (Word cells = cell.nonuniform(q, nx); cells; cells &= cells - 1)
-                        count += kCaseTable[cell.cell_case(static_cast<unsigned>(std::countr_zero(cells)))].count;
+                        count += cell.triangles(static_cast<unsigned>(std::countr_zero(cells)));
                 }
                 info[j].triangles = count;
             }
