@@ -94,7 +94,8 @@ void split_devices(bool split);
 
 // Exclusive prefix sum of n uints in `data`, in place, on d's queue (in order), and its
 // total copied to uint `total_at` of `totals` on the device: enqueued only, so that a caller
-// reads several totals back at once. Buffer ids >= kScanBufferBase are used for block sums.
+// reads several totals back at once. Buffer ids >= kScanBufferBase hold block sums, and
+// kScanTotal the total that scan() reads back.
 constexpr unsigned kScanBufferBase = 100, kScanTotal = kScanBufferBase - 1;
 void scan_into(Device& d, const cl::Buffer& data, std::size_t n, const cl::Buffer& totals, std::size_t total_at,
                EventLog& log, unsigned level = 0);

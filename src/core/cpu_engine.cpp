@@ -506,7 +506,9 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
     };
     // The bytes a resize writes: none where a reused mesh (extract_into) has the size already,
     // and then no worker needs to start.
-    const auto to_write = [](const auto& array, std::size_t n) { return 4 * (n - std::min(n, array.size())); };
+    const auto to_write = [](const auto& array, std::size_t n) {
+        return sizeof(*array.data()) * (n - std::min(n, array.size()));
+    };
     std::vector<Job> jobs{{to_write(mesh.indices, 3 * triangles), [&] { fill(mesh.indices, 3 * triangles); }},
                           {to_write(mesh.positions, 3 * vertices), [&] { fill(mesh.positions, 3 * vertices); }}};
     if (normals) jobs.push_back({to_write(mesh.normals, 3 * vertices), [&] { fill(mesh.normals, 3 * vertices); }});
