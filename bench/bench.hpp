@@ -61,6 +61,9 @@ struct Result {
     double floor_s = 0, floor_ratio = 0;  // streaming floor on the same threads
     double speedup = -1;                  // vs the fewest threads of the same series; -1: none
     unsigned speedup_base_threads = 0;
+    // What the machine allows that speed-up, against the same base thread count (-1: not
+    // measured): a compute-only loop's speed-up (compute_ceiling) and the streaming floor's.
+    double compute_ceiling = -1, floor_speedup = -1;
 
     double peak_rss_mb = 0;     // process peak while extracting (VmHWM after a reset)
     double extract_rss_mb = 0;  // that peak minus the RSS just before extract()
@@ -88,6 +91,10 @@ double now_s();
 double median(std::vector<double> v);
 // Time to read every sample once with `threads` threads (median over repeats, after warmup).
 double streaming_floor(const voxmesh::VolumeView& view, unsigned threads, int repeat, int warmup);
+// How many times faster `threads` threads, started together, finish a fixed amount of
+// arithmetic (a dependent integer chain per thread, no memory traffic) than one thread:
+// the machine's own ceiling for a speed-up (cores, SMT, a VM's share of them). Median of 7.
+double compute_speedup(unsigned threads);
 // Runs one combination on one input: warmup, then `repeat` timed extract() calls.
 Result measure(const Input& input, const Combo& combo, const Settings& settings);
 // All combinations of one input, taking turns run by run (forward, then backward): on a
@@ -120,7 +127,9 @@ bool rss_reset_works();
 unsigned hardware_threads();
 
 // ---- report.cpp ----
-void compute_speedups(std::vector<Result>& results);
+// Speed-ups within each series (same input, backend, device), with the ceilings beside them
+// when `ceilings` (compute_speedup per thread count) has the counts.
+void compute_speedups(std::vector<Result>& results, const std::map<unsigned, double>& ceilings = {});
 void print_table(const std::vector<Result>& results);
 void print_csv(const std::vector<Result>& results);
 void print_json(const std::vector<Result>& results, std::FILE* out = stdout);

@@ -301,7 +301,15 @@ int main(int argc, char** argv) {
         if (g_interrupted)
             std::fprintf(stderr, "\ninterrupted: printing the %zu finished result(s)\n", results.size());
 
-        compute_speedups(results);
+        // The machine's own speed-up per thread count, beside the measured ones (when there are two
+        // or more counts to compare).
+        std::map<unsigned, double> ceilings;
+        for (const auto& r : results) ceilings.emplace(r.threads, 0.0);
+        if (ceilings.size() > 1 && !g_interrupted)
+            for (auto& [count, ceiling] : ceilings) ceiling = compute_speedup(count);
+        else
+            ceilings.clear();
+        compute_speedups(results, ceilings);
         if (!save_path.empty()) {
             std::FILE* f = std::fopen(save_path.c_str(), "w");
             if (!f) throw voxmesh::Error("cannot write '" + save_path + "'");

@@ -94,6 +94,54 @@ double streaming_floor(const voxmesh::VolumeView& view, unsigned threads, int re
     return median(floor_reads(view, std::max(1u, threads), std::max(0, warmup), repeat));
 }
 
+// ---- compute ceiling -----------------------------------------------------------------------
+
+namespace {
+
+// A dependent chain of multiplies and shifts: a few cycles an iteration on any core, no loads.
+std::uint64_t spin(std::uint64_t iterations, std::uint64_t x) {
+    for (std::uint64_t i = 0; i < iterations; ++i) {
+        x = x * 6364136223846793005ull + 1442695040888963407ull;
+        x ^= x >> 29;
+    }
+    return x;
+}
+
+// Seconds for `threads` threads to share `iterations` (started together at a barrier, like
+// floor_reads), one per round.
+std::vector<double> spin_rounds(unsigned threads, std::uint64_t iterations, int rounds) {
+    std::vector<double> seconds(static_cast<std::size_t>(rounds));
+    std::vector<std::uint64_t> results(threads);
+    std::barrier sync(static_cast<std::ptrdiff_t>(threads));
+    auto work = [&](unsigned w) {
+        for (int r = 0; r < rounds; ++r) {
+            sync.arrive_and_wait();
+            const double t0 = now_s();
+            results[w] += spin(iterations / threads, w + r + 1);
+            sync.arrive_and_wait();
+            if (w == 0) seconds[static_cast<std::size_t>(r)] = now_s() - t0;
+        }
+    };
+    std::vector<std::thread> pool;
+    for (unsigned w = 1; w < threads; ++w) pool.emplace_back(work, w);
+    work(0);
+    for (auto& t : pool) t.join();
+    for (std::uint64_t x : results) g_sink = g_sink + x;  // consumed: the chains cannot be dropped
+    seconds.erase(seconds.begin());  // the first round warms up
+    return seconds;
+}
+
+}  // namespace
+
+double compute_speedup(unsigned threads) {
+    constexpr std::uint64_t kIterations = 4'000'000;  // about 10 ms on one core
+    constexpr int kRounds = 8;
+    threads = std::max(1u, threads);
+    const double one = median(spin_rounds(1, kIterations, kRounds));
+    const double many = threads == 1 ? one : median(spin_rounds(threads, kIterations, kRounds));
+    return many > 0 ? one / many : 0;
+}
+
 // ---- memory --------------------------------------------------------------------------------
 
 namespace {

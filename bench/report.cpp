@@ -65,7 +65,7 @@ std::string backend_label(const Result& r) {
 
 }  // namespace
 
-void compute_speedups(std::vector<Result>& results) {
+void compute_speedups(std::vector<Result>& results, const std::map<unsigned, double>& ceilings) {
     std::map<std::string, const Result*> base;
     for (const auto& r : results) {
         if (r.status != "ok") continue;
@@ -78,15 +78,20 @@ void compute_speedups(std::vector<Result>& results) {
         if (b && r.median_s > 0) {
             r.speedup = b->median_s / r.median_s;
             r.speedup_base_threads = b->threads;
+            const auto at = ceilings.find(r.threads), base_at = ceilings.find(b->threads);
+            if (at != ceilings.end() && base_at != ceilings.end() && base_at->second > 0)
+                r.compute_ceiling = at->second / base_at->second;
+            if (r.floor_s > 0 && b->floor_s > 0) r.floor_speedup = b->floor_s / r.floor_s;
         }
     }
 }
 
 void print_table(const std::vector<Result>& results) {
-    std::printf("%-8s %-4s %-6s %-10s %-8s %3s %9s %9s %9s %8s %10s %9s %8s %6s %7s %7s %6s %8s %8s %8s %8s %8s\n",
+    std::printf("%-8s %-4s %-6s %-10s %-8s %3s %9s %9s %9s %8s %10s %9s %8s %6s %6s %6s %7s %7s %6s %8s %8s %8s %8s "
+                "%8s\n",
                 "field", "type", "size", "backend", "device", "thr", "median_s", "min_s", "max_s", "Mvox/s",
-                "triangles", "floor_s", "x_floor", "speed", "rss_MB", "ext_MB", "over%", "classify", "scan",
-                "generate", "kernel", "transfer");
+                "triangles", "floor_s", "x_floor", "speed", "ceil", "fl_sp", "rss_MB", "ext_MB", "over%", "classify",
+                "scan", "generate", "kernel", "transfer");
     for (const auto& r : results) {
         if (r.status != "ok") {
             std::printf("%-8s %-4s %-6s %-10s %-8s %3u  %s: %s\n", r.field.c_str(), r.type.c_str(),
@@ -95,15 +100,17 @@ void print_table(const std::vector<Result>& results) {
             continue;
         }
         std::string speed = r.speedup > 0 ? num(r.speedup, "%.2f") : "-";
+        std::string ceiling = r.compute_ceiling > 0 ? num(r.compute_ceiling, "%.2f") : "-";
+        std::string floor_speed = r.floor_speedup > 0 ? num(r.floor_speedup, "%.2f") : "-";
         std::string kernel = r.kernel_s > 0 ? num(r.kernel_s, "%.4f") : "-";
         std::string transfer = r.transfer_s > 0 ? num(r.transfer_s, "%.4f") : "-";
         // Memory the extraction took beyond its mesh, in % of volume + mesh (issue 6: <= 10 %).
         const double over = 100 * (r.extract_rss_mb - r.mesh_mb) / std::max(r.volume_mb + r.mesh_mb, 1e-9);
-        std::printf("%-8s %-4s %-6s %-10s %-8s %3u %9.4f %9.4f %9.4f %8.1f %10zu %9.6f %8.2f %6s %7.0f %7.0f %6.1f "
-                    "%8.4f %8.4f %8.4f %8s %8s\n",
+        std::printf("%-8s %-4s %-6s %-10s %-8s %3u %9.4f %9.4f %9.4f %8.1f %10zu %9.6f %8.2f %6s %6s %6s %7.0f %7.0f "
+                    "%6.1f %8.4f %8.4f %8.4f %8s %8s\n",
                     r.field.c_str(), r.type.c_str(), r.size_label().c_str(), backend_label(r).c_str(),
                     r.device.c_str(), r.threads, r.median_s, r.min_s, r.max_s, r.mvox_s, r.triangles, r.floor_s,
-                    r.floor_ratio, speed.c_str(), r.peak_rss_mb, r.extract_rss_mb, over, r.classify_s, r.scan_s,
+                    r.floor_ratio, speed.c_str(), ceiling.c_str(), floor_speed.c_str(), r.peak_rss_mb, r.extract_rss_mb, over, r.classify_s, r.scan_s,
                     r.generate_s, kernel.c_str(), transfer.c_str());
         if (r.setup_rss_mb >= 0)
             std::printf("    note: set-up (--setup-first, the first 3 z-planes meshed once before the runs) took %.0f MB\n",
@@ -121,7 +128,8 @@ void print_table(const std::vector<Result>& results) {
             }
         std::printf("\nmedian/min/max: end-to-end %s seconds over %d runs after %d warmup%s; x_floor: median / "
                     "streaming floor (one threaded read of the volume); speed: vs the fewest threads of the same "
-                    "series; rss_MB: process peak RSS while extracting (%s); ext_MB: that peak minus RSS before the "
+                    "series; ceil: the same for a compute-only loop (the machine's ceiling for speed); fl_sp: the same for the "
+                    "streaming floor; rss_MB: process peak RSS while extracting (%s); ext_MB: that peak minus RSS before the "
                     "call; over%%: ext_MB minus the mesh, in %% of volume + mesh (a fresh process: --repeat 1 "
                     "--warmup 0); classify/scan/generate: Stats pass medians; kernel/transfer: OpenCL device time.\n\n",
                     first->reuse_mesh ? "extract_into() (one Mesh reused across runs, --reuse-mesh)" : "extract()",
@@ -135,7 +143,8 @@ void print_table(const std::vector<Result>& results) {
 void print_csv(const std::vector<Result>& results) {
     std::printf("field,type,size,nx,ny,nz,iso,backend,backend_ran,device,device_names,threads,normals,repeat,warmup,"
                 "status,error,median_s,min_s,max_s,classify_s,scan_s,generate_s,total_s,kernel_s,transfer_s,"
-                "triangles,vertices,mvox_s,floor_s,floor_ratio,speedup,speedup_base_threads,peak_rss_mb,"
+                "triangles,vertices,mvox_s,floor_s,floor_ratio,speedup,speedup_base_threads,compute_ceiling,floor_speedup,"
+                "peak_rss_mb,"
                 "extract_rss_mb,rss_scope,volume_mb,mesh_mb,warnings\n");
     for (const auto& r : results) {
         std::ostringstream o;
@@ -147,7 +156,9 @@ void print_csv(const std::vector<Result>& results) {
           << num(r.classify_s) << ',' << num(r.scan_s) << ',' << num(r.generate_s) << ',' << num(r.total_s) << ','
           << num(r.kernel_s) << ',' << num(r.transfer_s) << ',' << r.triangles << ',' << r.vertices << ','
           << num(r.mvox_s) << ',' << num(r.floor_s) << ',' << num(r.floor_ratio) << ','
-          << (r.speedup > 0 ? num(r.speedup) : "") << ',' << r.speedup_base_threads << ',' << num(r.peak_rss_mb)
+          << (r.speedup > 0 ? num(r.speedup) : "") << ',' << r.speedup_base_threads << ','
+          << (r.compute_ceiling > 0 ? num(r.compute_ceiling) : "") << ','
+          << (r.floor_speedup > 0 ? num(r.floor_speedup) : "") << ',' << num(r.peak_rss_mb)
           << ',' << num(r.extract_rss_mb) << ',' << r.rss_scope << ',' << num(r.volume_mb) << ','
           << num(r.mesh_mb) << ',' << csv_field(joined(r.warnings, "; "));
         std::printf("%s\n", o.str().c_str());
@@ -179,7 +190,10 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
           << ",\"floor_s\":" << (r.floor_s > 0 ? num(r.floor_s) : "null")
           << ",\"floor_ratio\":" << opt(r.floor_ratio)
           << ",\"speedup\":" << (r.speedup > 0 ? num(r.speedup) : "null")
-          << ",\"speedup_base_threads\":" << r.speedup_base_threads << ",\"peak_rss_mb\":" << opt(r.peak_rss_mb)
+          << ",\"speedup_base_threads\":" << r.speedup_base_threads
+          << ",\"compute_ceiling\":" << (r.compute_ceiling > 0 ? num(r.compute_ceiling) : "null")
+          << ",\"floor_speedup\":" << (r.floor_speedup > 0 ? num(r.floor_speedup) : "null")
+          << ",\"peak_rss_mb\":" << opt(r.peak_rss_mb)
           << ",\"extract_rss_mb\":" << opt(r.extract_rss_mb)
           << ",\"setup_rss_mb\":" << (r.setup_rss_mb >= 0 ? num(r.setup_rss_mb) : "null") << ",\"rss_scope\":\"" << r.rss_scope
           << "\",\"volume_mb\":" << num(r.volume_mb) << ",\"mesh_mb\":" << opt(r.mesh_mb) << ",\"warnings\":[";
