@@ -302,13 +302,21 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "\ninterrupted: printing the %zu finished result(s)\n", results.size());
 
         // The machine's own speed-up per thread count, beside the measured ones (when there are two
-        // or more counts to compare).
+        // or more counts to compare). Counts above the cores get the ceiling of all cores: the CPU
+        // engine starts no more workers than cores, whatever Options::threads asks for.
         std::map<unsigned, double> ceilings;
         for (const auto& r : results) ceilings.emplace(r.threads, 0.0);
-        if (ceilings.size() > 1 && !g_interrupted)
-            for (auto& [count, ceiling] : ceilings) ceiling = compute_speedup(count);
-        else
+        if (ceilings.size() > 1 && !g_interrupted) {
+            std::map<unsigned, double> measured;
+            for (auto& [count, ceiling] : ceilings) {
+                const unsigned running = std::clamp(count, 1u, hardware_threads());
+                auto it = measured.find(running);
+                if (it == measured.end()) it = measured.emplace(running, compute_speedup(running)).first;
+                ceiling = it->second;
+            }
+        } else {
             ceilings.clear();
+        }
         compute_speedups(results, ceilings);
         if (!save_path.empty()) {
             std::FILE* f = std::fopen(save_path.c_str(), "w");

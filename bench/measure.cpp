@@ -54,27 +54,46 @@ std::uint64_t sum_words(const unsigned char* p, std::size_t bytes) {
 
 volatile std::uint64_t g_sink = 0;
 
+// The wall time of one round of work shared by threads: from the first thread's start to the
+// last one's end. Not timed on one thread from the barrier: with more threads than cores that
+// thread may start long after the others (its clock would miss their work).
+class Span {
+public:
+    explicit Span(unsigned threads) : start_(threads), end_(threads) {}
+    void start(unsigned w) { start_[w] = now_s(); }
+    void end(unsigned w) { end_[w] = now_s(); }
+    // After a barrier that every thread reached after end().
+    double seconds() const {
+        return *std::max_element(end_.begin(), end_.end()) - *std::min_element(start_.begin(), start_.end());
+    }
+
+private:
+    std::vector<double> start_, end_;
+};
+
 // Reads of the whole volume by `threads` threads, each its contiguous share (like the
 // engine's z-slabs), started together at a barrier so that no read includes starting a
-// thread; the seconds of each of warmup + repeat reads, timed on the first thread from the
-// barrier to the last thread's end.
+// thread; the seconds of each of warmup + repeat reads, from the first thread's start to the
+// last one's end (Span).
 std::vector<double> floor_reads(const voxmesh::VolumeView& view, unsigned threads, int warmup, int repeat) {
     const std::size_t bytes = voxmesh::scalar_size(view.type) * view.dims[0] * view.dims[1] * view.dims[2];
     const auto* base = static_cast<const unsigned char*>(view.data);
     const int rounds = warmup + std::max(1, repeat);
     std::vector<double> seconds(static_cast<std::size_t>(rounds));
     std::vector<std::uint64_t> partial(threads);
+    Span spans(threads);
     std::barrier sync(static_cast<std::ptrdiff_t>(threads));
     auto work = [&](unsigned w) {
         const std::size_t b = bytes * w / threads / 64 * 64;
         const std::size_t e = w + 1 == threads ? bytes : bytes * (w + 1) / threads / 64 * 64;
         for (int r = 0; r < rounds; ++r) {
             sync.arrive_and_wait();
-            const double t0 = now_s();
+            spans.start(w);
             partial[w] = sum_words(base + b, e - b);
+            spans.end(w);
             sync.arrive_and_wait();
             if (w != 0) continue;
-            seconds[static_cast<std::size_t>(r)] = now_s() - t0;
+            seconds[static_cast<std::size_t>(r)] = spans.seconds();
             std::uint64_t s = 0;  // the others write theirs again only after the next barrier
             for (std::uint64_t p : partial) s += p;
             g_sink = g_sink + s;
@@ -112,14 +131,16 @@ std::uint64_t spin(std::uint64_t iterations, std::uint64_t x) {
 std::vector<double> spin_rounds(unsigned threads, std::uint64_t iterations, int rounds) {
     std::vector<double> seconds(static_cast<std::size_t>(rounds));
     std::vector<std::uint64_t> results(threads);
+    Span spans(threads);
     std::barrier sync(static_cast<std::ptrdiff_t>(threads));
     auto work = [&](unsigned w) {
         for (int r = 0; r < rounds; ++r) {
             sync.arrive_and_wait();
-            const double t0 = now_s();
+            spans.start(w);
             results[w] += spin(iterations / threads, w + r + 1);
+            spans.end(w);
             sync.arrive_and_wait();
-            if (w == 0) seconds[static_cast<std::size_t>(r)] = now_s() - t0;
+            if (w == 0) seconds[static_cast<std::size_t>(r)] = spans.seconds();
         }
     };
     std::vector<std::thread> pool;

@@ -128,8 +128,8 @@ void print_table(const std::vector<Result>& results) {
             }
         std::printf("\nmedian/min/max: end-to-end %s seconds over %d runs after %d warmup%s; x_floor: median / "
                     "streaming floor (one threaded read of the volume); speed: vs the fewest threads of the same "
-                    "series; ceil: the same for a compute-only loop (the machine's ceiling for speed); fl_sp: the same for the "
-                    "streaming floor; rss_MB: process peak RSS while extracting (%s); ext_MB: that peak minus RSS before the "
+                    "series; ceil: the same for a compute-only loop on at most as many threads as cores (the machine's ceiling; "
+                    "the CPU engine runs no more workers than cores); fl_sp: the same for the streaming floor; rss_MB: process peak RSS while extracting (%s); ext_MB: that peak minus RSS before the "
                     "call; over%%: ext_MB minus the mesh, in %% of volume + mesh (a fresh process: --repeat 1 "
                     "--warmup 0); classify/scan/generate: Stats pass medians; kernel/transfer: OpenCL device time.\n\n",
                     first->reuse_mesh ? "extract_into() (one Mesh reused across runs, --reuse-mesh)" : "extract()",
