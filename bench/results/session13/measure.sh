@@ -1,45 +1,5 @@
 #!/bin/bash
-# The thirteenth session's measurements on the 2-core machine, in this order: floor_runs,
-# backends, scaling (extract(), then extract_into(), then one process per thread count),
-# peers. Run from the repository root with a Release build in build/ and nothing else
-# running; outputs go to the directory given (default: beside this script).
-set -euo pipefail
-out=${1:-$(dirname "$0")}
-mkdir -p "$out"
-bench=build/bench/voxmesh-bench
-git rev-parse --short HEAD > "$out/commit.txt"
-uptime > "$out/uptime.txt"
-: > "$out/floor_runs.txt"
-for run in 1 2 3; do
-  echo "### run $run extract()" >> "$out/floor_runs.txt"
-  $bench --field sphere --type f32,u8 --sizes 512 --threads 2 --repeat 9 --warmup 1 -q >> "$out/floor_runs.txt"
-  echo "### run $run extract_into()" >> "$out/floor_runs.txt"
-  $bench --field sphere --type f32,u8 --sizes 512 --threads 2 --repeat 9 --warmup 1 --reuse-mesh -q >> "$out/floor_runs.txt"
-done
-$bench --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 2 --backends cpu,opencl,hybrid --interleave \
-  --repeat 7 --warmup 1 -q > "$out/backends.txt"
-$bench --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 1,2,4,6,16 --interleave --repeat 7 \
-  --no-floor -q > "$out/scaling.txt"
-$bench --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 1,2,4,6,16 --interleave --repeat 7 \
-  --no-floor --reuse-mesh -q > "$out/scaling_into.txt"
-# Each thread count in its own process, alternating 1 and 2 five times per volume: every call
-# follows a call with the same thread count (in --interleave, the first multi-threaded call
-# after a one-thread call pays for the output pages glibc gave back in between).
-: > "$out/scaling_steady.txt"
-for field in sphere gyroid; do for type in f32 u8; do for size in 256 512; do
-  for round in 1 2 3 4 5; do for threads in 1 2; do
-    $bench --field $field --type $type --sizes $size --threads $threads --repeat 9 --warmup 2 --no-floor -q \
-      | grep -E "^$field " | sed "s/\$/  round $round/" >> "$out/scaling_steady.txt"
-  done; done
-done; done; done
-: > "$out/peers.txt"
-for spec in sphere:f32:256 sphere:f32:512 gyroid:f32:256 gyroid:f32:512 sphere:u8:256 sphere:u8:512 \
-            gyroid:u8:256 gyroid:u8:512 ct:i16:256 ct:i16:512; do
-  field=${spec%%:*}; rest=${spec#*:}; type=${rest%%:*}; size=${rest#*:}
-  $bench --field "$field" --type "$type" --sizes "$size" --write-volume /tmp/v.nrrd > /dev/null
-  /usr/bin/python3 bench/peers/peers.py /tmp/v.nrrd --threads 2 --repeat 5 --bench $bench --tools voxmesh,fe \
-    --fe-scaling >> "$out/peers.txt"
-done
-rm -f /tmp/v.nrrd
-uptime >> "$out/uptime.txt"
-echo finished >> "$out/uptime.txt"
+# The thirteenth session's runs: bench/measure_targets.sh without the floor in the thread runs
+# (--no-floor there, as they ran). Run from the repository root; outputs go to the directory
+# given (default: beside this script).
+SCALING_FLOOR=0 exec bash "$(dirname "$0")/../../measure_targets.sh" "${1:-$(dirname "$0")}"
