@@ -59,6 +59,7 @@ struct Result {
     std::size_t triangles = 0, vertices = 0;
     double mvox_s = 0;
     double floor_s = 0, floor_ratio = 0;  // streaming floor on the same threads
+    bool floor_in_rounds = false;         // floor_s: median of reads between the runs (--interleave)
     double speedup = -1;                  // vs the fewest threads of the same series; -1: none
     unsigned speedup_base_threads = 0;
     // What the machine allows that speed-up, against the same base thread count (-1: not
@@ -81,6 +82,9 @@ struct Settings {
     bool quiet = false;
     bool reuse_mesh = false;  // extract_into() one Mesh kept across runs, instead of extract()
     bool interleave = false;  // an input's combinations take turns run by run (measure_interleaved)
+    // --interleave: one read of the volume (the streaming floor) on each combination's threads
+    // after each of its timed runs, so the floor is measured in the same phases as the runs.
+    bool floor_in_rounds = false;
     // Before its runs, each combination meshes the volume's first 3 z-planes once: set-up (the
     // OpenCL runtime, program builds) is paid there, so a first run's memory is extraction's.
     bool setup_first = false;

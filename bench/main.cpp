@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
     app.add_flag("--reuse-mesh", settings.reuse_mesh,
                  "mesh every run into one kept Mesh with extract_into() (no fresh output pages), not extract()");
     app.add_flag("--interleave", settings.interleave,
-                 "an input's combinations take turns run by run (robust ratios on a machine whose speed drifts)");
+                 "an input's combinations take turns run by run (robust ratios on a machine whose speed drifts); the floor is read after each run");
     app.add_flag("--setup-first", settings.setup_first,
                  "before its runs, each combination meshes the volume's first 3 z-planes once (OpenCL runtime and "
                  "program builds paid there; its memory is printed as a note)");
@@ -125,6 +125,7 @@ int main(int argc, char** argv) {
                    "write the (one) built-in field as a raw NRRD for bench/peers, with its iso, and exit");
     CLI11_PARSE(app, argc, argv);
     settings.normals = !no_normals;
+    settings.floor_in_rounds = settings.interleave && !no_floor;
     if (csv && json) {
         std::fprintf(stderr, "voxmesh-bench: choose one of --csv and --json\n");
         return 2;
@@ -280,7 +281,9 @@ int main(int argc, char** argv) {
                 std::fflush(stderr);
                 Result r = settings.interleave ? std::move(interleaved[ci]) : measure(in, c, settings);
                 if (r.status == "interrupted") break;
-                if (!no_floor && !g_interrupted) {
+                if (r.floor_in_rounds) {
+                    if (r.status == "ok" && r.floor_s > 0) r.floor_ratio = r.median_s / r.floor_s;
+                } else if (!no_floor && !g_interrupted) {
                     auto it = floors.find(c.threads);
                     if (it == floors.end())
                         it = floors.emplace(c.threads, streaming_floor(in.volume.view(), c.threads, settings.repeat,

@@ -361,10 +361,22 @@ std::vector<Result> measure_interleaved(const Input& input, const std::vector<Co
     for (auto& runner : runners) runner->setup();
     for (int i = 0; i < settings.warmup && !g_interrupted; ++i)
         for (auto& runner : runners) runner->run(false);
+    std::vector<std::vector<double>> floors(n);
+    const voxmesh::VolumeView view = input.volume.view();
     for (int i = 0; i < std::max(1, settings.repeat) && !g_interrupted; ++i)
-        for (std::size_t k = 0; k < n; ++k) runners[i % 2 ? n - 1 - k : k]->run(true);  // forward, then backward
+        for (std::size_t step = 0; step < n; ++step) {
+            const std::size_t k = i % 2 ? n - 1 - step : step;  // forward, then backward
+            runners[k]->run(true);
+            if (settings.floor_in_rounds) floors[k].push_back(floor_reads(view, std::max(1u, combos[k].threads), 0, 1)[0]);
+        }
     std::vector<Result> out;
-    for (auto& runner : runners) out.push_back(runner->finish());
+    for (std::size_t k = 0; k < n; ++k) {
+        out.push_back(runners[k]->finish());
+        if (!floors[k].empty()) {
+            out.back().floor_s = median(floors[k]);
+            out.back().floor_in_rounds = true;
+        }
+    }
     return out;
 }
 

@@ -127,7 +127,7 @@ void print_table(const std::vector<Result>& results) {
                 break;
             }
         std::printf("\nmedian/min/max: end-to-end %s seconds over %d runs after %d warmup%s; x_floor: median / "
-                    "streaming floor (one threaded read of the volume); speed: vs the fewest threads of the same "
+                    "streaming floor (one threaded read of the volume%s); speed: vs the fewest threads of the same "
                     "series; ceil: the same for a compute-only loop on at most as many threads as cores (the machine's ceiling; "
                     "the CPU engine runs no more workers than cores); fl_sp: the same for the streaming floor; rss_MB: process peak RSS while extracting (%s); ext_MB: that peak minus RSS before the "
                     "call; over%%: ext_MB minus the mesh, in %% of volume + mesh (a fresh process: --repeat 1 "
@@ -135,6 +135,7 @@ void print_table(const std::vector<Result>& results) {
                     first->reuse_mesh ? "extract_into() (one Mesh reused across runs, --reuse-mesh)" : "extract()",
                     first->repeat, first->warmup,
                     first->interleaved ? " (combinations of an input taking turns run by run, --interleave)" : "",
+                    first->floor_in_rounds ? ", median of reads after each run, in the same phases as the runs" : "",
                     first->rss_scope == "run" ? "VmHWM reset before each run"
                                               : "lifetime peak: VmHWM could not be reset on this system");
     }
@@ -189,6 +190,7 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
           << ",\"vertices\":" << (ok ? std::to_string(r.vertices) : "null") << ",\"mvox_s\":" << opt(r.mvox_s)
           << ",\"floor_s\":" << (r.floor_s > 0 ? num(r.floor_s) : "null")
           << ",\"floor_ratio\":" << opt(r.floor_ratio)
+          << ",\"floor_in_rounds\":" << (r.floor_in_rounds ? "true" : "false")
           << ",\"speedup\":" << (r.speedup > 0 ? num(r.speedup) : "null")
           << ",\"speedup_base_threads\":" << r.speedup_base_threads
           << ",\"compute_ceiling\":" << (r.compute_ceiling > 0 ? num(r.compute_ceiling) : "null")
