@@ -95,10 +95,11 @@ double now_s();
 double median(std::vector<double> v);
 // Time to read every sample once with `threads` threads (median over repeats, after warmup).
 double streaming_floor(const voxmesh::VolumeView& view, unsigned threads, int repeat, int warmup);
-// How many times faster `threads` threads, started together, finish a fixed amount of
-// arithmetic (a dependent integer chain per thread, no memory traffic) than one thread:
-// the machine's own ceiling for a speed-up (cores, SMT, a VM's share of them). Median of 7.
-double compute_speedup(unsigned threads);
+// Rounds per second in which `threads` threads, started together, finish a fixed amount of
+// arithmetic (a dependent integer chain per thread, no memory traffic), median of 7 rounds:
+// the ratio of two thread counts' rates is the machine's own ceiling for a speed-up (cores,
+// SMT, a VM's share of them).
+double compute_rate(unsigned threads);
 // Runs one combination on one input: warmup, then `repeat` timed extract() calls.
 Result measure(const Input& input, const Combo& combo, const Settings& settings);
 // All combinations of one input, taking turns run by run (forward, then backward): on a
@@ -132,8 +133,8 @@ unsigned hardware_threads();
 
 // ---- report.cpp ----
 // Speed-ups within each series (same input, backend, device), with the ceilings beside them
-// when `ceilings` (compute_speedup per thread count) has the counts.
-void compute_speedups(std::vector<Result>& results, const std::map<unsigned, double>& ceilings = {});
+// when `compute_rates` (compute_rate per thread count) has the counts.
+void compute_speedups(std::vector<Result>& results, const std::map<unsigned, double>& compute_rates = {});
 void print_table(const std::vector<Result>& results);
 void print_csv(const std::vector<Result>& results);
 void print_json(const std::vector<Result>& results, std::FILE* out = stdout);

@@ -105,7 +105,8 @@ int main(int argc, char** argv) {
     app.add_flag("--reuse-mesh", settings.reuse_mesh,
                  "mesh every run into one kept Mesh with extract_into() (no fresh output pages), not extract()");
     app.add_flag("--interleave", settings.interleave,
-                 "an input's combinations take turns run by run (robust ratios on a machine whose speed drifts); the floor is read after each run");
+                 "an input's combinations take turns run by run (robust ratios on a machine whose speed drifts); the "
+                 "floor is read after each run");
     app.add_flag("--setup-first", settings.setup_first,
                  "before its runs, each combination meshes the volume's first 3 z-planes once (OpenCL runtime and "
                  "program builds paid there; its memory is printed as a note)");
@@ -281,16 +282,14 @@ int main(int argc, char** argv) {
                 std::fflush(stderr);
                 Result r = settings.interleave ? std::move(interleaved[ci]) : measure(in, c, settings);
                 if (r.status == "interrupted") break;
-                if (r.floor_in_rounds) {
-                    if (r.status == "ok" && r.floor_s > 0) r.floor_ratio = r.median_s / r.floor_s;
-                } else if (!no_floor && !g_interrupted) {
+                if (!r.floor_in_rounds && !no_floor && !g_interrupted) {  // else read between the runs
                     auto it = floors.find(c.threads);
                     if (it == floors.end())
                         it = floors.emplace(c.threads, streaming_floor(in.volume.view(), c.threads, settings.repeat,
                                                                        1)).first;
                     r.floor_s = it->second;
-                    if (r.status == "ok" && r.floor_s > 0) r.floor_ratio = r.median_s / r.floor_s;
                 }
+                if (r.status == "ok" && r.floor_s > 0) r.floor_ratio = r.median_s / r.floor_s;
                 if (!settings.quiet) {
                     if (r.status == "ok")
                         std::fprintf(stderr, " %.4f s median, %zu triangles, %.2fx floor\n", r.median_s, r.triangles,
@@ -307,20 +306,20 @@ int main(int argc, char** argv) {
         // The machine's own speed-up per thread count, beside the measured ones (when there are two
         // or more counts to compare). Counts above the cores get the ceiling of all cores: the CPU
         // engine starts no more workers than cores, whatever Options::threads asks for.
-        std::map<unsigned, double> ceilings;
-        for (const auto& r : results) ceilings.emplace(r.threads, 0.0);
-        if (ceilings.size() > 1 && !g_interrupted) {
+        std::map<unsigned, double> rates;
+        for (const auto& r : results) rates.emplace(r.threads, 0.0);
+        if (rates.size() > 1 && !g_interrupted) {
             std::map<unsigned, double> measured;
-            for (auto& [count, ceiling] : ceilings) {
+            for (auto& [count, rate] : rates) {
                 const unsigned running = std::clamp(count, 1u, hardware_threads());
                 auto it = measured.find(running);
-                if (it == measured.end()) it = measured.emplace(running, compute_speedup(running)).first;
-                ceiling = it->second;
+                if (it == measured.end()) it = measured.emplace(running, compute_rate(running)).first;
+                rate = it->second;
             }
         } else {
-            ceilings.clear();
+            rates.clear();
         }
-        compute_speedups(results, ceilings);
+        compute_speedups(results, rates);
         if (!save_path.empty()) {
             std::FILE* f = std::fopen(save_path.c_str(), "w");
             if (!f) throw voxmesh::Error("cannot write '" + save_path + "'");

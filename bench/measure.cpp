@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <sstream>
 #include <thread>
@@ -54,68 +55,48 @@ std::uint64_t sum_words(const unsigned char* p, std::size_t bytes) {
 
 volatile std::uint64_t g_sink = 0;
 
-// The wall time of one round of work shared by threads: from the first thread's start to the
-// last one's end. Not timed on one thread from the barrier: with more threads than cores that
-// thread may start long after the others (its clock would miss their work).
-class Span {
-public:
-    explicit Span(unsigned threads) : start_(threads), end_(threads) {}
-    void start(unsigned w) { start_[w] = now_s(); }
-    void end(unsigned w) { end_[w] = now_s(); }
-    // After a barrier that every thread reached after end().
-    double seconds() const {
-        return *std::max_element(end_.begin(), end_.end()) - *std::min_element(start_.begin(), start_.end());
-    }
-
-private:
-    std::vector<double> start_, end_;
-};
-
-// Reads of the whole volume by `threads` threads, each its contiguous share (like the
-// engine's z-slabs), started together at a barrier so that no read includes starting a
-// thread; the seconds of each of warmup + repeat reads, from the first thread's start to the
-// last one's end (Span).
-std::vector<double> floor_reads(const voxmesh::VolumeView& view, unsigned threads, int warmup, int repeat) {
-    const std::size_t bytes = voxmesh::scalar_size(view.type) * view.dims[0] * view.dims[1] * view.dims[2];
-    const auto* base = static_cast<const unsigned char*>(view.data);
-    const int rounds = warmup + std::max(1, repeat);
+// The seconds of each of `rounds` rounds of work(w, round) on `threads` threads, started once
+// and released together at a barrier each round (so no round includes starting a thread),
+// from the first thread's start to the last one's end. Not timed on one thread from the
+// barrier: with more threads than cores that thread may start long after the others.
+std::vector<double> timed_rounds(unsigned threads, int rounds, const std::function<void(unsigned, int)>& work) {
     std::vector<double> seconds(static_cast<std::size_t>(rounds));
-    std::vector<std::uint64_t> partial(threads);
-    Span spans(threads);
+    std::vector<double> start(threads), end(threads);
     std::barrier sync(static_cast<std::ptrdiff_t>(threads));
-    auto work = [&](unsigned w) {
-        const std::size_t b = bytes * w / threads / 64 * 64;
-        const std::size_t e = w + 1 == threads ? bytes : bytes * (w + 1) / threads / 64 * 64;
+    auto worker = [&](unsigned w) {
         for (int r = 0; r < rounds; ++r) {
             sync.arrive_and_wait();
-            spans.start(w);
-            partial[w] = sum_words(base + b, e - b);
-            spans.end(w);
-            sync.arrive_and_wait();
-            if (w != 0) continue;
-            seconds[static_cast<std::size_t>(r)] = spans.seconds();
-            std::uint64_t s = 0;  // the others write theirs again only after the next barrier
-            for (std::uint64_t p : partial) s += p;
-            g_sink = g_sink + s;
+            start[w] = now_s();
+            work(w, r);
+            end[w] = now_s();
+            sync.arrive_and_wait();  // the others write start again only after the next one
+            if (w == 0)
+                seconds[static_cast<std::size_t>(r)] =
+                    *std::max_element(end.begin(), end.end()) - *std::min_element(start.begin(), start.end());
         }
     };
     std::vector<std::thread> pool;
-    for (unsigned w = 1; w < threads; ++w) pool.emplace_back(work, w);
-    work(0);
+    for (unsigned w = 1; w < threads; ++w) pool.emplace_back(worker, w);
+    worker(0);
     for (auto& t : pool) t.join();
-    seconds.erase(seconds.begin(), seconds.begin() + warmup);
     return seconds;
 }
 
-}  // namespace
-
-double streaming_floor(const voxmesh::VolumeView& view, unsigned threads, int repeat, int warmup) {
-    return median(floor_reads(view, std::max(1u, threads), std::max(0, warmup), repeat));
+// Reads of the whole volume by `threads` threads, each its contiguous share (like the
+// engine's z-slabs); the seconds of each of warmup + repeat reads (timed_rounds).
+std::vector<double> floor_reads(const voxmesh::VolumeView& view, unsigned threads, int warmup, int repeat) {
+    const std::size_t bytes = voxmesh::scalar_size(view.type) * view.dims[0] * view.dims[1] * view.dims[2];
+    const auto* base = static_cast<const unsigned char*>(view.data);
+    std::vector<std::uint64_t> sums(threads);
+    std::vector<double> seconds = timed_rounds(threads, warmup + std::max(1, repeat), [&](unsigned w, int) {
+        const std::size_t b = bytes * w / threads / 64 * 64;
+        const std::size_t e = w + 1 == threads ? bytes : bytes * (w + 1) / threads / 64 * 64;
+        sums[w] += sum_words(base + b, e - b);
+    });
+    for (std::uint64_t s : sums) g_sink = g_sink + s;  // consumed: the reads cannot be dropped
+    seconds.erase(seconds.begin(), seconds.begin() + warmup);
+    return seconds;
 }
-
-// ---- compute ceiling -----------------------------------------------------------------------
-
-namespace {
 
 // A dependent chain of multiplies and shifts: a few cycles an iteration on any core, no loads.
 std::uint64_t spin(std::uint64_t iterations, std::uint64_t x) {
@@ -126,41 +107,26 @@ std::uint64_t spin(std::uint64_t iterations, std::uint64_t x) {
     return x;
 }
 
-// Seconds for `threads` threads to share `iterations` (started together at a barrier, like
-// floor_reads), one per round.
-std::vector<double> spin_rounds(unsigned threads, std::uint64_t iterations, int rounds) {
-    std::vector<double> seconds(static_cast<std::size_t>(rounds));
-    std::vector<std::uint64_t> results(threads);
-    Span spans(threads);
-    std::barrier sync(static_cast<std::ptrdiff_t>(threads));
-    auto work = [&](unsigned w) {
-        for (int r = 0; r < rounds; ++r) {
-            sync.arrive_and_wait();
-            spans.start(w);
-            results[w] += spin(iterations / threads, w + r + 1);
-            spans.end(w);
-            sync.arrive_and_wait();
-            if (w == 0) seconds[static_cast<std::size_t>(r)] = spans.seconds();
-        }
-    };
-    std::vector<std::thread> pool;
-    for (unsigned w = 1; w < threads; ++w) pool.emplace_back(work, w);
-    work(0);
-    for (auto& t : pool) t.join();
-    for (std::uint64_t x : results) g_sink = g_sink + x;  // consumed: the chains cannot be dropped
-    seconds.erase(seconds.begin());  // the first round warms up
-    return seconds;
-}
-
 }  // namespace
 
-double compute_speedup(unsigned threads) {
+double streaming_floor(const voxmesh::VolumeView& view, unsigned threads, int repeat, int warmup) {
+    return median(floor_reads(view, std::max(1u, threads), std::max(0, warmup), repeat));
+}
+
+// ---- compute ceiling -----------------------------------------------------------------------
+
+double compute_rate(unsigned threads) {
     constexpr std::uint64_t kIterations = 4'000'000;  // about 10 ms on one core
-    constexpr int kRounds = 8;
+    constexpr int kRounds = 8;                        // the first warms up
     threads = std::max(1u, threads);
-    const double one = median(spin_rounds(1, kIterations, kRounds));
-    const double many = threads == 1 ? one : median(spin_rounds(threads, kIterations, kRounds));
-    return many > 0 ? one / many : 0;
+    std::vector<std::uint64_t> chains(threads);
+    std::vector<double> seconds = timed_rounds(threads, kRounds, [&](unsigned w, int r) {
+        chains[w] += spin(kIterations / threads, w + static_cast<unsigned>(r) + 1);
+    });
+    for (std::uint64_t x : chains) g_sink = g_sink + x;  // consumed: the chains cannot be dropped
+    seconds.erase(seconds.begin());
+    const double t = median(seconds);
+    return t > 0 ? 1 / t : 0;
 }
 
 // ---- memory --------------------------------------------------------------------------------
@@ -367,7 +333,8 @@ std::vector<Result> measure_interleaved(const Input& input, const std::vector<Co
         for (std::size_t step = 0; step < n; ++step) {
             const std::size_t k = i % 2 ? n - 1 - step : step;  // forward, then backward
             runners[k]->run(true);
-            if (settings.floor_in_rounds) floors[k].push_back(floor_reads(view, std::max(1u, combos[k].threads), 0, 1)[0]);
+            if (settings.floor_in_rounds)
+                floors[k].push_back(floor_reads(view, std::max(1u, combos[k].threads), 0, 1)[0]);
         }
     std::vector<Result> out;
     for (std::size_t k = 0; k < n; ++k) {

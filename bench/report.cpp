@@ -65,7 +65,7 @@ std::string backend_label(const Result& r) {
 
 }  // namespace
 
-void compute_speedups(std::vector<Result>& results, const std::map<unsigned, double>& ceilings) {
+void compute_speedups(std::vector<Result>& results, const std::map<unsigned, double>& compute_rates) {
     std::map<std::string, const Result*> base;
     for (const auto& r : results) {
         if (r.status != "ok") continue;
@@ -78,8 +78,8 @@ void compute_speedups(std::vector<Result>& results, const std::map<unsigned, dou
         if (b && r.median_s > 0) {
             r.speedup = b->median_s / r.median_s;
             r.speedup_base_threads = b->threads;
-            const auto at = ceilings.find(r.threads), base_at = ceilings.find(b->threads);
-            if (at != ceilings.end() && base_at != ceilings.end() && base_at->second > 0)
+            const auto at = compute_rates.find(r.threads), base_at = compute_rates.find(b->threads);
+            if (at != compute_rates.end() && base_at != compute_rates.end() && base_at->second > 0)
                 r.compute_ceiling = at->second / base_at->second;
             if (r.floor_s > 0 && b->floor_s > 0) r.floor_speedup = b->floor_s / r.floor_s;
         }
@@ -110,8 +110,8 @@ void print_table(const std::vector<Result>& results) {
                     "%6.1f %8.4f %8.4f %8.4f %8s %8s\n",
                     r.field.c_str(), r.type.c_str(), r.size_label().c_str(), backend_label(r).c_str(),
                     r.device.c_str(), r.threads, r.median_s, r.min_s, r.max_s, r.mvox_s, r.triangles, r.floor_s,
-                    r.floor_ratio, speed.c_str(), ceiling.c_str(), floor_speed.c_str(), r.peak_rss_mb, r.extract_rss_mb, over, r.classify_s, r.scan_s,
-                    r.generate_s, kernel.c_str(), transfer.c_str());
+                    r.floor_ratio, speed.c_str(), ceiling.c_str(), floor_speed.c_str(), r.peak_rss_mb,
+                    r.extract_rss_mb, over, r.classify_s, r.scan_s, r.generate_s, kernel.c_str(), transfer.c_str());
         if (r.setup_rss_mb >= 0)
             std::printf("    note: set-up (--setup-first, the first 3 z-planes meshed once before the runs) took %.0f MB\n",
                         r.setup_rss_mb);
@@ -128,9 +128,10 @@ void print_table(const std::vector<Result>& results) {
             }
         std::printf("\nmedian/min/max: end-to-end %s seconds over %d runs after %d warmup%s; x_floor: median / "
                     "streaming floor (one threaded read of the volume%s); speed: vs the fewest threads of the same "
-                    "series; ceil: the same for a compute-only loop on at most as many threads as cores (the machine's ceiling; "
-                    "the CPU engine runs no more workers than cores); fl_sp: the same for the streaming floor; rss_MB: process peak RSS while extracting (%s); ext_MB: that peak minus RSS before the "
-                    "call; over%%: ext_MB minus the mesh, in %% of volume + mesh (a fresh process: --repeat 1 "
+                    "series; ceil: the same for a compute-only loop on at most as many threads as cores (the "
+                    "machine's ceiling; the CPU engine runs no more workers than cores); fl_sp: the same for the "
+                    "streaming floor; rss_MB: process peak RSS while extracting (%s); ext_MB: that peak minus RSS "
+                    "before the call; over%%: ext_MB minus the mesh, in %% of volume + mesh (a fresh process: --repeat 1 "
                     "--warmup 0); classify/scan/generate: Stats pass medians; kernel/transfer: OpenCL device time.\n\n",
                     first->reuse_mesh ? "extract_into() (one Mesh reused across runs, --reuse-mesh)" : "extract()",
                     first->repeat, first->warmup,
@@ -144,9 +145,8 @@ void print_table(const std::vector<Result>& results) {
 void print_csv(const std::vector<Result>& results) {
     std::printf("field,type,size,nx,ny,nz,iso,backend,backend_ran,device,device_names,threads,normals,repeat,warmup,"
                 "status,error,median_s,min_s,max_s,classify_s,scan_s,generate_s,total_s,kernel_s,transfer_s,"
-                "triangles,vertices,mvox_s,floor_s,floor_ratio,speedup,speedup_base_threads,compute_ceiling,floor_speedup,"
-                "peak_rss_mb,"
-                "extract_rss_mb,rss_scope,volume_mb,mesh_mb,warnings\n");
+                "triangles,vertices,mvox_s,floor_s,floor_ratio,speedup,speedup_base_threads,compute_ceiling,"
+                "floor_speedup,peak_rss_mb,extract_rss_mb,rss_scope,volume_mb,mesh_mb,warnings\n");
     for (const auto& r : results) {
         std::ostringstream o;
         o << csv_field(r.field) << ',' << r.type << ',' << r.size_label() << ',' << r.dims[0] << ',' << r.dims[1]
