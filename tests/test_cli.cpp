@@ -1,4 +1,5 @@
 // Runs the built `voxmesh` binary on real files and on bad input.
+#include <algorithm>
 #include <catch2/catch.hpp>
 
 #ifdef VOXMESH_CLI_PATH
@@ -55,9 +56,11 @@ struct Result {
     std::string out, err;
 };
 
-Result run(const Scratch& s, const std::string& args) {
+// `env`: NAME=value assignments for the command's environment (the shell's prefix form).
+Result run(const Scratch& s, const std::string& args, const std::string& env = "") {
     const std::string out = s.path("stdout.txt"), err = s.path("stderr.txt");
-    const std::string cmd = quote(VOXMESH_CLI_PATH) + " " + args + " > " + quote(out) + " 2> " + quote(err);
+    const std::string cmd = (env.empty() ? "" : env + " ") + quote(VOXMESH_CLI_PATH) + " " + args + " > " + quote(out) +
+                            " 2> " + quote(err);
     const int status = std::system(cmd.c_str());
     Result r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -180,6 +183,46 @@ TEST_CASE("cli: voxelize then mesh round trip on a real STL", "[cli]") {
     REQUIRE(b.code == 0);
     CHECK(b.out.find("closed (euler 2)") != std::string::npos);
     CHECK(run(s, "info " + quote(raw) + " --dims 16 16 16 --type f32").code == 0);
+}
+
+// The AVX2 row packers, the AVX2/BMI copy of the generator and the batched normals must give
+// the portable code's bits (no fused multiply-adds; IEEE divide and square root), for every
+// sample type's packer: the [core] tests under VOXMESH_ISA=portable only compare with the
+// oracle within a tolerance. On a processor without AVX2 both runs are portable.
+TEST_CASE("cli: the AVX2 and portable code paths write identical files", "[cli]") {
+    Scratch s;
+    std::vector<float> wave(37 * 41 * 43);
+    for (int z = 0; z < 43; ++z)
+        for (int y = 0; y < 41; ++y)
+            for (int x = 0; x < 37; ++x)
+                wave[x + 37 * (y + 41 * z)] = std::sin(0.31f * x) * std::cos(0.23f * y) + std::sin(0.17f * z + 0.4f * x) +
+                                              0.013f * float((x * 7 + y * 13 + z * 29) % 11);
+    const std::string raw = s.write("wave.raw", f32_bytes(wave));
+    const std::vector<std::string> inputs = {
+        quote(data_file("headsq.nrrd")) + " --iso 499.5",                    // i16, a real CT
+        quote(data_file("mri_someones_anatomy.nii.gz")) + " --iso 19.5",     // u8, a real MRI
+        quote(raw) + " --dims 37 41 43 --type f32 --iso 0.1 --spacing 0.5 0.75 1.25",
+    };
+    for (const std::string& input : inputs)
+        for (const char* threads : {"1", "2"}) {
+            INFO(input << " --threads " << threads);
+            const std::string native = s.path("native.ply"), portable = s.path("portable.ply");
+            const std::string args = " --backend cpu --threads " + std::string(threads);
+            const Result a = run(s, "mesh " + input + " -o " + quote(native) + args);
+            INFO(a.err);
+            REQUIRE(a.code == 0);
+            const Result b = run(s, "mesh " + input + " -o " + quote(portable) + args, "VOXMESH_ISA=portable");
+            INFO(b.err);
+            REQUIRE(b.code == 0);
+            CHECK(a.out.find("triangles") != std::string::npos);
+            // Positions and normals bit for bit, and the indices.
+            const std::string x = slurp(native), y = slurp(portable);
+            CHECK(x.size() > 1000);
+            CHECK(x.size() == y.size());
+            const auto diff = std::mismatch(x.begin(), x.end(), y.begin(), y.end());
+            INFO("first differing byte: " << (diff.first - x.begin()) << " of " << x.size());
+            CHECK((diff.first == x.end() && diff.second == y.end()));
+        }
 }
 
 TEST_CASE("cli: bad input exits 2 with a message and leaves no output", "[cli]") {
