@@ -376,6 +376,7 @@ private:
             Id* id = ids_.row(half, j);
             std::uint32_t next_id = base;
             const WordSpan span = row_words(rows[j]);
+            const typename EdgeVertex<T>::Row vertex_row = vertex_.row(j, z);
             for (std::size_t q = span.begin; q < span.end; ++q) {
                 const EdgeMasks m = edge_masks(row, next_y, next_z, q, words_, nx_);
                 for (Word any = m.any(); any; any &= any - 1) {
@@ -384,7 +385,7 @@ private:
                     const unsigned c = static_cast<unsigned>((m.x >> r & 1) | (m.y >> r & 1) << 1 | (m.z >> r & 1) << 2);
                     if (write_vertices) {
                         const std::size_t at = 3 * static_cast<std::size_t>(next_id);
-                        vertex_.sample(i, j, z, c, out_.positions + at, normals);
+                        vertex_.sample(vertex_row, i, c, out_.positions + at, normals);
                     }
                     // All three slots, without branches: a slot whose edge does not cross is never read.
                     for (unsigned axis = 0; axis < 3; ++axis) {

@@ -62,6 +62,30 @@ public:
           sign_(inside_below ? 1.0 : -1.0),
           inside_below_(inside_below) {}
 
+    // What the samples of row (j, k) share, computed once per row.
+    struct Row {
+        std::size_t j, k, base;  // base: the index of sample (0, j, k)
+        double index_y, index_z;
+        float on_y, on_z;        // the coordinates its vertices keep off their edge's axis
+        bool interior;           // j and k away from the border (see away_from_border)
+        bool ahead3, ahead2;     // planes k + 3 and k + 2 (with rows j -/+ 1) exist: prefetch them
+    };
+
+    Row row(std::size_t j, std::size_t k) const {
+        Row r;
+        r.j = j;
+        r.k = k;
+        r.base = j * stride_[1] + k * stride_[2];
+        r.index_y = to_double(j);
+        r.index_z = to_double(k);
+        r.on_y = static_cast<float>(origin_[1] + r.index_y * spacing_[1]);
+        r.on_z = static_cast<float>(origin_[2] + r.index_z * spacing_[2]);
+        r.interior = away_from_border(j, n_[1]) && away_from_border(k, n_[2]);
+        r.ahead3 = k + 3 < n_[2];
+        r.ahead2 = k + 2 < n_[2] && j >= 1 && j + 1 < n_[1];
+        return r;
+    }
+
     // Writes the vertices of the crossed edges sample (i, j, k) owns, in axis order x, y, z:
     // bit a of `axes` set for a crossed edge along axis a, vertex v at position[3v] and
     // normal[3v]; normal may be null. The sample's own value and gradient are shared by its
@@ -75,26 +99,32 @@ public:
     // (see normalise_normal) in vertex order; normals may be null.
     template <class Normals>
     void sample(std::size_t i, std::size_t j, std::size_t k, unsigned axes, float* position, Normals* normal) const {
-        const std::size_t at0[3] = {i, j, k};
-        const std::size_t idx0 = i + j * stride_[1] + k * stride_[2];
+        sample(row(j, k), i, axes, position, normal);
+    }
+
+    // The same for sample i of a row from row(j, k): what only depends on the row is not
+    // computed again per sample (the same operations, so the same bits).
+    template <class Normals>
+    void sample(const Row& r, std::size_t i, unsigned axes, float* position, Normals* normal) const {
+        const std::size_t at0[3] = {i, r.j, r.k};
+        const std::size_t idx0 = i + r.base;
         const double v0 = static_cast<double>(data_[idx0]);
         // Gradients here read neighbours one and two planes up; the first reads of a line there
         // come one plane from now (the sample three planes up, the rows beside the one two
         // planes up), long after classify evicted it: ask for them now (-20 % generate time,
         // one thread, sphere f32 512³).
-        if (k + 3 < n_[2]) prefetch(data_ + idx0 + 3 * stride_[2]);
-        if (k + 2 < n_[2] && j >= 1 && j + 1 < n_[1]) {
+        if (r.ahead3) prefetch(data_ + idx0 + 3 * stride_[2]);
+        if (r.ahead2) {
             prefetch(data_ + idx0 + 2 * stride_[2] - stride_[1]);
             prefetch(data_ + idx0 + 2 * stride_[2] + stride_[1]);
         }
         // Coordinates off the edge's axis are the sample's own (index + 0 * t: the same bits).
         // Indices convert through int64_t: one instruction, where size_t takes several.
-        const double index[3] = {to_double(i), to_double(j), to_double(k)};
-        float on_sample[3];
-        for (unsigned d = 0; d < 3; ++d) on_sample[d] = static_cast<float>(origin_[d] + index[d] * spacing_[d]);
+        const double index[3] = {to_double(i), r.index_y, r.index_z};
+        const float on_sample[3] = {static_cast<float>(origin_[0] + index[0] * spacing_[0]), r.on_y, r.on_z};
         // Away from the border (both ends of every edge at least one sample in) the gradients
         // are plain central differences, computed without the per-axis border tests.
-        const bool interior = away_from_border(i, n_[0]) && away_from_border(j, n_[1]) && away_from_border(k, n_[2]);
+        const bool interior = r.interior && away_from_border(i, n_[0]);
         double g0[3] = {0, 0, 0};
         if (normal) {
             if (interior) central_gradient(idx0, g0);
@@ -110,7 +140,7 @@ public:
                 if (interior) {
                     central_gradient(idx1, g1);
                 } else {
-                    std::size_t at1[3] = {i, j, k};
+                    std::size_t at1[3] = {i, r.j, r.k};
                     ++at1[axis];
                     gradient(idx1, at1, g1);
                 }
