@@ -3,11 +3,14 @@
 # backends, scaling (extract(), then extract_into(), then one process per thread count),
 # peers. Run from the repository root with a Release build in build/ and nothing else
 # running; outputs go to the directory given. SCALING_FLOOR=0 skips the streaming floor (and
-# so fl_sp) in the two interleaved thread runs, as the thirteenth session ran them.
+# so fl_sp) in the two interleaved thread runs, as the thirteenth session ran them;
+# BACKENDS_WARMUP=1 gives the CPU vs OpenCL run one warm-up call, as the thirteenth to
+# fifteenth sessions ran it (default 3).
 set -euo pipefail
 out=${1:?usage: bench/measure_targets.sh OUTDIR}
 scaling_floor=()
 [[ "${SCALING_FLOOR:-1}" == 0 ]] && scaling_floor=(--no-floor)
+backends_warmup=${BACKENDS_WARMUP:-3}
 mkdir -p "$out"
 bench=build/bench/voxmesh-bench
 git rev-parse --short HEAD > "$out/commit.txt"
@@ -19,10 +22,10 @@ for run in 1 2 3; do
   echo "### run $run extract_into()" >> "$out/floor_runs.txt"
   $bench --field sphere --type f32,u8 --sizes 512 --threads 2 --repeat 9 --warmup 1 --reuse-mesh -q >> "$out/floor_runs.txt"
 done
-# Three warm-up calls: on PoCL a process's first few calls can take twice the steady time
-# (bench/NOTES.md, fifteenth session); the fifteenth session's runs and earlier used one.
+# Three warm-up calls by default: on PoCL a process's first few calls can take twice the
+# steady time (bench/NOTES.md, fifteenth session).
 $bench --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 2 --backends cpu,opencl,hybrid --interleave \
-  --repeat 7 --warmup 3 -q > "$out/backends.txt"
+  --repeat 7 --warmup "$backends_warmup" -q > "$out/backends.txt"
 # With the streaming floor on, its fl_sp column (and ceil, a compute-only loop) give what the
 # machine itself gains from each thread count, beside the engine's speed-up.
 $bench --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 1,2,4,6,16 --interleave --repeat 7 \

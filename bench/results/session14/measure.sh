@@ -1,4 +1,5 @@
 #!/bin/bash
-# The fourteenth session's runs: bench/measure_targets.sh with the floor in the thread runs.
+# The fourteenth session's runs: bench/measure_targets.sh with the floor in the thread runs and
+# one warm-up call in the CPU vs OpenCL run, as they ran.
 # Run from the repository root; outputs go to the directory given (default: beside this script).
-exec bash "$(dirname "$0")/../../measure_targets.sh" "${1:-$(dirname "$0")}"
+BACKENDS_WARMUP=1 exec bash "$(dirname "$0")/../../measure_targets.sh" "${1:-$(dirname "$0")}"
