@@ -593,6 +593,10 @@ TEST_CASE("Two OpenCL devices share the chunks", "[opencl]") {
     const VolumeView v = view_of(f.data(), ScalarType::F32, g);
     Options o;
     o.chunk_planes = 2;
+    // A first call pays each sub-device's set-up (program builds, PoCL's slow first calls):
+    // otherwise one can pull all 45 small chunks before the other starts (one sub-device got
+    // none once, under ASan in a clean-clone CI run).
+    run(v, o, Backend::OpenCL);
     Stats stats;
     const Mesh cl = run(v, o, Backend::OpenCL, &stats);
     detail::opencl_split_devices(false);
