@@ -593,12 +593,13 @@ TEST_CASE("Two OpenCL devices share the chunks", "[opencl]") {
     const VolumeView v = view_of(f.data(), ScalarType::F32, g);
     Options o;
     o.chunk_planes = 2;
-    // A first call pays each sub-device's set-up (program builds, PoCL's slow first calls):
-    // otherwise one can pull all 45 small chunks before the other starts (one sub-device got
-    // none once, under ASan in a clean-clone CI run).
-    run(v, o, Backend::OpenCL);
+    // Chunks are pulled by whichever device is free, so one sub-device can take all 45 before
+    // the other has finished its first (it happened once, under ASan in a clean-clone CI run):
+    // the hook deals each device its first chunk before any takes a second.
+    detail::opencl_deal_first_chunks(true);
     Stats stats;
     const Mesh cl = run(v, o, Backend::OpenCL, &stats);
+    detail::opencl_deal_first_chunks(false);
     detail::opencl_split_devices(false);
     require_same(run(v, Options{}, Backend::Cpu), cl, v);
     REQUIRE(stats.devices.size() == devices.size());

@@ -30,6 +30,7 @@
 #include <chrono>
 #include <climits>
 #include <cmath>
+#include <condition_variable>
 #include <exception>
 #include <limits>
 #include <map>
@@ -63,6 +64,9 @@ std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths o
 std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
 // Test hook: a slower device (per chunk counted, per piece generated), a slower CPU worker.
 std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{0};
+// Test hook: every device takes its first chunk before any takes a second (the chunks are
+// otherwise pulled, so which device counts how many depends on timing).
+std::atomic<bool> g_deal_first_chunks{false};
 
 void pretend_slow(const std::atomic<double>& seconds) {
     if (const double s = seconds; s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(s));
@@ -192,6 +196,7 @@ struct DeviceJob {
     std::size_t local = kLocalSize;            // work-group size of every launch
     std::size_t word_id_bytes = 4;             // of the per-word vertex id bases (2 or 4)
     std::size_t pieces_counted = 0;            // in this call
+    std::size_t fronts_taken = 0;              // times take_front gave it chunks, in this call
     std::size_t resident_bytes = 0;            // of pieces' own samples and bits
     // The range whose samples / bits the kData / kBits buffers hold now (empty: none), and
     // those buffers' handles then: generate uploads or packs again only when they differ.
@@ -283,6 +288,7 @@ private:
     // Chunks not taken yet: [lo_, hi_). Devices take from the front, Hybrid's CPU worker runs
     // of chunks from the back (hybrid_schedule.hpp); the estimates beside them, in seconds.
     std::mutex queue_mutex_;
+    std::condition_variable dealt_;  // a device took its first chunk (g_deal_first_chunks)
     std::size_t lo_ = 0, hi_ = 0;
     std::vector<DeviceJob>* jobs_ = nullptr;
     double cpu_count_chunk_s_ = 0;  // the CPU worker's latest run, per chunk
@@ -464,7 +470,14 @@ std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) cons
 }
 
 bool Engine::take_front(DeviceJob& job, std::size_t& first, std::size_t& count) {
-    std::lock_guard<std::mutex> lock(queue_mutex_);
+    std::unique_lock<std::mutex> lock(queue_mutex_);
+    if (g_deal_first_chunks && !hybrid_ && job.fronts_taken > 0) {
+        // A device that failed before taking a chunk must not hang the others: a time limit.
+        dealt_.wait_for(lock, std::chrono::seconds(10), [&] {
+            return abort_ || lo_ >= hi_ ||
+                   std::all_of(jobs_->begin(), jobs_->end(), [](const DeviceJob& j) { return j.fronts_taken > 0; });
+        });
+    }
     if (abort_ || lo_ >= hi_) return false;
     first = lo_;
     count = 1;
@@ -488,6 +501,7 @@ bool Engine::take_front(DeviceJob& job, std::size_t& first, std::size_t& count) 
         if (!hybrid_device_takes(job.count_chunk_s, cpu_count_chunk_s_, cpu_busy_s, hi_ - lo_)) return false;
     }
     lo_ += 1;
+    if (++job.fronts_taken == 1) dealt_.notify_all();
     return true;
 }
 
@@ -1169,6 +1183,8 @@ void opencl_pretend_no_fp64(bool pretend) { g_pretend_no_fp64 = pretend; }
 void opencl_pretend_discrete(bool pretend) { g_pretend_discrete = pretend; }
 
 void opencl_staging_block_bytes(std::size_t bytes) { cl_engine::set_staging_block_bytes(bytes); }
+
+void opencl_deal_first_chunks(bool deal) { g_deal_first_chunks = deal; }
 
 void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s) {
     g_slow_count_s = count_s;
