@@ -338,11 +338,11 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
 
 // The id of the vertex on the edge along `axis` from bit b of a word whose masks are m and
 // whose first vertex is base.
-inline uint edge_id(uint base, EdgeMasks m, uint b, uint axis) {
+inline uint edge_id(uint base, uint mx, uint my, uint mz, uint b, uint axis) {
     const uint below = (1u << b) - 1u;
-    uint id = base + popcount(m.x & below) + popcount(m.y & below) + popcount(m.z & below);
-    if (axis > 0) id += m.x >> b & 1u;
-    if (axis > 1) id += m.y >> b & 1u;
+    uint id = base + popcount(mx & below) + popcount(my & below) + popcount(mz & below);
+    if (axis > 0) id += mx >> b & 1u;
+    if (axis > 1) id += my >> b & 1u;
     return id;
 }
 
@@ -350,16 +350,17 @@ inline uint edge_id(uint base, EdgeMasks m, uint b, uint axis) {
 // word q (see generate_triangles).
 // word_first[k]: the id of word q's first vertex in row k.
 ALWAYS_INLINE inline uint corner_id(uint code, uint b, uint q, const uint* word_first, const uint* row_first,
-                                    __global const word_id* const* word_base, const EdgeMasks* m,
+                                    __global const word_id* const* word_base, const uint* mx, const uint* my,
+                                    const uint* mz,
                                     __global const uint* const* row, __global const uint* const* ry,
                                     __global const uint* const* rz, uint words, uint nx) {
     const uint k = code >> 1 & 3u;
     const uint axis = code >> 3;
     const uint x = b + (code & 1u);
-    if (x < 32) return edge_id(word_first[k], m[k], x, axis);
+    if (x < 32) return edge_id(word_first[k], mx[k], my[k], mz[k], x, axis);
     // the first sample of the next word
     const EdgeMasks next = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
-    return edge_id(row_first[k] + word_base[k][q + 1], next, 0, axis);
+    return edge_id(row_first[k] + word_base[k][q + 1], next.x, next.y, next.z, 0, axis);
 }
 
 // One work-item per cell row with triangles. Cell row (y, z) is spanned by sample rows
@@ -402,10 +403,17 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
             const CellWord w = cell_word(row[0], row[1], row[2], row[3], q, words);
             uint cells = nonuniform(w, q, nx);
             if (!cells) continue;
-            EdgeMasks m[4];
-            uint word_first[4];  // loaded once per word, not once per corner (a load chain each)
+            // Per row, the word's edge masks and first id: loaded once per word, not once per
+            // corner (a load chain each). Three arrays, not one of EdgeMasks: PoCL read a
+            // corner's x and y masks as one 8-byte load of two 4-byte stores made just before,
+            // a store-forwarding stall (-3 % generate, PoCL, u8 and f32, sphere and gyroid).
+            uint mx[4], my[4], mz[4];
+            uint word_first[4];
             for (uint k = 0; k < 4; ++k) {
-                m[k] = edge_masks(row[k], ry[k], rz[k], q, words, nx);
+                const EdgeMasks m = edge_masks(row[k], ry[k], rz[k], q, words, nx);
+                mx[k] = m.x;
+                my[k] = m.y;
+                mz[k] = m.z;
                 word_first[k] = row_first[k] + word_base[k][q];
             }
             for (; cells; cells &= cells - 1) {
@@ -417,9 +425,9 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
                     // time and reloaded two lanes as one vector for the stores below, a
                     // store-forwarding stall per triangle (a third of this kernel's time).
                     __constant uchar* code = corners + 1 + 3 * tri;
-                    const uint i0 = corner_id(code[0], b, q, word_first, row_first, word_base, m, row, ry, rz, words, nx);
-                    const uint i1 = corner_id(code[1], b, q, word_first, row_first, word_base, m, row, ry, rz, words, nx);
-                    const uint i2 = corner_id(code[2], b, q, word_first, row_first, word_base, m, row, ry, rz, words, nx);
+                    const uint i0 = corner_id(code[0], b, q, word_first, row_first, word_base, mx, my, mz, row, ry, rz, words, nx);
+                    const uint i1 = corner_id(code[1], b, q, word_first, row_first, word_base, mx, my, mz, row, ry, rz, words, nx);
+                    const uint i2 = corner_id(code[2], b, q, word_first, row_first, word_base, mx, my, mz, row, ry, rz, words, nx);
                     out[0] = i0;
                     out[1] = inside_below ? i2 : i1;
                     out[2] = inside_below ? i1 : i2;
