@@ -3,7 +3,7 @@
 //   classify_rows       per row: crossed edges it owns, triangles of the cell row it starts
 //   (scan.cl)           exclusive prefix sums over rows: every vertex and triangle its index
 //   generate_vertices   per row with crossings: its vertices, in x then axis order
-//   generate_triangles  per cell row with triangles: its triangles, corner ids by popcounts
+//   generate_triangles  per cell row with triangles: its triangles, each cell's edge ids by popcounts
 // No per-sample bytes are stored: later passes re-derive edges and cases from the bits.
 //
 // The host builds it behind edge_vertex.cl (types, build options, the vertex formula).
@@ -45,15 +45,6 @@ typedef CAT(VOXEL_T, 16) voxel16;
 #endif
 #ifndef PREFETCH
 #define PREFETCH(p) ((void)0)
-#endif
-
-// PoCL's CPU compiler left a helper called per triangle corner out of line (19 % of
-// generate_triangles in the call alone); GPU compilers inline small functions anyway, and the
-// attribute is clang's, so it is only asked for on CPU devices.
-#ifdef CPU_PREFETCH
-#define ALWAYS_INLINE __attribute__((always_inline))
-#else
-#define ALWAYS_INLINE
 #endif
 
 // Bits of word q that stand for x < limit.
@@ -336,33 +327,6 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
     }
 }
 
-// The id of the vertex on the edge along `axis` from bit b of a word whose masks are m and
-// whose first vertex is base.
-inline uint edge_id(uint base, uint mx, uint my, uint mz, uint b, uint axis) {
-    const uint below = (1u << b) - 1u;
-    uint id = base + popcount(mx & below) + popcount(my & below) + popcount(mz & below);
-    if (axis > 0) id += mx >> b & 1u;
-    if (axis > 1) id += my >> b & 1u;
-    return id;
-}
-
-// The id of a triangle corner whose case_corners code is `code`, in the cell at bit b of
-// word q (see generate_triangles).
-// word_first[k]: the id of word q's first vertex in row k.
-ALWAYS_INLINE inline uint corner_id(uint code, uint b, uint q, const uint* word_first, const uint* row_first,
-                                    __global const word_id* const* word_base, const uint* mx, const uint* my,
-                                    const uint* mz,
-                                    __global const uint* const* row, __global const uint* const* ry,
-                                    __global const uint* const* rz, uint words, uint nx) {
-    const uint k = code >> 1 & 3u;
-    const uint axis = code >> 3;
-    const uint x = b + (code & 1u);
-    if (x < 32) return edge_id(word_first[k], mx[k], my[k], mz[k], x, axis);
-    // the first sample of the next word
-    const EdgeMasks next = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
-    return edge_id(row_first[k] + word_base[k][q + 1], next.x, next.y, next.z, 0, axis);
-}
-
 // One work-item per cell row with triangles. Cell row (y, z) is spanned by sample rows
 // (y + dy, z + dz), indexed k = dy + 2 dz; a triangle corner on the edge from sample
 // x = 32 q + b + dx of row k has the id of its word's first vertex plus the crossed edges
@@ -420,14 +384,35 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
                 const uint b = lowest_bit(cells);
                 __constant uchar* corners = case_corners + 16 * cell_case(w, b);
                 const uint n = corners[0];
+                // The ids of the cell's 12 edges, by corner code (dx | k << 1 | axis << 3):
+                // a row's edges at sample b start after those before it in the word, its
+                // edges at b + 1 after those at b. Once per cell, not per corner.
+                uint id_of[24];
+                const uint below = (1u << b) - 1u;
+                for (uint k = 0; k < 4; ++k) {
+                    const uint at = word_first[k] + popcount(mx[k] & below) + popcount(my[k] & below) +
+                                    popcount(mz[k] & below);
+                    const uint bx = mx[k] >> b & 1u, by = my[k] >> b & 1u, bz = mz[k] >> b & 1u;
+                    uint nx1, ny1;  // sample b + 1's x- and y-edge bits
+                    if (b < 31) {
+                        nx1 = mx[k] >> (b + 1) & 1u;
+                        ny1 = my[k] >> (b + 1) & 1u;
+                    } else {  // the first sample of the next word
+                        const EdgeMasks next = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
+                        nx1 = next.x & 1u;
+                        ny1 = next.y & 1u;
+                    }
+                    const uint after = at + bx + by + bz;
+                    id_of[2 * k] = at;
+                    id_of[8 + 2 * k] = at + bx;
+                    id_of[16 + 2 * k] = at + bx + by;
+                    id_of[1 + 2 * k] = after;
+                    id_of[9 + 2 * k] = after + nx1;
+                    id_of[17 + 2 * k] = after + nx1 + ny1;
+                }
                 for (uint tri = 0; tri < n; ++tri) {
-                    // Three named ids, not an array: PoCL stored an id array a lane at a
-                    // time and reloaded two lanes as one vector for the stores below, a
-                    // store-forwarding stall per triangle (a third of this kernel's time).
                     __constant uchar* code = corners + 1 + 3 * tri;
-                    const uint i0 = corner_id(code[0], b, q, word_first, row_first, word_base, mx, my, mz, row, ry, rz, words, nx);
-                    const uint i1 = corner_id(code[1], b, q, word_first, row_first, word_base, mx, my, mz, row, ry, rz, words, nx);
-                    const uint i2 = corner_id(code[2], b, q, word_first, row_first, word_base, mx, my, mz, row, ry, rz, words, nx);
+                    const uint i0 = id_of[code[0]], i1 = id_of[code[1]], i2 = id_of[code[2]];
                     out[0] = i0;
                     out[1] = inside_below ? i2 : i1;
                     out[2] = inside_below ? i1 : i2;
