@@ -22,7 +22,8 @@
 //   case_table:   16 bytes per case, triangle count then 15 signed edge numbers;
 //   case_corners: 16 bytes per case, triangle count then each corner's edge as
 //                 dx | dy << 1 | dz << 2 | axis << 3 (the host builds it from its case and
-//                 cell-edge tables).
+//                 cell-edge tables);
+//   pair_corners: case_corners by row-pair index (cell_pairs), what this file's kernels read.
 
 #define CAT2(a, b) a##b
 #define CAT(a, b) CAT2(a, b)
@@ -182,9 +183,12 @@ inline uint nonuniform(CellWord w, uint q, uint nx) {
     return (any & ~all) & bits_below(q, nx - 1);
 }
 
-inline uint cell_case(CellWord w, uint b) {
-    return (w.k0 >> b & 1u) | (w.k1 >> b & 1u) << 1 | (w.k2 >> b & 1u) << 2 | (w.k3 >> b & 1u) << 3 |
-           (w.k4 >> b & 1u) << 4 | (w.k5 >> b & 1u) << 5 | (w.k6 >> b & 1u) << 6 | (w.k7 >> b & 1u) << 7;
+// The cell at bit b as its four rows' 2-bit pairs (bits b and b + 1 of rows a, b, c, d), the
+// index of pair_corners: below bit 31 both bits lie in the rows' own words.
+inline uint cell_pairs(CellWord w, uint b) {
+    if (b < 31) return (w.k0 >> b & 3u) | (w.k3 >> b & 3u) << 2 | (w.k4 >> b & 3u) << 4 | (w.k7 >> b & 3u) << 6;
+    return (w.k0 >> b & 1u) | (w.k1 >> b & 1u) << 1 | (w.k3 >> b & 1u) << 2 | (w.k2 >> b & 1u) << 3 |
+           (w.k4 >> b & 1u) << 4 | (w.k5 >> b & 1u) << 5 | (w.k7 >> b & 1u) << 6 | (w.k6 >> b & 1u) << 7;
 }
 
 // Row r's neighbours in +y and +z among the bit rows, or null at the volume's border.
@@ -207,7 +211,7 @@ inline uint lowest_bit64(ulong w) { return 63u - (uint)clz(w & (0ul - w)); }
 // uniform has a crossed edge among row a's edges and row b's x- and z-edges (they join all
 // 8 corners), so cell rows without one are skipped.
 __kernel void classify_rows(__global const uint* bits, const uint nx, const uint ny, const uint nz, const uint words,
-                            const uint begin, const uint cell_end, const uint rows, __constant uchar* case_table,
+                            const uint begin, const uint cell_end, const uint rows, __constant uchar* pair_corners,
                             __global uint* vcount, __global uint* tcount, __global ulong* cell_groups) {
     const uint r = (uint)get_global_id(0);
     if (r >= rows) return;
@@ -238,7 +242,7 @@ __kernel void classify_rows(__global const uint* bits, const uint nx, const uint
             const uint cells = nonuniform(w, q, nx);
             groups |= (ulong)(cells != 0u) << (q / group);
             for (uint left = cells; left; left &= left - 1)
-                t += case_table[16 * cell_case(w, lowest_bit(left))];
+                t += pair_corners[16 * cell_pairs(w, lowest_bit(left))];
         }
     }
     vcount[r] = v;
@@ -331,14 +335,14 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
 // (y + dy, z + dz), indexed k = dy + 2 dz; a triangle corner on the edge from sample
 // x = 32 q + b + dx of row k has the id of its word's first vertex plus the crossed edges
 // before it in that word. Only the word groups classify_rows marked are visited, and words
-// without a non-uniform cell there are skipped. case_corners: per case the triangle count,
-// then each corner as dx | k << 1 | axis << 3 (the host's case_corner_table). Ids are the
+// without a non-uniform cell there are skipped. pair_corners: per cell_pairs index the
+// triangle count, then each corner as dx | k << 1 | axis << 3 (the host's pair_corner_table). Ids are the
 // chunk's plus vertex_offset, its first vertex's id in the mesh.
 __kernel void generate_triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz,
                                  const uint words, const uint begin, const uint cell_rows, const uint rows,
                                  const uint tend, __global const uint* tbase, __global const uint* vbase,
                                  const uint vertex_offset, __global const word_id* wbase, __global const ulong* cell_groups,
-                                 __constant uchar* case_corners, const int inside_below, __global uint* indices) {
+                                 __constant uchar* pair_corners, const int inside_below, __global uint* indices) {
     const uint r = (uint)get_global_id(0);
     if (r >= cell_rows || scanned_count(tbase, r, rows, tend) == 0) return;
     uint t = tbase[r];
@@ -382,7 +386,7 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
             }
             for (; cells; cells &= cells - 1) {
                 const uint b = lowest_bit(cells);
-                __constant uchar* corners = case_corners + 16 * cell_case(w, b);
+                __constant uchar* corners = pair_corners + 16 * cell_pairs(w, b);
                 const uint n = corners[0];
                 // The ids of the cell's 12 edges, by corner code (dx | k << 1 | axis << 3):
                 // a row's edges at sample b start after those before it in the word, its

@@ -706,7 +706,7 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
         job.pieces_counted += 1;
         cl::Kernel& rows = d.mc_kernel(job.options, "classify_rows");
         set_args(rows, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin),
-                 u(s.cell_end), u(s.rows), d.case_table, piece.vbase, piece.tbase, piece.cell_groups);
+                 u(s.cell_end), u(s.rows), d.pair_corners, piece.vbase, piece.tbase, piece.cell_groups);
         launch(job, rows, s.rows, Pass::Classify, log);
 
         scan_into(d, piece.vbase, s.rows, counts, kVertexTotal, log);
@@ -904,7 +904,7 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
             cl::Kernel& k = d.mc_kernel(job.options, "generate_triangles");
             set_args(k, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(piece.range.begin), u(s.cell_rows), u(s.rows),
                      u(piece.triangles), piece.tbase, piece.vbase, u(piece.first_vertex), word_base, piece.cell_groups,
-                     d.case_corners, static_cast<cl_int>(options_.inside_below), indices);
+                     d.pair_corners, static_cast<cl_int>(options_.inside_below), indices);
             launch(job, k, s.cell_rows, Pass::Generate, log);
         }
         if (vertices > 0) fetch(positions, positions_at, vertices * 12);

@@ -126,6 +126,16 @@ std::array<std::uint8_t, 256 * 16> case_corner_table() {
     return table;
 }
 
+// case_corner_table() by row-pair index (kRowPairsToCase): a kernel reads a cell's entry with
+// its four rows' 2-bit pairs as the index, without assembling the case bit by bit.
+std::array<std::uint8_t, 256 * 16> pair_corner_table() {
+    const std::array<std::uint8_t, 256 * 16> by_case = case_corner_table();
+    std::array<std::uint8_t, 256 * 16> table{};
+    for (std::size_t pairs = 0; pairs < 256; ++pairs)
+        std::copy_n(by_case.begin() + 16 * kRowPairsToCase[pairs], 16, table.begin() + 16 * pairs);
+    return table;
+}
+
 std::size_t round_up(std::size_t n, std::size_t m) { return (n + m - 1) / m * m; }
 
 }  // namespace
@@ -136,6 +146,8 @@ Device::Device(const cl::Device& dev, DeviceInfo description)
     pair_to_case = constant_buffer(context, kColumnPairToCase.data(), kColumnPairToCase.size());
     static const std::array<std::uint8_t, 256 * 16> corners = case_corner_table();
     case_corners = constant_buffer(context, corners.data(), corners.size());
+    static const std::array<std::uint8_t, 256 * 16> by_pairs = pair_corner_table();
+    pair_corners = constant_buffer(context, by_pairs.data(), by_pairs.size());
 }
 
 Device::~Device() = default;

@@ -54,6 +54,7 @@ public:
     cl::CommandQueue queue;
     cl::Buffer case_table, pair_to_case;  // from src/core/case_tables.cpp
     cl::Buffer case_corners;              // case_corner_table(): case_table's corners as (dx, dy, dz, axis)
+    cl::Buffer pair_corners;              // the same by row-pair index (kRowPairsToCase)
     std::mutex mutex;  // whoever uses queue, kernels or buffers holds it
     std::size_t programs_built = 0;  // by build(): programs are cached, so this stops growing
 
