@@ -57,12 +57,21 @@ inline void border_gradient(__global const voxel* data, uint idx, uint x, uint y
     g[2] = axis_diff(data, idx, z, nz, stride_z, iz);
 }
 
+// PoCL's CPU compiler called sample_vertices out of line, its 29 arguments passed through the
+// stack per sample; always_inline is clang's attribute, so it is only asked for on CPU
+// devices (GPU compilers inline by default).
+#ifdef CPU_PREFETCH
+#define VERTEX_INLINE __attribute__((always_inline))
+#else
+#define VERTEX_INLINE
+#endif
+
 // The vertices of the crossed edges global sample (x, y, z), at data index idx, owns: bit a
 // of `axes` for the edge along axis a, written in axis order to position[0..] and, when
 // want_normals, normal[0..]. The sample's value and gradient are read once for all its
 // edges (as the CPU engine does; the arithmetic per edge is the same either way).
 // stride_y / stride_z: the data's strides; nx, ny, nz: the whole volume's dimensions.
-inline void sample_vertices(__global const voxel* data, const uint idx, const uint x, const uint y, const uint z,
+VERTEX_INLINE inline void sample_vertices(__global const voxel* data, const uint idx, const uint x, const uint y, const uint z,
                             const uint axes, const uint stride_y, const uint stride_z, const uint nx, const uint ny,
                             const uint nz, const voxel thr, const real iso, const long iso_int, const float iso_frac,
                             const real ox, const real oy, const real oz, const real sx, const real sy, const real sz,
