@@ -71,12 +71,13 @@ inline void border_gradient(__global const voxel* data, uint idx, uint x, uint y
 // want_normals, normal[0..]. The sample's value and gradient are read once for all its
 // edges (as the CPU engine does; the arithmetic per edge is the same either way).
 // stride_y / stride_z: the data's strides; nx, ny, nz: the whole volume's dimensions.
-VERTEX_INLINE inline void sample_vertices(__global const voxel* data, const uint idx, const uint x, const uint y, const uint z,
-                            const uint axes, const uint stride_y, const uint stride_z, const uint nx, const uint ny,
-                            const uint nz, const voxel thr, const real iso, const long iso_int, const float iso_frac,
-                            const real ox, const real oy, const real oz, const real sx, const real sy, const real sz,
-                            const real ix, const real iy, const real iz, const int inside_below,
-                            const int want_normals, __global float* position, __global float* normal) {
+VERTEX_INLINE inline void sample_vertices(__global const voxel* data, const uint idx, const uint x, const uint y,
+                                          const uint z, const uint axes, const uint stride_y, const uint stride_z,
+                                          const uint nx, const uint ny, const uint nz, const voxel thr, const real iso,
+                                          const long iso_int, const float iso_frac, const real ox, const real oy,
+                                          const real oz, const real sx, const real sy, const real sz, const real ix,
+                                          const real iy, const real iz, const int inside_below,
+                                          const int want_normals, __global float* position, __global float* normal) {
     const voxel v0 = data[idx];
     // Both ends of every edge at least one sample in: plain central differences, without the
     // per-axis border tests.

@@ -3,7 +3,7 @@
 //   classify_rows       per row: crossed edges it owns, triangles of the cell row it starts
 //   (scan.cl)           exclusive prefix sums over rows: every vertex and triangle its index
 //   generate_vertices   per row with crossings: its vertices, in x then axis order
-//   generate_triangles  per cell row with triangles: its triangles, each cell's edge ids by popcounts
+//   generate_triangles  per cell row with triangles: its triangles, a cell's edge ids by popcounts
 // No per-sample bytes are stored: later passes re-derive edges and cases from the bits.
 //
 // The host builds it behind edge_vertex.cl (types, build options, the vertex formula).
@@ -336,8 +336,9 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
 // x = 32 q + b + dx of row k has the id of its word's first vertex plus the crossed edges
 // before it in that word. Only the word groups classify_rows marked are visited, and words
 // without a non-uniform cell there are skipped. pair_corners: per cell_pairs index the
-// triangle count, then each corner as dx | k << 1 | axis << 3 (the host's pair_corner_table). Ids are the
-// chunk's plus vertex_offset, its first vertex's id in the mesh.
+// triangle count, then each corner as dx | k << 1 | axis << 3 (the host's
+// pair_corner_table). Ids are the chunk's plus vertex_offset, its first vertex's id in the
+// mesh.
 __kernel void generate_triangles(__global const uint* bits, const uint nx, const uint ny, const uint nz,
                                  const uint words, const uint begin, const uint cell_rows, const uint rows,
                                  const uint tend, __global const uint* tbase, __global const uint* vbase,
