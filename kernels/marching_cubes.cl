@@ -391,30 +391,44 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
                 const uint n = corners[0];
                 // The ids of the cell's 12 edges, by corner code (dx | k << 1 | axis << 3):
                 // a row's edges at sample b start after those before it in the word, its
-                // edges at b + 1 after those at b. Once per cell, not per corner.
-                uint id_of[24];
+                // edges at b + 1 after those at b. Once per cell, not per corner. Only the
+                // codes of cell edges are set: x-edges of all four rows at b, y-edges of
+                // rows 0 and 2 and z-edges of rows 0 and 1 at b and b + 1.
+                uint id_of[20];
                 const uint below = (1u << b) - 1u;
-                for (uint k = 0; k < 4; ++k) {
-                    const uint at = word_first[k] + popcount(mx[k] & below) + popcount(my[k] & below) +
-                                    popcount(mz[k] & below);
-                    const uint bx = mx[k] >> b & 1u, by = my[k] >> b & 1u, bz = mz[k] >> b & 1u;
-                    uint nx1, ny1;  // sample b + 1's x- and y-edge bits
+                // at: each row's first edge at b; bx, by: its x- and y-edge bits at b, nx1,
+                // ny1 at b + 1 (rows 0 to 2: row 3 has only its x-edge in the cell).
+                uint at[4], bx[3], by[3], nx1[3], ny1[3];
+                for (uint k = 0; k < 4; ++k)
+                    at[k] = word_first[k] + popcount(mx[k] & below) + popcount(my[k] & below) +
+                            popcount(mz[k] & below);
+                for (uint k = 0; k < 3; ++k) {
+                    bx[k] = mx[k] >> b & 1u;
+                    by[k] = my[k] >> b & 1u;
                     if (b < 31) {
-                        nx1 = mx[k] >> (b + 1) & 1u;
-                        ny1 = my[k] >> (b + 1) & 1u;
+                        nx1[k] = mx[k] >> (b + 1) & 1u;
+                        ny1[k] = my[k] >> (b + 1) & 1u;
                     } else {  // the first sample of the next word
                         const EdgeMasks next = edge_masks(row[k], ry[k], rz[k], q + 1, words, nx);
-                        nx1 = next.x & 1u;
-                        ny1 = next.y & 1u;
+                        nx1[k] = next.x & 1u;
+                        ny1[k] = next.y & 1u;
                     }
-                    const uint after = at + bx + by + bz;
-                    id_of[2 * k] = at;
-                    id_of[8 + 2 * k] = at + bx;
-                    id_of[16 + 2 * k] = at + bx + by;
-                    id_of[1 + 2 * k] = after;
-                    id_of[9 + 2 * k] = after + nx1;
-                    id_of[17 + 2 * k] = after + nx1 + ny1;
                 }
+                id_of[0] = at[0];
+                id_of[2] = at[1];
+                id_of[4] = at[2];
+                id_of[6] = at[3];
+                const uint after0 = at[0] + bx[0] + by[0] + (mz[0] >> b & 1u);
+                const uint after1 = at[1] + bx[1] + by[1] + (mz[1] >> b & 1u);
+                const uint after2 = at[2] + bx[2] + by[2] + (mz[2] >> b & 1u);
+                id_of[8] = at[0] + bx[0];
+                id_of[9] = after0 + nx1[0];
+                id_of[12] = at[2] + bx[2];
+                id_of[13] = after2 + nx1[2];
+                id_of[16] = at[0] + bx[0] + by[0];
+                id_of[17] = after0 + nx1[0] + ny1[0];
+                id_of[18] = at[1] + bx[1] + by[1];
+                id_of[19] = after1 + nx1[1] + ny1[1];
                 for (uint tri = 0; tri < n; ++tri) {
                     __constant uchar* code = corners + 1 + 3 * tri;
                     const uint i0 = id_of[code[0]], i1 = id_of[code[1]], i2 = id_of[code[2]];
