@@ -179,7 +179,7 @@ TEST_CASE("OpenCL matches the CPU engine for every scalar type", "[opencl]") {
 }
 
 #ifdef VOXMESH_HAS_OPENCL  // uses test hooks of the OpenCL build
-// Turns one of the engine's pretend_* test hooks on for a scope.
+// Turns one of the engine's on/off test hooks on for a scope.
 class Pretend {
 public:
     explicit Pretend(void (*hook)(bool)) : hook_(hook) { hook_(true); }
@@ -581,28 +581,30 @@ TEST_CASE("OpenCL programs are built once per device: a second extract builds no
 #ifdef VOXMESH_HAS_OPENCL  // uses a test hook of the OpenCL build
 TEST_CASE("Two OpenCL devices share the chunks", "[opencl]") {
     if (!have_device()) return;
-    detail::opencl_split_devices(true);
-    const auto devices = list_devices();
-    if (devices.size() < 2) {
-        detail::opencl_split_devices(false);
-        WARN("fewer than two OpenCL devices even with device fission: two-device test SKIPPED");
-        return;
-    }
     Grid g{{40, 44, 90}};
     const auto f = sphere(g);
     const VolumeView v = view_of(f.data(), ScalarType::F32, g);
     Options o;
     o.chunk_planes = 2;
-    // Chunks are pulled by whichever device is free, so one sub-device can take all 45 before
-    // the other has finished its first (it happened once, under ASan in a clean-clone CI run):
-    // the hook deals each device its first chunk before any takes a second.
-    detail::opencl_deal_first_chunks(true);
     Stats stats;
-    const Mesh cl = run(v, o, Backend::OpenCL, &stats);
-    detail::opencl_deal_first_chunks(false);
-    detail::opencl_split_devices(false);
+    Mesh cl;
+    std::size_t device_count = 0;
+    {
+        const Pretend split(detail::opencl_split_devices);
+        device_count = list_devices().size();
+        if (device_count < 2) {
+            WARN("fewer than two OpenCL devices even with device fission: two-device test SKIPPED");
+            return;
+        }
+        // Chunks are pulled by whichever device is free, so one sub-device can take all 45
+        // before the other has finished its first (it happened once, under ASan in a
+        // clean-clone CI run): the hook deals each device its first chunk before any takes a
+        // second.
+        const Pretend deal(detail::opencl_deal_first_chunks);
+        cl = run(v, o, Backend::OpenCL, &stats);
+    }
     require_same(run(v, Options{}, Backend::Cpu), cl, v);
-    REQUIRE(stats.devices.size() == devices.size());
+    REQUIRE(stats.devices.size() == device_count);
     for (const DeviceStats& d : stats.devices) {
         INFO("device " << d.name);
         CHECK(d.chunks > 0);

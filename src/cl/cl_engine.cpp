@@ -196,7 +196,7 @@ struct DeviceJob {
     std::size_t local = kLocalSize;            // work-group size of every launch
     std::size_t word_id_bytes = 4;             // of the per-word vertex id bases (2 or 4)
     std::size_t pieces_counted = 0;            // in this call
-    std::size_t fronts_taken = 0;              // times take_front gave it chunks, in this call
+    std::size_t fronts_taken = 0;              // single chunks take_front gave it, in this call
     std::size_t resident_bytes = 0;            // of pieces' own samples and bits
     // The range whose samples / bits the kData / kBits buffers hold now (empty: none), and
     // those buffers' handles then: generate uploads or packs again only when they differ.
