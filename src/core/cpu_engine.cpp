@@ -88,12 +88,17 @@ public:
             } else if (rows && stored) {
                 plane.rows[j] = stored->data() + rows[j].bits_at;
             } else {
-                Word* out = plane.packed.data() + j * stride_;
-                nan |= pack_(data_ + (z * ny_ + j) * nx_, nx_, threshold_, out);
-                plane.rows[j] = out;
+                nan |= pack(plane, z, j);
             }
         }
         return nan;
+    }
+
+    // Packs row j of plane z from the volume; true when a sample is NaN.
+    bool pack(BitPlane& plane, std::size_t z, std::size_t j) const {
+        Word* out = plane.packed.data() + j * stride_;
+        plane.rows[j] = out;
+        return pack_(data_ + (z * ny_ + j) * nx_, nx_, threshold_, out);
     }
 
 private:
@@ -168,6 +173,25 @@ inline WordSpan cell_row_words(const RowInfo& a, const RowInfo& b) {
     return {(first > 0 ? first - 1 : 0) / 64, last / 64 + 1};
 }
 
+// Counts the triangles of cell row j (rows j and j + 1 of planes `here` and `up`) into
+// info[j].triangles.
+inline void count_cell_row(const BitPlane& here, const BitPlane& up, RowInfo* info, const Word* busy, std::size_t j,
+                           std::size_t words, std::size_t nx) {
+    if (!cell_row_active(info[j], info[j + 1])) return;
+    const Word *ra = here.row(j), *rb = here.row(j + 1), *rc = up.row(j), *rd = up.row(j + 1);
+    std::uint32_t count = 0;
+    const WordSpan span = cell_row_words(info[j], info[j + 1]);
+    const Word crossed = busy[j] | busy[j + 1];
+    const Word nonuniform_words = crossed | crossed >> 1;
+    for (std::size_t q = span.begin; q < span.end; ++q) {
+        if (!(nonuniform_words & word_bit(q))) continue;
+        const CellWord cell(ra, rb, rc, rd, q, words);
+        for (Word cells = cell.nonuniform(q, nx); cells; cells &= cells - 1)
+            count += cell.triangles(static_cast<unsigned>(std::countr_zero(cells)));
+    }
+    info[j].triangles = count;
+}
+
 template <class T>
 void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T threshold, std::size_t a, std::size_t b,
                      RowInfo* rows, PlaneCounts* plane_counts, std::vector<Word>* plane_bits) {
@@ -182,14 +206,21 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
     std::vector<Word> busy(ny);  // per row of plane k, its words with a crossing
     for (std::size_t k = a; k < b; ++k) {
         const bool has_up = k + 1 < nz;
-        if (has_up && bits.fill(up, k + 1, nullptr, nullptr)) throw_nan(k + 1);
+        const bool count_cells = has_up && k < plan.range.end;
+        const BitPlane& next_z = has_up ? up : here;
         RowInfo* info = rows + (k - plan.range.begin) * ny;
         std::size_t active = 0;
+        bool nan = false;
+        // Row by row: pack row j of plane k + 1, classify row j of plane k, count cell row
+        // j - 1. The volume streams in while the bits are worked on, where packing the whole
+        // plane first left the memory idle during the counting.
         for (std::size_t j = 0; j < ny; ++j) {
-            busy[j] = classify_row(here.row(j), here.row(j + 1 < ny ? j + 1 : j), (has_up ? up : here).row(j), words,
-                                   nx, info[j]);
+            if (has_up) nan |= bits.pack(up, k + 1, j);
+            busy[j] = classify_row(here.row(j), here.row(j + 1 < ny ? j + 1 : j), next_z.row(j), words, nx, info[j]);
             active += !info[j].empty();
+            if (count_cells && j > 0) count_cell_row(here, up, info, busy.data(), j - 1, words, nx);
         }
+        if (nan) throw_nan(k + 1);
         if (plane_bits) {
             std::vector<Word>& store = plane_bits[k - plan.range.begin];
             store.reserve(active * words);
@@ -198,24 +229,6 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
                     info[j].bits_at = static_cast<std::uint32_t>(store.size());
                     store.insert(store.end(), here.row(j), here.row(j) + words);
                 }
-        }
-        if (has_up && k < plan.range.end) {
-            for (std::size_t j = 0; j + 1 < ny; ++j) {
-                if (!cell_row_active(info[j], info[j + 1])) continue;
-                const Word *ra = here.row(j), *rb = here.row(j + 1), *rc = up.row(j),
-                           *rd = up.row(j + 1);
-                std::uint32_t count = 0;
-                const WordSpan span = cell_row_words(info[j], info[j + 1]);
-                const Word crossed = busy[j] | busy[j + 1];
-                const Word nonuniform_words = crossed | crossed >> 1;
-                for (std::size_t q = span.begin; q < span.end; ++q) {
-                    if (!(nonuniform_words & word_bit(q))) continue;
-                    const CellWord cell(ra, rb, rc, rd, q, words);
-                    for (Word cells = cell.nonuniform(q, nx); cells; cells &= cells - 1)
-                        count += cell.triangles(static_cast<unsigned>(std::countr_zero(cells)));
-                }
-                info[j].triangles = count;
-            }
         }
         // The plane's sums while its rows are in cache. Cost: a plane's bits plus its vertices
         // and triangles, and a pass over the words of each row with crossings.
