@@ -68,6 +68,8 @@ public:
           pack_(row_packer<T>()),
           uniform_{std::vector<Word>(stride_, kNoBits), std::vector<Word>(stride_)} {
         for (std::size_t q = 0; q < stride_; ++q) uniform_[1][q] = bits_below(q, nx_);
+        rows_ = ny_ * volume.dims[2];
+        ahead_rows_ = std::max<std::size_t>(1, kPackAheadBytes / (nx_ * sizeof(T)));
     }
 
     std::size_t stride() const { return stride_; }
@@ -94,6 +96,17 @@ public:
         return nan;
     }
 
+    // Asks for the lines of the volume's row kPackAheadBytes after row j of plane z, which
+    // a pack a few rows from now reads. The hardware prefetcher alone left classify's loads
+    // waiting on memory (in-process A/B, 2 threads: sphere u8 512³ classify 5.2 → 4.3 ms,
+    // total -5 %; f32 -1.6 %; gyroid ±0; 16 and 32 KiB ahead did no better).
+    void prefetch_ahead(std::size_t z, std::size_t j) const {
+        const std::size_t row = z * ny_ + j + ahead_rows_;
+        if (row >= rows_) return;
+        const char* line = reinterpret_cast<const char*>(data_ + row * nx_);
+        for (std::size_t b = 0; b < nx_ * sizeof(T); b += 64) prefetch(line + b);
+    }
+
     // Packs row j of plane z from the volume; true when a sample is NaN.
     bool pack(BitPlane& plane, std::size_t z, std::size_t j) const {
         Word* out = plane.packed.data() + j * stride_;
@@ -102,8 +115,11 @@ public:
     }
 
 private:
+    static constexpr std::size_t kPackAheadBytes = 8192;
+
     const T* data_;
     std::size_t nx_, ny_, stride_;
+    std::size_t rows_ = 0, ahead_rows_ = 0;
     T threshold_;
     RowPacker<T> pack_;
     std::vector<Word> uniform_[2];  // a row of all-outside and of all-inside samples
@@ -215,7 +231,10 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
         // j - 1. The volume streams in while the bits are worked on, where packing the whole
         // plane first left the memory idle during the counting.
         for (std::size_t j = 0; j < ny; ++j) {
-            if (has_up) nan |= bits.pack(up, k + 1, j);
+            if (has_up) {
+                bits.prefetch_ahead(k + 1, j);
+                nan |= bits.pack(up, k + 1, j);
+            }
             busy[j] = classify_row(here.row(j), here.row(j + 1 < ny ? j + 1 : j), next_z.row(j), words, nx, info[j]);
             active += !info[j].empty();
             if (count_cells && j > 0) count_cell_row(here, up, info, busy.data(), j - 1, words, nx);
