@@ -90,6 +90,7 @@ public:
             } else if (rows && stored) {
                 plane.rows[j] = stored->data() + rows[j].bits_at;
             } else {
+                prefetch_ahead(z, j);
                 nan |= pack(plane, z, j);
             }
         }
@@ -97,9 +98,10 @@ public:
     }
 
     // Asks for the lines of the volume's row kPackAheadBytes after row j of plane z, which
-    // a pack a few rows from now reads. The hardware prefetcher alone left classify's loads
-    // waiting on memory (in-process A/B, 2 threads: sphere u8 512³ classify 5.2 → 4.3 ms,
-    // total -5 %; f32 -1.6 %; gyroid ±0; 16 and 32 KiB ahead did no better).
+    // a pack a few rows from now reads. The hardware prefetcher alone left the packs' loads
+    // waiting on memory (in-process A/B, 2 threads, sphere u8 512³: in classify, classify
+    // 5.2 → 4.3 ms, total -5 %, 16 and 32 KiB ahead no better; in generate's re-pack of 8-bit
+    // rows, generate -6 to -8 %; gyroid ±0 both).
     void prefetch_ahead(std::size_t z, std::size_t j) const {
         const std::size_t row = z * ny_ + j + ahead_rows_;
         if (row >= rows_) return;
