@@ -614,18 +614,23 @@ TEST_CASE("Two OpenCL devices share the chunks", "[opencl]") {
 TEST_CASE("OpenCL scan kernel matches std::exclusive_scan", "[opencl]") {
     if (!have_device()) return;
     std::mt19937 rng(7);
-    for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(255), std::size_t(256), std::size_t(257),
-                          std::size_t(2049), std::size_t(1000003)}) {
-        INFO("length " << n);
-        std::vector<std::uint32_t> values(n);
-        for (auto& x : values) x = rng() % 16;
-        std::vector<std::uint32_t> expected(n);
-        std::exclusive_scan(values.begin(), values.end(), expected.begin(), std::uint32_t(0));
-        const auto got = detail::opencl_exclusive_scan(values);
-        REQUIRE(got.size() == n + 1);
-        CHECK(std::equal(expected.begin(), expected.end(), got.begin()));
-        CHECK(got.back() == std::accumulate(values.begin(), values.end(), std::uint32_t(0)));
-    }
+    // Block edges of both launch shapes (2048 elements a GPU work-group, 1024 a CPU one) and
+    // lengths that take two and three levels of block sums in each.
+    for (const bool gpu_shape : {false, true})
+        for (std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(255), std::size_t(256), std::size_t(257),
+                              std::size_t(1023), std::size_t(1024), std::size_t(1025), std::size_t(2047),
+                              std::size_t(2048), std::size_t(2049), std::size_t(1000003), std::size_t(1048577),
+                              std::size_t(4194305)}) {
+            INFO("length " << n << (gpu_shape ? ", GPU launch shape" : ", the device's launch shape"));
+            std::vector<std::uint32_t> values(n);
+            for (auto& x : values) x = rng() % 16;
+            std::vector<std::uint32_t> expected(n);
+            std::exclusive_scan(values.begin(), values.end(), expected.begin(), std::uint32_t(0));
+            const auto got = detail::opencl_exclusive_scan(values, 0, gpu_shape);
+            REQUIRE(got.size() == n + 1);
+            CHECK(std::equal(expected.begin(), expected.end(), got.begin()));
+            CHECK(got.back() == std::accumulate(values.begin(), values.end(), std::uint32_t(0)));
+        }
 }
 #endif  // VOXMESH_HAS_OPENCL
 

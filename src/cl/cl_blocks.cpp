@@ -73,7 +73,7 @@ public:
                            device_->device));
         local_ = 1;
         while (local_ * 2 <= local) local_ *= 2;
-        device_->scan_local_size();
+        device_->scan_shape();
     }
 
     const std::string& device_name() const override { return device_->info.name; }

@@ -384,7 +384,7 @@ void Engine::prepare(DeviceJob& job) {
             job.device->mc_kernel(job.options, name).getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(job.device->device);
         while (job.local > most && job.local > 1) job.local /= 2;
     }
-    job.device->scan_local_size();
+    job.device->scan_shape();
     job.stats.programs_built = job.device->programs_built - built;
     job.stats.setup_s = seconds_since(t0);
 }
@@ -1151,7 +1151,8 @@ std::vector<DeviceInfo> opencl_devices() {
     return out;
 }
 
-std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t>& values, int device) {
+std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t>& values, int device,
+                                                 bool gpu_shape) {
     const auto all = cl_engine::devices();
     if (device < 0 || static_cast<std::size_t>(device) >= all.size())
         throw Error("OpenCL device index " + std::to_string(device) + " does not exist");
@@ -1162,7 +1163,7 @@ std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t
     cl::Buffer buffer(d.context, CL_MEM_READ_WRITE, values.size() * 4);
     EventLog log;
     d.queue.enqueueWriteBuffer(buffer, CL_TRUE, 0, values.size() * 4, values.data());
-    const std::uint64_t total = scan(d, buffer, values.size(), log);
+    const std::uint64_t total = scan(d, buffer, values.size(), log, gpu_shape);
     d.queue.enqueueReadBuffer(buffer, CL_TRUE, 0, values.size() * 4, out.data());
     out.back() = static_cast<std::uint32_t>(total);
     return out;

@@ -24,8 +24,6 @@ extern const unsigned char kKernel_sculpt_blocks[];  // sculpting's batched bloc
 
 namespace cl_engine {
 
-constexpr unsigned kScanItems = 8;  // elements per work-item in scan.cl (passed as -DSCAN_ITEMS)
-
 
 enum class Pass { Classify, Scan, Generate, Transfer };
 
@@ -61,10 +59,16 @@ public:
     // Kernels of marching_cubes.cl built with `options`, and of scan.cl. Build failures
     // throw Error with the device name and the build log.
     cl::Kernel& mc_kernel(const std::string& options, const char* name);
-    cl::Kernel& scan_kernel(const char* name);
+    cl::Kernel& scan_kernel(const char* name, std::size_t items);
     // Kernels of sculpt_blocks.cl built with `options` (src/cl/cl_blocks.cpp).
     cl::Kernel& sculpt_kernel(const std::string& options, const char* name);
-    std::size_t scan_local_size();
+    // scan.cl's launch shape on this device (or, with gpu_shape, the shape GPUs get, on any
+    // device; for tests): work-group size and elements per work-item (SCAN_ITEMS), a block of
+    // local * items elements per work-group.
+    struct ScanShape {
+        std::size_t local = 0, items = 0;
+    };
+    ScanShape scan_shape(bool gpu_shape = false);
 
     // A buffer of at least `bytes` for slot `id`, kept for the next chunk and call.
     cl::Buffer& buffer(unsigned id, std::size_t bytes);
@@ -84,7 +88,7 @@ private:
     std::map<std::string, Program> programs_;
     std::map<unsigned, std::pair<cl::Buffer, std::size_t>> buffers_;
     std::unique_ptr<PinnedStaging> staging_;
-    std::size_t scan_local_ = 0;
+    ScanShape scan_shapes_[2];  // the device's own, the GPU shape
 };
 
 // Every usable device (available, with a compiler), discovered once per process.
@@ -98,10 +102,11 @@ void split_devices(bool split);
 // reads several totals back at once. Buffer ids >= kScanBufferBase hold block sums, and
 // kScanTotal the total that scan() reads back.
 constexpr unsigned kScanBufferBase = 100, kScanTotal = kScanBufferBase - 1;
+// gpu_shape: launched as on GPUs whatever the device (Device::scan_shape).
 void scan_into(Device& d, const cl::Buffer& data, std::size_t n, const cl::Buffer& totals, std::size_t total_at,
-               EventLog& log, unsigned level = 0);
+               EventLog& log, bool gpu_shape = false, unsigned level = 0);
 // The same, blocking: reads the total back and returns it.
-std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& log);
+std::uint64_t scan(Device& d, const cl::Buffer& data, std::size_t n, EventLog& log, bool gpu_shape = false);
 
 // Kernel arguments in declaration order from index 0, so that no call site numbers them:
 //   set_args(kernel, buffer, cl_uint{n}, ArgBytes{threshold}, ArgVertexFormula{...}, ...)

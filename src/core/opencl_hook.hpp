@@ -23,8 +23,11 @@ std::vector<DeviceInfo> opencl_devices();
 // (then VOXMESH_HAS_OPENCL is defined for everything linking voxmesh).
 #ifdef VOXMESH_HAS_OPENCL
 // The scan kernel on device `device`: the exclusive prefix sums of `values`, followed by
-// their total (values.size() + 1 entries).
-std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t>& values, int device = 0);
+// their total (values.size() + 1 entries). gpu_shape: launched as on GPUs (work-groups of
+// up to 256 work-items, 8 elements each), also on a CPU device, where the engine launches a
+// work-item of 1024 elements per work-group.
+std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t>& values, int device = 0,
+                                                 bool gpu_shape = false);
 // Presents each partitionable OpenCL device as (at most two) sub-devices of one compute
 // unit each, or undoes that; list_devices() indices change. Not for use while meshing.
 void opencl_split_devices(bool split);
