@@ -64,8 +64,9 @@ std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths o
 std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
 // Test hook: a slower device (per chunk counted, per piece generated), a slower CPU worker.
 std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{0};
-// Test hook: every device takes its first chunk before any takes a second (the chunks are
-// otherwise pulled, so which device counts how many depends on timing).
+// Test hook: every device takes its first chunk before any takes a second, and in Hybrid the
+// CPU worker its first run too (the chunks are otherwise pulled, so which worker counts how
+// many depends on timing).
 std::atomic<bool> g_deal_first_chunks{false};
 
 void pretend_slow(const std::atomic<double>& seconds) {
@@ -288,7 +289,8 @@ private:
     // Chunks not taken yet: [lo_, hi_). Devices take from the front, Hybrid's CPU worker runs
     // of chunks from the back (hybrid_schedule.hpp); the estimates beside them, in seconds.
     std::mutex queue_mutex_;
-    std::condition_variable dealt_;  // a device took its first chunk (g_deal_first_chunks)
+    std::condition_variable dealt_;  // a worker took its first chunk or run (g_deal_first_chunks)
+    bool cpu_took_ = false;          // Hybrid's CPU worker has taken a run
     std::size_t lo_ = 0, hi_ = 0;
     std::vector<DeviceJob>* jobs_ = nullptr;
     double cpu_count_chunk_s_ = 0;  // the CPU worker's latest run, per chunk
@@ -303,6 +305,7 @@ private:
     // Mending a plan: whether the device, at its measured pace, needs longer to count the
     // `device_left` planned chunks it has not taken than the CPU worker to count and generate one.
     bool device_behind(std::size_t device_left) const;
+    void cpu_took();  // under queue_mutex_: the CPU worker took a run (wakes dealt_ waiters)
     HybridRates rates_;  // the earlier call's (planned) or none
     Measured cpu_counted_, cpu_generated_;
     void plan_hybrid(const std::vector<DeviceJob>& jobs);
@@ -471,11 +474,12 @@ std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) cons
 
 bool Engine::take_front(DeviceJob& job, std::size_t& first, std::size_t& count) {
     std::unique_lock<std::mutex> lock(queue_mutex_);
-    if (g_deal_first_chunks && !hybrid_ && job.fronts_taken > 0) {
-        // A device that failed before taking a chunk must not hang the others: a time limit.
+    if (g_deal_first_chunks && job.fronts_taken > 0) {
+        // A worker that failed before taking a chunk must not hang the others: a time limit.
         dealt_.wait_for(lock, std::chrono::seconds(10), [&] {
             return abort_ || lo_ >= hi_ ||
-                   std::all_of(jobs_->begin(), jobs_->end(), [](const DeviceJob& j) { return j.fronts_taken > 0; });
+                   (std::all_of(jobs_->begin(), jobs_->end(), [](const DeviceJob& j) { return j.fronts_taken > 0; }) &&
+                    (!hybrid_ || cpu_took_));
         });
     }
     if (abort_ || lo_ >= hi_) return false;
@@ -530,6 +534,7 @@ Engine::Take Engine::take_back(std::size_t& first, std::size_t& count) {
         if (count == 0) return cpu_waiting_ ? Take::Later : Take::Done;
         hi_ -= count;
         first = hi_;
+        cpu_took();
         return Take::Run;
     }
     double device_rate = 0;
@@ -540,7 +545,15 @@ Engine::Take Engine::take_back(std::size_t& first, std::size_t& count) {
     first = hi_;
     cpu_free_at_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                       std::chrono::duration<double>(cpu_count_chunk_s_ * static_cast<double>(count)));
+    cpu_took();
     return Take::Run;
+}
+
+void Engine::cpu_took() {
+    if (!cpu_took_) {
+        cpu_took_ = true;
+        dealt_.notify_all();
+    }
 }
 
 // Hybrid with one device: where an earlier call on this device and volume shape measured

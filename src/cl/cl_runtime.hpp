@@ -24,7 +24,6 @@ extern const unsigned char kKernel_sculpt_blocks[];  // sculpting's batched bloc
 
 namespace cl_engine {
 
-
 enum class Pass { Classify, Scan, Generate, Transfer };
 
 // Events of one chunk, summed into seconds per pass after the queue finished.

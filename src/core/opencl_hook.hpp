@@ -44,9 +44,10 @@ void opencl_staging_block_bytes(std::size_t bytes);
 // generates, and Hybrid's CPU worker on each chunk it counts (0: off), so that the hand-over
 // between a device and the CPU worker runs in tests whatever the machine.
 void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s = 0);
-// OpenCL (not Hybrid): every device takes its first chunk before any device takes a second
-// (waiting at most 10 s for one that never asks), so that a test can count on each device
-// meshing something; chunks are otherwise pulled by whichever device is free.
+// Every device takes its first chunk before any device takes a second, and in Hybrid the
+// CPU worker its first run too (waiting at most 10 s for one that never asks), so that a
+// test can count on each worker meshing something; chunks are otherwise pulled by
+// whichever worker is free.
 void opencl_deal_first_chunks(bool deal);
 // Builds an OpenCL C program on device `device` the way the engine builds its kernels:
 // a failure throws Error with the device name and the build log.
