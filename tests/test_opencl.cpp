@@ -444,8 +444,8 @@ TEST_CASE("Hybrid hands chunks between a slow device and the CPU worker", "[open
     const Mesh cpu = run(v, Options{}, Backend::Cpu);
     const Pretend discrete(detail::opencl_pretend_discrete);
     struct Slow {
-        Slow(double device_count_s, double device_generate_s, double cpu_count_s) {
-            detail::opencl_pretend_slow(device_count_s, device_generate_s, cpu_count_s);
+        Slow(double device_count_s, double device_generate_s, double cpu_count_s, double cpu_start_s = 0) {
+            detail::opencl_pretend_slow(device_count_s, device_generate_s, cpu_count_s, cpu_start_s);
         }
         ~Slow() { detail::opencl_pretend_slow(0, 0, 0); }
     };
@@ -478,6 +478,16 @@ TEST_CASE("Hybrid hands chunks between a slow device and the CPU worker", "[open
                               << ", cpu chunks " << stats.devices[1].chunks);
         CHECK(stats.devices[0].chunks >= 1);  // the piece it was generating when the CPU came
         CHECK(stats.devices[0].chunks_handed_over >= 1);
+    }
+    SECTION("the CPU worker starts after the device has counted every chunk: it still takes pieces over") {
+        // It has counted nothing, so it has no rate of its own to weigh a take-over with: it
+        // takes one piece to measure, then goes on while that is quicker than the device.
+        const Slow slow(0, 0.05, 0, 0.5);
+        Stats stats;
+        hybrid(stats);
+        INFO("device chunks " << stats.devices[0].chunks << ", handed over " << stats.devices[0].chunks_handed_over
+                              << ", cpu chunks " << stats.devices[1].chunks);
+        CHECK(stats.devices[0].chunks_handed_over >= 2);
     }
     SECTION("both sides slow") {
         const Slow slow(0.003, 0.003, 0.003);

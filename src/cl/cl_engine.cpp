@@ -62,8 +62,9 @@ constexpr unsigned kPieceSamples = kPieceRows + 3 * kKeptPieceRows;
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
 std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
-// Test hook: a slower device (per chunk counted, per piece generated), a slower CPU worker.
-std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{0};
+// Test hook: a slower device (per chunk counted, per piece generated), a slower CPU worker
+// (per chunk counted), a CPU worker that starts late (before its first run).
+std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{0}, g_slow_cpu_start_s{0};
 // Test hook: every device takes its first chunk before any takes a second, and in Hybrid the
 // CPU worker its first run too (the chunks are otherwise pulled, so which worker counts how
 // many depends on timing).
@@ -308,6 +309,7 @@ private:
     void cpu_took();  // under queue_mutex_: the CPU worker took a run (wakes dealt_ waiters)
     HybridRates rates_;  // the earlier call's (planned) or none
     Measured cpu_counted_, cpu_generated_;
+    Measured cpu_taken_over_;  // the CPU worker's pieces taken over from devices: counted again and generated
     void plan_hybrid(const std::vector<DeviceJob>& jobs);
     void remember_rates(const std::vector<DeviceJob>& jobs);
     RatesKey rates_key(const DeviceJob& job) const {
@@ -831,6 +833,7 @@ void Engine::device_count_worker(DeviceJob& job, unsigned worker) {
 void Engine::cpu_count_worker(unsigned worker) {
     const auto t0 = Clock::now();
     std::size_t first = 0, n = 0;
+    pretend_slow(g_slow_cpu_start_s);
     for (Take take; (take = take_back(first, n)) != Take::Done;) {
         if (take == Take::Later) {
             std::this_thread::sleep_for(std::chrono::microseconds(50));
@@ -988,14 +991,25 @@ Piece* Engine::take_over(std::vector<DeviceJob>& jobs, DeviceJob*& from, bool& w
     std::lock_guard<std::mutex> lock(queue_mutex_);
     wait = false;
     if (abort_) return nullptr;
-    // Counting again and generating, per chunk; generate measured on its own pieces.
-    const double cpu_chunk_s = cpu_count_chunk_s_ + cpu_generated_.per_sample(0) * chunk_samples();
+    // Counting again and generating, per chunk: from its own pieces, or where it counted none
+    // (the devices took every chunk before it started), from the pieces it took over.
+    double cpu_chunk_s = cpu_count_chunk_s_ + cpu_generated_.per_sample(0) * chunk_samples();
+    if (cpu_count_chunk_s_ <= 0) cpu_chunk_s = cpu_taken_over_.per_sample(0) * chunk_samples();
     for (DeviceJob& job : jobs) {
         const std::size_t left = job.generate_back - job.generate_front;
         if (left == 0) continue;
         if (job.generate_piece_s <= 0) {
             wait = true;
             continue;
+        }
+        if (cpu_chunk_s <= 0) {
+            // Nothing measured on the CPU yet: one piece of one chunk to measure, while the
+            // device has another to work on (a slow device would otherwise mesh every piece
+            // alone). Not where a plan left the CPU out: a planned device's pieces are large.
+            const Piece* next = job.to_generate[job.generate_front];
+            if (left < 2 || planned_device_chunks_ != kNoPlan || chunks_in(next->range) != 1) continue;
+            from = &job;
+            return job.to_generate[job.generate_front++];
         }
         const Piece* next = job.to_generate[job.generate_front];
         const double chunks = static_cast<double>(next->range.end - next->range.begin) / static_cast<double>(chunk_planes());
@@ -1026,9 +1040,11 @@ void Engine::cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, 
             std::this_thread::sleep_for(std::chrono::microseconds(50));
             continue;
         }
+        const auto t = Clock::now();
         generate_counted_on_cpu(*p, worker, threads_, mesh);
         p->vbase = p->tbase = p->cell_groups = p->data = p->bits = cl::Buffer();
         std::lock_guard<std::mutex> lock(queue_mutex_);
+        cpu_taken_over_.add(seconds_since(t), static_cast<double>((p->range.end - p->range.begin) * plane_));
         from->taken_over += chunks_in(p->range);
         from->taken_over_voxels += (p->range.end - p->range.begin) * plane_;
     }
@@ -1200,10 +1216,11 @@ void opencl_staging_block_bytes(std::size_t bytes) { cl_engine::set_staging_bloc
 
 void opencl_deal_first_chunks(bool deal) { g_deal_first_chunks = deal; }
 
-void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s) {
+void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s, double cpu_start_s) {
     g_slow_count_s = count_s;
     g_slow_generate_s = generate_s;
     g_slow_cpu_count_s = cpu_count_s;
+    g_slow_cpu_start_s = cpu_start_s;
 }
 
 }  // namespace voxmesh::detail

@@ -41,9 +41,10 @@ void opencl_pretend_discrete(bool pretend);
 // default), so that tests run many blocks through the double buffering.
 void opencl_staging_block_bytes(std::size_t bytes);
 // Makes every device spend this long more on each chunk it counts and on each piece it
-// generates, and Hybrid's CPU worker on each chunk it counts (0: off), so that the hand-over
-// between a device and the CPU worker runs in tests whatever the machine.
-void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s = 0);
+// generates, and Hybrid's CPU worker on each chunk it counts and before it takes its first
+// (0: off), so that the hand-over between a device and the CPU worker runs in tests whatever
+// the machine.
+void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s = 0, double cpu_start_s = 0);
 // Every device takes its first chunk before any device takes a second, and in Hybrid the
 // CPU worker its first run too (waiting at most 10 s for one that never asks), so that a
 // test can count on each worker meshing something; chunks are otherwise pulled by
