@@ -17,13 +17,12 @@
 //   bits[r * words + q] bit b is sample x = 32 q + b of row r; bits past nx are 0.
 //
 // "Inside" is sample >= thr, with thr made by the host exactly as the CPU engine makes it,
-// so every case index is identical. Tables come from the host's single copy
-// (src/core/case_tables.cpp) as __constant buffers:
-//   case_table:   16 bytes per case, triangle count then 15 signed edge numbers;
-//   case_corners: 16 bytes per case, triangle count then each corner's edge as
-//                 dx | dy << 1 | dz << 2 | axis << 3 (the host builds it from its case and
-//                 cell-edge tables);
-//   pair_corners: case_corners by row-pair index (cell_pairs), what this file's kernels read.
+// so every case index is identical. The one table this file's kernels read comes from the
+// host's single copy (src/core/case_tables.cpp) as a __constant buffer:
+//   pair_corners: 16 bytes per row-pair index (cell_pairs), the case's triangle count then
+//                 each corner's edge as dx | dy << 1 | dz << 2 | axis << 3 (the host builds
+//                 it from its case, cell-edge and row-pair tables; sculpt_blocks.cl reads the
+//                 same by case index, case_corners).
 
 #define CAT2(a, b) a##b
 #define CAT(a, b) CAT2(a, b)

@@ -459,6 +459,11 @@ TEST_CASE("Hybrid hands chunks between a slow device and the CPU worker", "[open
         CHECK(stats.devices[0].voxels + stats.devices[1].voxels == g.size());
         CHECK(stats.devices[0].chunks + stats.devices[1].chunks == 48);  // handed-over chunks are the CPU's
     };
+    const auto shares = [](const Stats& stats) {
+        return "device chunks " + std::to_string(stats.devices[0].chunks) + ", handed over " +
+               std::to_string(stats.devices[0].chunks_handed_over) + ", cpu chunks " +
+               std::to_string(stats.devices[1].chunks);
+    };
     SECTION("counting on the device is slow: it stops taking chunks") {
         const Slow slow(0.02, 0, 0);
         Stats stats;
@@ -474,8 +479,7 @@ TEST_CASE("Hybrid hands chunks between a slow device and the CPU worker", "[open
         const Slow slow(0, 0.02, 0.01);
         Stats stats;
         hybrid(stats);
-        INFO("device chunks " << stats.devices[0].chunks << ", handed over " << stats.devices[0].chunks_handed_over
-                              << ", cpu chunks " << stats.devices[1].chunks);
+        INFO(shares(stats));
         CHECK(stats.devices[0].chunks >= 1);  // the piece it was generating when the CPU came
         CHECK(stats.devices[0].chunks_handed_over >= 1);
     }
@@ -485,8 +489,7 @@ TEST_CASE("Hybrid hands chunks between a slow device and the CPU worker", "[open
         const Slow slow(0, 0.05, 0, 0.5);
         Stats stats;
         hybrid(stats);
-        INFO("device chunks " << stats.devices[0].chunks << ", handed over " << stats.devices[0].chunks_handed_over
-                              << ", cpu chunks " << stats.devices[1].chunks);
+        INFO(shares(stats));
         CHECK(stats.devices[0].chunks_handed_over >= 2);
     }
     SECTION("both sides slow") {

@@ -1002,16 +1002,15 @@ Piece* Engine::take_over(std::vector<DeviceJob>& jobs, DeviceJob*& from, bool& w
             wait = true;
             continue;
         }
+        const Piece* next = job.to_generate[job.generate_front];
         if (cpu_chunk_s <= 0) {
             // Nothing measured on the CPU yet: one piece of one chunk to measure, while the
             // device has another to work on (a slow device would otherwise mesh every piece
             // alone). Not where a plan left the CPU out: a planned device's pieces are large.
-            const Piece* next = job.to_generate[job.generate_front];
             if (left < 2 || planned_device_chunks_ != kNoPlan || chunks_in(next->range) != 1) continue;
             from = &job;
             return job.to_generate[job.generate_front++];
         }
-        const Piece* next = job.to_generate[job.generate_front];
         const double chunks = static_cast<double>(next->range.end - next->range.begin) / static_cast<double>(chunk_planes());
         if (hybrid_cpu_takes_over(cpu_chunk_s * chunks, job.generate_piece_s, left)) {
             from = &job;
@@ -1043,10 +1042,11 @@ void Engine::cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, 
         const auto t = Clock::now();
         generate_counted_on_cpu(*p, worker, threads_, mesh);
         p->vbase = p->tbase = p->cell_groups = p->data = p->bits = cl::Buffer();
+        const std::size_t voxels = (p->range.end - p->range.begin) * plane_;
         std::lock_guard<std::mutex> lock(queue_mutex_);
-        cpu_taken_over_.add(seconds_since(t), static_cast<double>((p->range.end - p->range.begin) * plane_));
+        cpu_taken_over_.add(seconds_since(t), static_cast<double>(voxels));
         from->taken_over += chunks_in(p->range);
-        from->taken_over_voxels += (p->range.end - p->range.begin) * plane_;
+        from->taken_over_voxels += voxels;
     }
     cpu_pass_seconds_[2] += seconds_since(t0);
     cpu_stats_.wall_s += seconds_since(t0);
