@@ -2,6 +2,7 @@
 // random small volumes of odd dimensions, down to the exact canonical vertex/triangle order.
 #include <catch2/catch.hpp>
 
+#include "core/bit_rows.hpp"
 #include "core/case_tables.hpp"
 #include "support/mesh_checks.hpp"
 #include "support/reference_mc.hpp"
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <random>
 #include <set>
 #include <string>
 #include <vector>
@@ -106,6 +108,54 @@ TEST_CASE("case table: each case uses exactly its crossed edges, wound outward",
             for (int k = 0; k < 3; ++k) lean += n[0] * dir[k][0] + n[1] * dir[k][1] + n[2] * dir[k][2];
             INFO("triangle " << t);
             CHECK(lean > 0);
+        }
+    }
+}
+
+// Classify counts the triangles of a word with many non-uniform cells as V - 2F - 4R
+// (CellWord::triangle_sum), not by a table lookup per cell: check that against the table,
+// case by case and on random words.
+TEST_CASE("triangle counts summed a word at a time agree with the case table", "[core]") {
+    using voxmesh::detail::CellWord;
+    using voxmesh::detail::Word;
+    constexpr std::size_t kWords = 2, kNx = 64 * kWords;
+    SECTION("each non-uniform case alone, at either end of a word and inside it") {
+        for (unsigned code = 1; code < 255; ++code)
+            for (unsigned r : {0u, 1u, 30u, 62u, 63u}) {
+                Word rows[4][kWords] = {};  // (y, z), (y + 1, z), (y, z + 1), (y + 1, z + 1)
+                for (unsigned k = 0; k < 8; ++k) {
+                    if (!(code >> k & 1)) continue;
+                    const auto* at = voxmesh::detail::kCornerOffset[k];
+                    const unsigned x = r + at[0];
+                    rows[at[1] + 2 * at[2]][x / 64] |= Word{1} << (x % 64);
+                }
+                const CellWord cell(rows[0], rows[1], rows[2], rows[3], 0, kWords);
+                INFO("case " << code << " at bit " << r);
+                REQUIRE((cell.nonuniform(0, kNx) >> r & 1) == 1);
+                CHECK(cell.cell_case(r) == code);
+                CHECK(cell.triangle_sum(Word{1} << r) == voxmesh::detail::kCaseTable[code].count);
+            }
+    }
+    SECTION("random words: the sum over a word's non-uniform cells") {
+        std::mt19937_64 rng(6);
+        for (int trial = 0; trial < 20000; ++trial) {
+            Word rows[4][kWords];
+            // Sparse, dense and half-filled rows: every mix of cases, runs of one case, rings.
+            const int density = trial % 4;
+            for (auto& row : rows)
+                for (Word& w : row) {
+                    w = rng();
+                    if (density == 1) w &= rng() & rng();
+                    if (density == 2) w |= rng() | rng();
+                    if (density == 3) w = trial % 8 < 4 ? ~Word{0} ^ (Word{1} << (rng() % 64)) : Word{1} << (rng() % 64);
+                }
+            const CellWord cell(rows[0], rows[1], rows[2], rows[3], 0, kWords);
+            const Word cells = cell.nonuniform(0, kNx);
+            unsigned expected = 0;
+            for (unsigned r = 0; r < 64; ++r)
+                if (cells >> r & 1) expected += voxmesh::detail::kCaseTable[cell.cell_case(r)].count;
+            INFO("trial " << trial);
+            REQUIRE(cell.triangle_sum(cells) == expected);
         }
     }
 }
