@@ -175,8 +175,8 @@ inline WordSpan cell_row_words(const RowInfo& a, const RowInfo& b) {
 
 // A word with more than this many non-uniform cells has its triangles counted in one go
 // (CellWord::triangle_sum, about 100 instructions), fewer cell by cell. In-process A/B, 2
-// threads: classify -4 to -11 % on gyroid u8 256³, u8 512³ and f32 512³, sphere ±0; summing
-// every word cost sphere u8 512³ +10 % classify (its words hold one to four such cells).
+// threads: classify -3 to -11 % on gyroid u8 256³, u8 512³ and f32 512³, sphere ±0; summing
+// every word cost sphere u8 512³ +7 to +10 % classify (its words hold one to four such cells).
 constexpr unsigned kCellsToSum = 4;
 
 // Counts the triangles of cell row j (rows j and j + 1 of planes `here` and `up`) into
