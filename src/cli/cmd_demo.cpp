@@ -22,6 +22,8 @@ constexpr ScalarType kType = ScalarType::U16;
 // Best of: the first run also pays for page faults / program builds, and on PoCL the next
 // few calls of a process can take twice the steady time (bench/NOTES.md, fifteenth session),
 // which a best of 3 printed as the OpenCL engine's speed (0.29-0.52x the CPU's over six runs).
+// The cause was PoCL's worker threads sharing one core at first; main() now pins them where
+// it may (pocl_threads.cpp, eighteenth session).
 constexpr int kRuns = 9;
 
 struct Run {

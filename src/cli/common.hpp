@@ -41,6 +41,9 @@ Command add_devices(CLI::App& app);
 Command add_demo(CLI::App& app);
 Command add_sculpt(CLI::App& app);
 
+// Before any OpenCL call: pin PoCL's worker threads where that is safe (pocl_threads.cpp).
+void pin_pocl_workers();
+
 // Runs f; a voxmesh::Error it throws becomes BadInput whose message names `path`.
 template <class F>
 auto about_file(const std::string& path, F&& f) -> decltype(f()) {

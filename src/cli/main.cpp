@@ -9,6 +9,7 @@
 
 int main(int argc, char** argv) {
     using namespace voxmesh::cli;
+    pin_pocl_workers();
     CLI::App app{"voxmesh " VOXMESH_VERSION_STRING
                  ": marching cubes on every compute device (CPU threads, OpenCL), STL voxelization"};
     app.name("voxmesh");
