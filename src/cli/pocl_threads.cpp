@@ -9,13 +9,12 @@
 
 namespace voxmesh::cli {
 
-// PoCL (OpenCL on the CPU) starts its worker threads on the core of the thread that creates
-// them, and Linux spreads them over the cores only after some tens of milliseconds: a short
-// run's first OpenCL calls took up to twice their steady time (the demo printed OpenCL at
-// 0.50-0.67x the CPU engine, 0.64-0.69x pinned; bench/NOTES.md, eighteenth session). POCL_AFFINITY=1 pins PoCL's worker i to CPU i. Set here, in the tool,
+// A process's first OpenCL calls on PoCL (OpenCL on the CPU) took up to twice their steady
+// time, most likely while PoCL's worker threads shared one core before Linux spread them
+// (the demo printed OpenCL at 0.50-0.67x the CPU engine, 0.64-0.69x pinned; bench/NOTES.md,
+// eighteenth session). POCL_AFFINITY=1 pins PoCL's worker i to CPU i. Set here, in the tool,
 // not in the library: it is the process's environment. Not where the user set it, and not
-// where this process may not run on every CPU 0..n-1 (PoCL would try to pin to one it may
-// not use).
+// where this process may not run on every CPU 0..n-1 (PoCL would pin to one it may not use).
 void pin_pocl_workers() {
 #if defined(__linux__)
     if (std::getenv("POCL_AFFINITY")) return;
