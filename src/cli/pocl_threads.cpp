@@ -10,7 +10,7 @@
 namespace voxmesh::cli {
 
 // A process's first OpenCL calls on PoCL (OpenCL on the CPU) took up to twice their steady
-// time, most likely while PoCL's worker threads shared one core before Linux spread them
+// time, while PoCL's two worker threads took turns on one core before Linux spread them
 // (the demo printed OpenCL at 0.50-0.67x the CPU engine, 0.64-0.69x pinned; bench/NOTES.md,
 // eighteenth session). POCL_AFFINITY=1 pins PoCL's worker i to CPU i. Set here, in the tool,
 // not in the library: it is the process's environment. Not where the user set it, and not
