@@ -84,6 +84,11 @@ struct CellWord {
         return c;
     }
 
+    // The number of triangles of cell 64q + r.
+    VOXMESH_HOT_INLINE unsigned triangles(unsigned r) const {
+        return r < 63 ? kRowPairsToTriangles[row_pairs(r)] : kCaseTable[cell_case(r)].count;
+    }
+
     // The triangles of the cells set in `cells` (non-uniform ones), without a loop over them.
     // Every non-uniform case of the table has V - 2F - 4R triangles: V inside corners, F faces
     // with four inside corners, R = 1 for the four "rings" (the two outside corners at the

@@ -40,4 +40,11 @@ const std::array<std::uint8_t, 256> kColumnPairToCase =
 const std::array<std::uint8_t, 256> kRowPairsToCase =
     cases_by_index([](int dx, int dy, int dz) { return 2 * (dy + 2 * dz) + dx; });
 
+// Defined after kRowPairsToCase: initialised in that order.
+const std::array<std::uint8_t, 256> kRowPairsToTriangles = [] {
+    std::array<std::uint8_t, 256> table{};
+    for (std::size_t pairs = 0; pairs < 256; ++pairs) table[pairs] = kCaseTable[kRowPairsToCase[pairs]].count;
+    return table;
+}();
+
 }  // namespace voxmesh::detail

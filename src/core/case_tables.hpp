@@ -34,5 +34,7 @@ extern const std::array<std::uint8_t, 256> kColumnPairToCase;
 // Case index from the inside bits at x and x+1 (bits 0 and 1 of a 2-bit pair) of rows
 // (y, z), (y+1, z), (y, z+1), (y+1, z+1), their pairs at bits 0, 2, 4, 6 of the index.
 extern const std::array<std::uint8_t, 256> kRowPairsToCase;
+// kCaseTable[kRowPairsToCase[pairs]].count: classify counts a cell's triangles in one lookup.
+extern const std::array<std::uint8_t, 256> kRowPairsToTriangles;
 
 }  // namespace voxmesh::detail

@@ -197,10 +197,8 @@ constexpr unsigned kCellsToSum = 4;
         if (popcount(cells) > kCellsToSum) {
             count += cell.triangle_sum(cells);
         } else {
-            for (Word rest = cells; rest; rest &= rest - 1) {
-                const unsigned r = static_cast<unsigned>(std::countr_zero(rest));
-                count += kCaseTable[cell.cell_case(r)].count;
-            }
+            for (Word rest = cells; rest; rest &= rest - 1)
+                count += cell.triangles(static_cast<unsigned>(std::countr_zero(rest)));
         }
     }
     info[j].triangles = count;
@@ -260,14 +258,9 @@ template <class T>
     }
 }
 
-// Compiled twice: the edge and triangle counts are popcounts, which without POPCNT are
-// library calls that cost more than the rest of the pass.
-template <class T>
-void classify_planes_portable(const CpuChunkPlan& plan, const VolumeView& volume, T threshold, std::size_t a,
-                              std::size_t b, RowInfo* rows, PlaneCounts* plane_counts, std::vector<Word>* plane_bits) {
-    classify_planes_body<T>(plan, volume, threshold, a, b, rows, plane_counts, plane_bits);
-}
-
+// Compiled twice, here with POPCNT and inline in classify_planes without: the edge and
+// triangle counts are popcounts, which without POPCNT are library calls that cost more than
+// the rest of the pass.
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 template <class T>
 __attribute__((target("popcnt"))) void classify_planes_popcnt(const CpuChunkPlan& plan, const VolumeView& volume,
@@ -284,7 +277,7 @@ void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T thres
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
     if (cpu_has_popcnt()) return classify_planes_popcnt<T>(plan, volume, threshold, a, b, rows, plane_counts, plane_bits);
 #endif
-    classify_planes_portable<T>(plan, volume, threshold, a, b, rows, plane_counts, plane_bits);
+    classify_planes_body<T>(plan, volume, threshold, a, b, rows, plane_counts, plane_bits);
 }
 
 // Contiguous split of [0, n) into `parts` ranges with about equal sums of cost.
