@@ -5,9 +5,14 @@
 #include "core/parallel.hpp"
 
 #include <atomic>
+#include <chrono>
 #include <stdexcept>
 #include <thread>
 #include <vector>
+
+#if defined(__linux__)
+#include <sched.h>
+#endif
 
 using namespace voxmesh::detail;
 
@@ -57,3 +62,41 @@ TEST_CASE("run_workers rethrows a worker's exception after all have returned", "
     run_workers(6, [&](unsigned) { again += 1; });
     CHECK(again == 6);
 }
+
+#if defined(__linux__)
+// A worker woken after a long sleep could be put on the CPU of the thread that woke it, and
+// the two then took turns there (parallel.cpp); a run now wakes its workers off the caller's
+// CPU and leaves their affinity as it was.
+TEST_CASE("run_workers wakes a sleeping worker off the caller's CPU and keeps its affinity", "[core][parallel]") {
+    cpu_set_t all;
+    REQUIRE(sched_getaffinity(0, sizeof all, &all) == 0);
+    if (CPU_COUNT(&all) < 2) {
+        WARN("one CPU allowed: nothing to check");
+        return;
+    }
+    run_workers(2, [](unsigned) {});  // a cached worker started with every CPU allowed
+    int caller = 0;
+    while (!CPU_ISSET(caller, &all)) ++caller;
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(caller, &one);
+    REQUIRE(sched_setaffinity(0, sizeof one, &one) == 0);  // the caller stays on `caller`
+    for (int round = 0; round < 5; ++round) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        std::atomic<int> worker_cpu{-1};
+        cpu_set_t worker_affinity;
+        CPU_ZERO(&worker_affinity);
+        run_workers(2, [&](unsigned w) {
+            if (w == 0) {
+                while (worker_cpu.load() < 0) std::this_thread::yield();  // keeps `caller` busy
+                return;
+            }
+            sched_getaffinity(0, sizeof worker_affinity, &worker_affinity);
+            worker_cpu = sched_getcpu();
+        });
+        CHECK(worker_cpu != caller);
+        CHECK(CPU_EQUAL(&worker_affinity, &all));
+    }
+    sched_setaffinity(0, sizeof all, &all);
+}
+#endif
