@@ -10,10 +10,12 @@
 #include <dlfcn.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -63,7 +65,8 @@ int main(int argc, char** argv) try {
         std::fprintf(stderr,
                      "usage: voxmesh-ab FIELD TYPE SIZE THREADS ROUNDS LIB.so...\n"
                      "  e.g. voxmesh-ab sphere u8 512 2 30 /tmp/a.so /tmp/b.so\n"
-                     "  AB_BACKEND=cpu (default), opencl or cpu,opencl: the engines each build runs\n");
+                     "  AB_BACKEND=cpu (default), opencl or cpu,opencl: the engines each build runs\n"
+                     "  AB_PAUSE_MS=N: sleep N ms after every call (default 2; 0: back to back)\n");
         return 2;
     }
     const voxmesh::Field field = parse_field(argv[1]);
@@ -75,6 +78,12 @@ int main(int argc, char** argv) try {
 
     // AB_BACKEND: the engines every build runs, alternated like the builds (cpu,opencl
     // compares the two engines in one process; each build gets its own OpenCL context).
+    // AB_PAUSE_MS: a sleep after every call, so that one build's idle worker threads, which
+    // spin for a moment before they sleep (src/core/parallel.cpp), do not take a core from
+    // the next build's call.
+    const char* pause_text = std::getenv("AB_PAUSE_MS");
+    const double pause_ms = pause_text ? std::stod(pause_text) : 2.0;
+
     std::vector<voxmesh::Backend> backends;
     const char* backend_list = std::getenv("AB_BACKEND");
     std::string list = backend_list ? backend_list : "cpu";
@@ -133,6 +142,7 @@ int main(int argc, char** argv) try {
             total[b].push_back(stats.times.total);
             g[b] = stats.times.generate;
             t[b] = stats.times.total;
+            if (pause_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(pause_ms));
         }
         for (std::size_t b = 0; b < n; ++b) {
             ratio[b].push_back(g[b] / g[0]);

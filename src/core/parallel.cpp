@@ -8,12 +8,19 @@
 // concurrent runs (Hybrid's CPU worker inside the engine's workers, several extracts at once)
 // never wait for each other's threads.
 //
+// Waking a sleeping thread takes a futex call and the scheduler, about 25 µs each way on the
+// 2-core VM (an empty two-thread run took 50 µs), and an extract forks and joins two or three
+// times. So both sides spin a little before they sleep: a thread that finishes a task
+// watches for the next one for kSpin, and the caller of a run watches for its tasks' end as
+// long before it waits on the count.
+//
 // A run also keeps its threads off the caller's CPU when it wakes or starts them (keep_off
 // below): on Linux a thread woken or started after the process was idle for a while can be
 // put on the CPU of the thread that woke it, and then the two take turns there.
 #include "parallel.hpp"
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <functional>
 #include <memory>
@@ -28,6 +35,23 @@
 
 namespace voxmesh::detail {
 namespace {
+
+// Long enough to cover the gaps between an extract's passes (a scan, a small allocation),
+// short enough that a thread with nothing coming soon gives its core back quickly.
+constexpr auto kSpin = std::chrono::microseconds(100);
+
+// Spins until ready() or kSpin has passed; returns ready().
+template <class Ready>
+bool spin_until(Ready ready) {
+    const auto until = std::chrono::steady_clock::now() + kSpin;
+    for (unsigned i = 0;; ++i) {
+        if (ready()) return true;
+#if defined(__x86_64__) || defined(__i386__)
+        __builtin_ia32_pause();
+#endif
+        if (i % 64 == 63 && std::chrono::steady_clock::now() >= until) return ready();
+    }
+}
 
 int current_cpu() {
 #if defined(__linux__)
@@ -73,6 +97,7 @@ public:
             std::lock_guard<std::mutex> lock(w->mutex);
             w->task = std::move(task);
             w->kept_off = keep_off(*w, caller_cpu);
+            w->has_task.store(true, std::memory_order_release);
         }
         w->wake.notify_one();
     }
@@ -82,6 +107,7 @@ private:
         std::mutex mutex;
         std::condition_variable wake;
         std::function<void()> task;
+        std::atomic<bool> has_task{false};  // task is set; read while spinning, without the lock
         bool stop = false;
         std::thread thread;
 #if defined(__linux__)
@@ -114,12 +140,14 @@ private:
     void loop(Worker& w) {
         for (;;) {
             std::function<void()> task;
+            spin_until([&] { return w.has_task.load(std::memory_order_acquire); });
             {
                 std::unique_lock<std::mutex> lock(w.mutex);
                 w.wake.wait(lock, [&] { return w.stop || task_set(w); });
                 if (w.stop) return;
                 task = std::move(w.task);
                 w.task = nullptr;
+                w.has_task.store(false, std::memory_order_relaxed);
 #if defined(__linux__)
                 // On a CPU of the narrowed set, which the full one includes: nothing moves.
                 if (w.kept_off) sched_setaffinity(0, sizeof w.allowed, &w.allowed);
@@ -163,6 +191,7 @@ void run_on_threads(unsigned n, const std::function<void(unsigned)>& f) {
             },
             caller_cpu);
     f(0);
+    spin_until([&] { return pending->load(std::memory_order_acquire) == 0; });
     for (unsigned left = pending->load(std::memory_order_acquire); left != 0;
          left = pending->load(std::memory_order_acquire))
         pending->wait(left, std::memory_order_acquire);
