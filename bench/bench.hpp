@@ -43,6 +43,7 @@ struct Result {
     bool normals = true;
     bool reuse_mesh = false, interleaved = false;
     int repeat = 0, warmup = 0;
+    double pause_ms = 0;  // --pause: idle time before each run
     std::string status = "ok";  // "ok", "unavailable", "error"
     std::string error;
     std::vector<std::string> warnings;
@@ -82,6 +83,9 @@ struct Settings {
     bool quiet = false;
     bool reuse_mesh = false;  // extract_into() one Mesh kept across runs, instead of extract()
     bool interleave = false;  // an input's combinations take turns run by run (measure_interleaved)
+    // Milliseconds the process sleeps before each run, as a program that meshes once a frame
+    // does between frames: the library's idle worker threads are then woken from a sleep.
+    double pause_ms = 0;
     // --interleave: one read of the volume (the streaming floor) on each combination's threads
     // after each of its timed runs, so the floor is measured in the same phases as the runs.
     bool floor_in_rounds = false;

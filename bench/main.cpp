@@ -107,6 +107,10 @@ int main(int argc, char** argv) {
     app.add_flag("--interleave", settings.interleave,
                  "an input's combinations take turns run by run (robust ratios on a machine whose speed drifts); the "
                  "floor is read after each run");
+    app.add_option("--pause", settings.pause_ms,
+                   "milliseconds to sleep before each run, as a program meshing once a frame (its worker threads "
+                   "then wake from a sleep)")
+        ->check(CLI::Range(0.0, 10000.0));
     app.add_flag("--setup-first", settings.setup_first,
                  "before its runs, each combination meshes the volume's first 3 z-planes once (OpenCL runtime and "
                  "program builds paid there; its memory is printed as a note)");

@@ -14,6 +14,11 @@
 #include <sstream>
 #include <thread>
 
+#if defined(__linux__)
+#include <pthread.h>
+#include <sched.h>
+#endif
+
 namespace vmbench {
 
 volatile std::sig_atomic_t g_interrupted = 0;
@@ -55,6 +60,47 @@ std::uint64_t sum_words(const unsigned char* p, std::size_t bytes) {
 
 volatile std::uint64_t g_sink = 0;
 
+// Each of timed_rounds' threads on a CPU of its own, when there are no more threads than CPUs.
+// Left to the kernel, a thread started (or woken at a barrier) after the process was idle
+// for a few ms was put on its starter's CPU on this project's VM and waited there (the
+// library's worker threads had the same; src/core/parallel.cpp): the threads' reads then ran
+// one after the other, and the floor's speed-up on 2 threads read 1.0 in some runs.
+class PinThreads {
+public:
+    explicit PinThreads(unsigned threads) {
+#if defined(__linux__)
+        if (sched_getaffinity(0, sizeof allowed_, &allowed_) != 0) return;
+        for (int cpu = 0; cpu < CPU_SETSIZE && cpus_.size() < threads; ++cpu)
+            if (CPU_ISSET(cpu, &allowed_)) cpus_.push_back(cpu);
+        if (cpus_.size() < threads || threads < 2) cpus_.clear();
+#else
+        (void)threads;
+#endif
+    }
+    void pin(unsigned w) const {  // on thread w
+#if defined(__linux__)
+        if (cpus_.empty()) return;
+        cpu_set_t one;
+        CPU_ZERO(&one);
+        CPU_SET(cpus_[w], &one);
+        sched_setaffinity(0, sizeof one, &one);
+#else
+        (void)w;
+#endif
+    }
+    void unpin() const {  // on thread 0, at the end
+#if defined(__linux__)
+        if (!cpus_.empty()) sched_setaffinity(0, sizeof allowed_, &allowed_);
+#endif
+    }
+
+private:
+#if defined(__linux__)
+    cpu_set_t allowed_;
+    std::vector<int> cpus_;
+#endif
+};
+
 // The seconds of each of `rounds` rounds of work(w, round) on `threads` threads, started once
 // and released together at a barrier each round (so no round includes starting a thread),
 // from the first thread's start to the last one's end. Not timed on one thread from the
@@ -63,7 +109,9 @@ std::vector<double> timed_rounds(unsigned threads, int rounds, const std::functi
     std::vector<double> seconds(static_cast<std::size_t>(rounds));
     std::vector<double> start(threads), end(threads);
     std::barrier sync(static_cast<std::ptrdiff_t>(threads));
+    const PinThreads pins(threads);
     auto worker = [&](unsigned w) {
+        pins.pin(w);
         for (int r = 0; r < rounds; ++r) {
             sync.arrive_and_wait();
             start[w] = now_s();
@@ -79,6 +127,7 @@ std::vector<double> timed_rounds(unsigned threads, int rounds, const std::functi
     for (unsigned w = 1; w < threads; ++w) pool.emplace_back(worker, w);
     worker(0);
     for (auto& t : pool) t.join();
+    pins.unpin();
     return seconds;
 }
 
@@ -193,6 +242,7 @@ Runner::Runner(const Input& input, const Combo& combo, const Settings& settings)
     r.interleaved = settings.interleave;
     r.repeat = settings.repeat;
     r.warmup = settings.warmup;
+    r.pause_ms = settings.pause_ms;
     r.volume_mb = double(input.volume.byte_size()) / (1024.0 * 1024.0);
     r.rss_scope = per_run_rss_ ? "run" : "process";
 
@@ -240,6 +290,7 @@ bool Runner::run(bool timed) {
         // loop would; otherwise each run gets a new Mesh from extract(), freed after the timing.
         voxmesh::Mesh fresh;
         voxmesh::Stats stats;
+        if (settings_.pause_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(settings_.pause_ms));
         if (per_run_rss_ && timed) reset_hwm();
         const double rss_before = status_mb("VmRSS");
         const double t0 = now_s();

@@ -45,6 +45,10 @@ std::string num(double v, const char* fmt = "%.6g") {
     return buf;
 }
 
+std::string pause_note(double pause_ms) {
+    return pause_ms > 0 ? ", each after a " + num(pause_ms) + " ms sleep (--pause)" : "";
+}
+
 std::string csv_field(const std::string& s) {
     if (s.find_first_of(",\"\n") == std::string::npos) return s;
     std::string o = "\"";
@@ -126,7 +130,7 @@ void print_table(const std::vector<Result>& results) {
                 first = &r;
                 break;
             }
-        std::printf("\nmedian/min/max: end-to-end %s seconds over %d runs after %d warmup%s; x_floor: median / "
+        std::printf("\nmedian/min/max: end-to-end %s seconds over %d runs after %d warmup%s%s; x_floor: median / "
                     "streaming floor (one threaded read of the volume%s); speed: vs the fewest threads of the same "
                     "series; ceil: the same for a compute-only loop on at most as many threads as cores (the "
                     "machine's ceiling; the CPU engine runs no more workers than cores); fl_sp: the same for the "
@@ -136,7 +140,7 @@ void print_table(const std::vector<Result>& results) {
                     first->reuse_mesh ? "extract_into() (one Mesh reused across runs, --reuse-mesh)" : "extract()",
                     first->repeat, first->warmup,
                     first->interleaved ? " (combinations of an input taking turns run by run, --interleave)" : "",
-                    first->floor_in_rounds ? ", median of reads after each run, in the same phases as the runs" : "",
+                    pause_note(first->pause_ms).c_str(), first->floor_in_rounds ? ", median of reads after each run, in the same phases as the runs" : "",
                     first->rss_scope == "run" ? "VmHWM reset before each run"
                                               : "lifetime peak: VmHWM could not be reset on this system");
     }
@@ -177,7 +181,7 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
           << json_escape(r.device) << "\",\"device_names\":\"" << json_escape(r.device_names)
           << "\",\"threads\":" << r.threads << ",\"normals\":" << (r.normals ? "true" : "false")
           << ",\"reuse_mesh\":" << (r.reuse_mesh ? "true" : "false")
-          << ",\"interleaved\":" << (r.interleaved ? "true" : "false")
+          << ",\"interleaved\":" << (r.interleaved ? "true" : "false") << ",\"pause_ms\":" << num(r.pause_ms)
           << ",\"repeat\":" << r.repeat << ",\"warmup\":" << r.warmup << ",\"status\":\"" << r.status
           << "\",\"error\":\"" << json_escape(r.error) << "\",\"median_s\":" << opt(r.median_s)
           << ",\"min_s\":" << opt(r.min_s) << ",\"max_s\":" << opt(r.max_s) << ",\"times_s\":[";
