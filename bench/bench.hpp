@@ -147,8 +147,8 @@ void print_paper(const std::vector<Result>& results, const std::string& field, c
 
 // ---- sculpt_bench.cpp ----
 // --sculpt: stroke-path latency per size and backend (cpu, opencl, auto: --backends); 0 threads =
-// all cores. Returns the exit code.
-int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::size_t dabs,
+// all cores; pause_ms: a sleep before each dab (--pause). Returns the exit code.
+int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::size_t dabs, double pause_ms,
                const std::vector<std::string>& backends, bool json, bool quiet);
 
 // ---- volume_files.cpp ----

@@ -108,8 +108,8 @@ int main(int argc, char** argv) {
                  "an input's combinations take turns run by run (robust ratios on a machine whose speed drifts); the "
                  "floor is read after each run");
     app.add_option("--pause", settings.pause_ms,
-                   "milliseconds to sleep before each run, as a program meshing once a frame (its worker threads "
-                   "then wake from a sleep)")
+                   "milliseconds to sleep before each run (each dab with --sculpt), as a program meshing once a frame "
+                   "(its worker threads then wake from a sleep)")
         ->check(CLI::Range(0.0, 10000.0));
     app.add_flag("--setup-first", settings.setup_first,
                  "before its runs, each combination meshes the volume's first 3 z-planes once (OpenCL runtime and "
@@ -149,8 +149,8 @@ int main(int argc, char** argv) {
         if (sculpt) {
             std::signal(SIGINT, on_sigint);
             return run_sculpt(sizes_opt->count() ? sizes : std::vector<std::size_t>{256, 512},
-                              threads_opt->count() && !threads.empty() ? threads[0] : 0, dabs, backends, json,
-                              settings.quiet);
+                              threads_opt->count() && !threads.empty() ? threads[0] : 0, dabs, settings.pause_ms,
+                              backends, json, settings.quiet);
         }
         if (paper) {
             if (!sizes_opt->count()) sizes = {64, 128, 256, 512};

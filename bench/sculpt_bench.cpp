@@ -19,7 +19,7 @@ voxmesh::Backend sculpt_backend(const std::string& name) {
 
 }  // namespace
 
-int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::size_t dabs,
+int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::size_t dabs, double pause_ms,
                const std::vector<std::string>& backends, bool json, bool quiet) {
     std::vector<voxmesh::Backend> chosen;
     for (const std::string& b : backends) chosen.push_back(sculpt_backend(b));
@@ -30,6 +30,7 @@ int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::siz
             options.resolution = n;
             options.dabs = dabs;
             options.threads = threads;
+            options.pause_ms = pause_ms;
             options.backend = backend;
             const auto log = [&](const std::string& line) {
                 if (!quiet) std::fprintf(stderr, "[sculpt %zu^3 %s] %s\n", n, voxmesh::backend_name(backend), line.c_str());
@@ -37,10 +38,10 @@ int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::siz
             const voxmesh::SculptBenchResult r = voxmesh::run_sculpt_benchmark(options, log);
             if (json) {
                 std::printf("{\"bench\":\"sculpt\",\"size\":%zu,\"backend\":\"%s\",\"device\":\"%s\",\"threads\":%u,"
-                            "\"dabs\":%zu,\"update_p50_ms\":%.3f,\"update_p95_ms\":%.3f,\"update_p99_ms\":%.3f,"
+                            "\"dabs\":%zu,\"pause_ms\":%g,\"update_p50_ms\":%.3f,\"update_p95_ms\":%.3f,\"update_p99_ms\":%.3f,"
                             "\"update_cpu_p50_ms\":%.3f,\"frame_p95_ms\":%.3f,\"blocks_per_dab\":%.2f,"
                             "\"full_extract_ms\":%.3f,\"mesh_assembly_ms\":%.3f,\"triangles\":%zu}\n",
-                            n, voxmesh::backend_name(r.backend), r.device.c_str(), r.threads, r.update.count, r.update.p50,
+                            n, voxmesh::backend_name(r.backend), r.device.c_str(), r.threads, r.update.count, pause_ms, r.update.p50,
                             r.update.p95, r.update.p99, r.update_cpu.p50, r.frame.p95, r.mean_blocks_remeshed,
                             r.full_extract_ms, r.mesh_assembly_ms, r.triangles);
             } else {

@@ -214,6 +214,7 @@ struct SculptBenchOptions {
     std::size_t extract_repeats = 3;  // full extract() timings (median reported); 0 = skip
     Backend backend = Backend::Cpu;   // where update() re-meshes (SculptOptions::backend)
     int device = -1;                  // SculptOptions::device
+    double pause_ms = 0;              // sleep before each dab, as between an interactive program's frames
 };
 
 struct SculptBenchResult {

@@ -233,6 +233,7 @@ SculptBenchResult run_sculpt_benchmark(const SculptBenchOptions& options,
     cpu_ms.reserve(path.size());
     std::size_t remeshed = 0;
     for (const ScriptDab& d : path) {
+        if (options.pause_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options.pause_ms));
         const auto t0 = Clock::now();
         sculpt.apply(d.dab, d.units);
         const auto t1 = Clock::now();
@@ -291,7 +292,9 @@ std::string format_sculpt_benchmark(const SculptBenchResult& r) {
     o << "sculpt " << n << "^3, block " << r.options.block_size << ", ";
     if (r.backend == Backend::OpenCL) o << "OpenCL '" << r.device << "', ";
     else o << r.threads << " threads, ";
-    o << r.update.count << " dabs (radius " << r.options.radius_min << ".." << r.options.radius_max << ")\n";
+    o << r.update.count << " dabs (radius " << r.options.radius_min << ".." << r.options.radius_max << ")";
+    if (r.options.pause_ms > 0) o << ", each after a " << r.options.pause_ms << " ms sleep";
+    o << "\n";
     o << "  update latency ms: p50 " << r.update.p50 << "  p95 " << r.update.p95 << "  p99 " << r.update.p99
       << "  max " << r.update.max << "  mean " << r.update.mean << "\n";
     o << "  edit+update ms:    p50 " << r.frame.p50 << "  p95 " << r.frame.p95 << "  p99 " << r.frame.p99
