@@ -96,7 +96,9 @@ public:
         {
             std::lock_guard<std::mutex> lock(w->mutex);
             w->task = std::move(task);
-            w->kept_off = keep_off(*w, caller_cpu);
+            // A spinning worker takes the task where it runs; only a sleeping one is placed
+            // by the wake. (One whose spin is ending blocks on this lock and finds the task.)
+            if (!w->spinning.load(std::memory_order_relaxed)) w->kept_off = keep_off(*w, caller_cpu);
             w->has_task.store(true, std::memory_order_release);
         }
         w->wake.notify_one();
@@ -108,6 +110,7 @@ private:
         std::condition_variable wake;
         std::function<void()> task;
         std::atomic<bool> has_task{false};  // task is set; read while spinning, without the lock
+        std::atomic<bool> spinning{false};  // awake, watching has_task: no wake-up to place
         bool stop = false;
         std::thread thread;
 #if defined(__linux__)
@@ -140,7 +143,9 @@ private:
     void loop(Worker& w) {
         for (;;) {
             std::function<void()> task;
+            w.spinning.store(true, std::memory_order_relaxed);
             spin_until([&] { return w.has_task.load(std::memory_order_acquire); });
+            w.spinning.store(false, std::memory_order_relaxed);
             {
                 std::unique_lock<std::mutex> lock(w.mutex);
                 w.wake.wait(lock, [&] { return w.stop || task_set(w); });
