@@ -290,7 +290,8 @@ bool Runner::run(bool timed) {
         // loop would; otherwise each run gets a new Mesh from extract(), freed after the timing.
         voxmesh::Mesh fresh;
         voxmesh::Stats stats;
-        if (settings_.pause_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(settings_.pause_ms));
+        if (settings_.pause_ms > 0)
+            std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(settings_.pause_ms));
         if (per_run_rss_ && timed) reset_hwm();
         const double rss_before = status_mb("VmRSS");
         const double t0 = now_s();

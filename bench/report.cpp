@@ -140,7 +140,8 @@ void print_table(const std::vector<Result>& results) {
                     first->reuse_mesh ? "extract_into() (one Mesh reused across runs, --reuse-mesh)" : "extract()",
                     first->repeat, first->warmup,
                     first->interleaved ? " (combinations of an input taking turns run by run, --interleave)" : "",
-                    pause_note(first->pause_ms).c_str(), first->floor_in_rounds ? ", median of reads after each run, in the same phases as the runs" : "",
+                    pause_note(first->pause_ms).c_str(),
+                    first->floor_in_rounds ? ", median of reads after each run, in the same phases as the runs" : "",
                     first->rss_scope == "run" ? "VmHWM reset before each run"
                                               : "lifetime peak: VmHWM could not be reset on this system");
     }

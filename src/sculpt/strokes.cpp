@@ -233,7 +233,8 @@ SculptBenchResult run_sculpt_benchmark(const SculptBenchOptions& options,
     cpu_ms.reserve(path.size());
     std::size_t remeshed = 0;
     for (const ScriptDab& d : path) {
-        if (options.pause_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options.pause_ms));
+        if (options.pause_ms > 0)
+            std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options.pause_ms));
         const auto t0 = Clock::now();
         sculpt.apply(d.dab, d.units);
         const auto t1 = Clock::now();
