@@ -4,7 +4,8 @@
 # REV is a git revision or "." for the working tree. Each is built position-independent in
 # $AB_DIR (default /tmp/voxmesh-ab; revisions are git worktrees there: `rm -rf` it, then
 # `git worktree prune`) and wrapped as a shared object; then voxmesh-ab runs.
-# AB_BACKEND=opencl times the OpenCL engine, AB_BACKEND=cpu,opencl both (default: cpu).
+# AB_BACKEND=opencl times the OpenCL engine, AB_BACKEND=cpu,opencl both (default: cpu);
+# AB_REUSE=1 meshes into one kept Mesh per build (extract_into), AB_PAUSE_MS=N sleeps after calls.
 set -euo pipefail
 if [ $# -lt 6 ]; then sed -n 2,7p "$0"; exit 2; fi
 field=$1 type=$2 size=$3 threads=$4 rounds=$5; shift 5

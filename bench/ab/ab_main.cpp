@@ -22,10 +22,14 @@
 namespace {
 
 using Extract = voxmesh::Mesh (*)(const voxmesh::VolumeView&, const voxmesh::Options&, voxmesh::Stats&);
+using ExtractInto = void (*)(const voxmesh::VolumeView&, const voxmesh::Options&, voxmesh::Mesh&, voxmesh::Stats&);
 using MakeField = voxmesh::FieldVolume (*)(voxmesh::Field, std::size_t, voxmesh::ScalarType, std::uint32_t);
 
-// Mangled names of voxmesh::extract(view, options, stats) and voxmesh::make_field.
+// Mangled names of voxmesh::extract(view, options, stats), extract_into(view, options, mesh,
+// stats) and voxmesh::make_field.
 constexpr const char* kExtract = "_ZN7voxmesh7extractERKNS_10VolumeViewERKNS_7OptionsERNS_5StatsE";
+constexpr const char* kExtractInto =
+    "_ZN7voxmesh12extract_intoERKNS_10VolumeViewERKNS_7OptionsERNS_4MeshERNS_5StatsE";
 constexpr const char* kMakeField = "_ZN7voxmesh10make_fieldENS_5FieldEmNS_10ScalarTypeEj";
 
 double median(std::vector<double> v) {
@@ -66,7 +70,8 @@ int main(int argc, char** argv) try {
                      "usage: voxmesh-ab FIELD TYPE SIZE THREADS ROUNDS LIB.so...\n"
                      "  e.g. voxmesh-ab sphere u8 512 2 30 /tmp/a.so /tmp/b.so\n"
                      "  AB_BACKEND=cpu (default), opencl or cpu,opencl: the engines each build runs\n"
-                     "  AB_PAUSE_MS=N: sleep N ms after every call (default 2; 0: back to back)\n");
+                     "  AB_PAUSE_MS=N: sleep N ms after every call (default 2; 0: back to back)\n"
+                     "  AB_REUSE=1: extract_into() one kept Mesh per build, not extract()\n");
         return 2;
     }
     const voxmesh::Field field = parse_field(argv[1]);
@@ -83,6 +88,10 @@ int main(int argc, char** argv) try {
     // the next build's call.
     const char* pause_text = std::getenv("AB_PAUSE_MS");
     const double pause_ms = pause_text ? std::stod(pause_text) : 2.0;
+    // AB_REUSE=1: each build meshes into its own kept Mesh (extract_into), as a program
+    // meshing repeatedly would; the default, extract(), pays fresh output pages every call.
+    const char* reuse_text = std::getenv("AB_REUSE");
+    const bool reuse = reuse_text && std::string(reuse_text) == "1";
 
     std::vector<voxmesh::Backend> backends;
     const char* backend_list = std::getenv("AB_BACKEND");
@@ -98,8 +107,17 @@ int main(int argc, char** argv) try {
 
     struct Entry {
         Extract extract;
+        ExtractInto extract_into;
         voxmesh::Backend backend;
         std::string label;
+        voxmesh::Mesh kept;  // AB_REUSE's mesh
+
+        voxmesh::Mesh& run(const voxmesh::VolumeView& view, const voxmesh::Options& options, voxmesh::Stats& stats,
+                           bool reuse_mesh) {
+            if (reuse_mesh) extract_into(view, options, kept, stats);
+            else kept = extract(view, options, stats);
+            return kept;
+        }
     };
     std::vector<Entry> builds;
     MakeField make_field = nullptr;
@@ -108,8 +126,10 @@ int main(int argc, char** argv) try {
         void* library = dlopen(argv[i], RTLD_NOW | RTLD_LOCAL | RTLD_DEEPBIND);
         if (!library) throw voxmesh::Error(dlerror());
         const auto extract = reinterpret_cast<Extract>(symbol(library, kExtract, argv[i]));
+        const auto extract_into = reinterpret_cast<ExtractInto>(symbol(library, kExtractInto, argv[i]));
         for (const voxmesh::Backend backend : backends)
-            builds.push_back({extract, backend, std::string(argv[i]) + " " + (backend == voxmesh::Backend::Cpu ? "cpu" : "opencl")});
+            builds.push_back({extract, extract_into, backend,
+                              std::string(argv[i]) + " " + (backend == voxmesh::Backend::Cpu ? "cpu" : "opencl"), {}});
         if (!make_field) make_field = reinterpret_cast<MakeField>(symbol(library, kMakeField, argv[i]));
     }
     if (builds.size() < 2) throw voxmesh::Error("nothing to compare: give two builds or two engines");
@@ -128,7 +148,8 @@ int main(int argc, char** argv) try {
     for (std::size_t b = 0; b < n; ++b) {  // warm-up: page faults, thread start, caches
         voxmesh::Stats stats;
         options.backend = builds[b].backend;
-        triangles[b] = builds[b].extract(view, options, stats).triangle_count();
+        triangles[b] = builds[b].run(view, options, stats, reuse).triangle_count();
+        if (!reuse) builds[b].kept = {};
     }
     for (unsigned r = 0; r < rounds; ++r) {
         std::vector<double> g(n), t(n);
@@ -136,7 +157,8 @@ int main(int argc, char** argv) try {
             const std::size_t b = r % 2 ? n - 1 - k : k;  // forward, then backward
             voxmesh::Stats stats;
             options.backend = builds[b].backend;
-            const voxmesh::Mesh mesh = builds[b].extract(view, options, stats);
+            builds[b].run(view, options, stats, reuse);
+            if (!reuse) builds[b].kept = {};  // freed before the next call, as before
             classify[b].push_back(stats.times.classify);
             generate[b].push_back(stats.times.generate);
             total[b].push_back(stats.times.total);
@@ -149,8 +171,8 @@ int main(int argc, char** argv) try {
             total_ratio[b].push_back(t[b] / t[0]);
         }
     }
-    std::printf("%s %s %zu^3, %u threads, %u rounds; medians in seconds, generate and total / first build's per round\n",
-                argv[1], argv[2], size, threads, rounds);
+    std::printf("%s %s %zu^3, %u threads, %u rounds, %s; medians in seconds, generate and total / first build's per round\n",
+                argv[1], argv[2], size, threads, rounds, reuse ? "extract_into()" : "extract()");
     for (std::size_t b = 0; b < n; ++b)
         std::printf("%-39s triangles %zu classify %.4f generate %.4f total %.4f generate/first %.3f total/first %.3f\n",
                     builds[b].label.c_str(), triangles[b], median(classify[b]), median(generate[b]), median(total[b]),

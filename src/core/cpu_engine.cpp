@@ -82,13 +82,13 @@ public:
     // at a shared uniform row, and rows with crossings point into `stored` (classify's bits)
     // when there is one. Everything else is packed from the volume. Returns true when a
     // packed sample is NaN.
-    bool fill(BitPlane& plane, std::size_t z, const RowInfo* rows, const std::vector<Word>* stored) const {
+    bool fill(BitPlane& plane, std::size_t z, const RowInfo* rows, const Word* stored) const {
         bool nan = false;
         for (std::size_t j = 0; j < ny_; ++j) {
             if (rows && rows[j].empty()) {
                 plane.rows[j] = uniform_[rows[j].uniform_bit()].data();
             } else if (rows && stored) {
-                plane.rows[j] = stored->data() + rows[j].bits_at;
+                plane.rows[j] = stored + rows[j].bits_at;
             } else {
                 prefetch_ahead(z, j);
                 nan |= pack(plane, z, j);
@@ -149,6 +149,7 @@ private:
     info.vertices = count;
     info.first = static_cast<std::uint32_t>(first);
     info.last = static_cast<std::uint32_t>(last);
+    info.triangles = 0;  // counted after the next row, where its cell row has any
     return busy;
 }
 
@@ -207,7 +208,7 @@ constexpr unsigned kCellsToSum = 4;
 template <class T>
 [[gnu::always_inline]] inline void classify_planes_body(const CpuChunkPlan& plan, const VolumeView& volume,
                                                        T threshold, std::size_t a, std::size_t b, RowInfo* rows,
-                                                       PlaneCounts* plane_counts, std::vector<Word>* plane_bits) {
+                                                       PlaneCounts* plane_counts, const CpuChunkPlan* keep_bits) {
     const std::size_t nx = volume.dims[0], ny = volume.dims[1], nz = volume.dims[2];
     PlaneBits<T> bits(volume, threshold);
     const std::size_t words = bits.stride();
@@ -221,7 +222,6 @@ template <class T>
         const bool count_cells = has_up && k < plan.range.end;
         const BitPlane& next_z = has_up ? up : here;
         RowInfo* info = rows + (k - plan.range.begin) * ny;
-        std::size_t active = 0;
         bool nan = false;
         // Row by row: pack row j of plane k + 1, classify row j of plane k, count cell row
         // j - 1. The volume streams in while the bits are worked on, where packing the whole
@@ -232,17 +232,17 @@ template <class T>
                 nan |= bits.pack(up, k + 1, j);
             }
             busy[j] = classify_row_body(here.row(j), here.row(j + 1 < ny ? j + 1 : j), next_z.row(j), words, nx, info[j]);
-            active += !info[j].empty();
             if (count_cells && j > 0) count_cell_row_body(here, up, info, busy.data(), j - 1, words, nx);
         }
         if (nan) throw_nan(k + 1);
-        if (plane_bits) {
-            std::vector<Word>& store = plane_bits[k - plan.range.begin];
-            store.reserve(active * words);
+        if (keep_bits) {
+            Word* store = keep_bits->kept_bits(k - plan.range.begin);
+            std::uint32_t at = 0;
             for (std::size_t j = 0; j < ny; ++j)
                 if (!info[j].empty()) {
-                    info[j].bits_at = static_cast<std::uint32_t>(store.size());
-                    store.insert(store.end(), here.row(j), here.row(j) + words);
+                    info[j].bits_at = at;
+                    std::memcpy(store + at, here.row(j), words * sizeof(Word));
+                    at += static_cast<std::uint32_t>(words);
                 }
         }
         // The plane's sums while its rows are in cache. Cost: a plane's bits plus its vertices
@@ -266,18 +266,18 @@ template <class T>
 __attribute__((target("popcnt"))) void classify_planes_popcnt(const CpuChunkPlan& plan, const VolumeView& volume,
                                                               T threshold, std::size_t a, std::size_t b, RowInfo* rows,
                                                               PlaneCounts* plane_counts,
-                                                              std::vector<Word>* plane_bits) {
-    classify_planes_body<T>(plan, volume, threshold, a, b, rows, plane_counts, plane_bits);
+                                                              const CpuChunkPlan* keep_bits) {
+    classify_planes_body<T>(plan, volume, threshold, a, b, rows, plane_counts, keep_bits);
 }
 #endif
 
 template <class T>
 void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T threshold, std::size_t a, std::size_t b,
-                     RowInfo* rows, PlaneCounts* plane_counts, std::vector<Word>* plane_bits) {
+                     RowInfo* rows, PlaneCounts* plane_counts, const CpuChunkPlan* keep_bits) {
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-    if (cpu_has_popcnt()) return classify_planes_popcnt<T>(plan, volume, threshold, a, b, rows, plane_counts, plane_bits);
+    if (cpu_has_popcnt()) return classify_planes_popcnt<T>(plan, volume, threshold, a, b, rows, plane_counts, keep_bits);
 #endif
-    classify_planes_body<T>(plan, volume, threshold, a, b, rows, plane_counts, plane_bits);
+    classify_planes_body<T>(plan, volume, threshold, a, b, rows, plane_counts, keep_bits);
 }
 
 // Contiguous split of [0, n) into `parts` ranges with about equal sums of cost.
@@ -309,7 +309,9 @@ std::vector<std::size_t> balanced_split(const std::vector<double>& cost, unsigne
 // id is at a fixed offset from its cell's sample slot (`slots(lower)[e]`, for plane k in the
 // lower or upper half), plus the base of the row it is in (`rows_of()[e]`: 0 and 1 for rows
 // y and y + 1 of plane k, 2 and 3 of plane k + 1). In huge pages where large: a cell row reads
-// ids from rows 6 KiB apart at 512², a TLB miss each with 4 KiB pages.
+// ids from rows 6 KiB apart at 512², a TLB miss each with 4 KiB pages. From the scratch pool
+// (uninitialised, never read before written): a new table was 3 MB of fresh pages per worker
+// per call at 512², and of a memset where malloc reused memory.
 constexpr std::size_t kMaxNxFor16BitIds = 21845;  // 3 * nx - 1 <= 65535
 
 template <class Id>
@@ -319,7 +321,7 @@ public:
 
     EdgeIds(std::size_t nx, std::size_t ny)
         : row_(kSampleSlots * nx),
-          storage_(allocate_zeroed(row_ * ny * sizeof(Id))) {
+          storage_(acquire_scratch(row_ * ny * sizeof(Id))) {
         for (unsigned e = 0; e < 12; ++e) {
             const CellEdge& edge = kCellEdge[e];
             row_of_[e] = edge.dy + 2u * edge.dz;
@@ -407,7 +409,8 @@ private:
 
     void fill_bits(std::size_t z, int slot) {
         const std::size_t p = z - plan_.range.begin;
-        bits_.fill(planes_[slot], z, meta_rows(z), p < plan_.plane_bits.size() ? &plan_.plane_bits[p] : nullptr);
+        const bool kept = plan_.plane_bits.size() > 0 && p < plan_.meta_planes;
+        bits_.fill(planes_[slot], z, meta_rows(z), kept ? plan_.kept_bits(p) : nullptr);
     }
 
     void build_edges(std::size_t z, const BitPlane& plane, const BitPlane* up, unsigned half, bool write_vertices) {
@@ -614,16 +617,17 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
             return;
         }
         plan.meta_planes = std::min(range.end + 1, nz) - range.begin;
-        reserve_huge(plan.rows, plan.meta_planes * ny);
-        plan.rows.assign(plan.meta_planes * ny, RowInfo{});
+        plan.rows = ScratchArray<RowInfo>(plan.meta_planes * ny);
         plan.planes.assign(plan.meta_planes, PlaneCounts{});
-        if (sizeof(T) >= 2) plan.plane_bits.resize(plan.meta_planes);
+        if (sizeof(T) >= 2) {
+            plan.plane_bit_words = ny * words_per_row(volume.dims[0]);
+            plan.plane_bits = ScratchArray<Word>(plan.meta_planes * plan.plane_bit_words);
+        }
         const unsigned slabs = slab_count(threads, plan.meta_planes, kClassifySlabsPerThread);
         const auto cuts = even_split(plan.meta_planes, slabs);
         run_slabs(slabs, threads, [&](unsigned w, unsigned) {
             classify_planes<T>(plan, volume, threshold.value, range.begin + cuts[w], range.begin + cuts[w + 1],
-                               plan.rows.data(), plan.planes.data(),
-                               plan.plane_bits.empty() ? nullptr : plan.plane_bits.data());
+                               plan.rows.data(), plan.planes.data(), plan.plane_bits.size() > 0 ? &plan : nullptr);
         });
     });
     if (plan.uniform) return plan;

@@ -8,6 +8,7 @@
 #pragma once
 
 #include "row_packer.hpp"
+#include "scratch.hpp"
 
 #include <voxmesh/voxmesh.hpp>
 
@@ -48,12 +49,17 @@ struct PlaneCounts {
 struct CpuChunkPlan {
     ZRange range;
     std::size_t meta_planes = 0;             // planes with RowInfo: the range plus plane `end` if it exists
-    std::vector<RowInfo> rows;               // meta_planes * ny
+    // meta_planes * ny, in scratch kept from call to call (scratch.hpp): classify writes
+    // every row's first, last, vertices and triangles (bits_at where it keeps bits).
+    ScratchArray<RowInfo> rows;
     // Per meta plane, the inside bits classify packed for the rows with crossings (the only
-    // rows generate reads samples of), so generate does not read and pack them again. Kept
-    // for samples of 2 bytes or more only, where they cost at most 1/16 of the volume; 8-bit
-    // samples are cheaper to pack again than to keep.
-    std::vector<std::vector<Word>> plane_bits;
+    // rows generate reads samples of), so generate does not read and pack them again: plane
+    // p's rows one after another from kept_bits(p). Kept for samples of 2 bytes or more only,
+    // where they cost at most 1/16 of the volume; 8-bit samples are cheaper to pack again
+    // than to keep.
+    ScratchArray<Word> plane_bits;
+    std::size_t plane_bit_words = 0;         // room per plane: ny rows' words
+    Word* kept_bits(std::size_t p) const { return plane_bits.data() + p * plane_bit_words; }
     std::vector<PlaneCounts> planes;         // meta_planes
     std::uint64_t vertices = 0;   // owned by the range (excludes plane `end`)
     std::uint64_t triangles = 0;

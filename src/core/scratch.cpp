@@ -1,0 +1,89 @@
+#include "scratch.hpp"
+
+#include "huge_pages.hpp"
+
+#include <algorithm>
+#include <deque>
+#include <mutex>
+
+namespace voxmesh::detail {
+namespace {
+
+// Room for what a few extracts on a many-core machine let go of (two classify arrays per
+// chunk, an id table per worker), and for 1024³ float volumes' kept bits (128 MB).
+constexpr std::size_t kMaxKeptBlocks = 64;
+constexpr std::size_t kMaxKeptBytes = std::size_t{512} << 20;
+
+struct Block {
+    std::shared_ptr<void> memory;  // allocate_zeroed: huge pages where large
+    std::size_t bytes = 0;
+};
+
+class ScratchPool {
+public:
+    std::shared_ptr<void> acquire(std::size_t bytes) {
+        bytes = std::max<std::size_t>(bytes, 1);
+        Block block;
+        {
+            std::lock_guard<std::mutex> lock(mutex_);
+            // The smallest kept block that fits, so a small request does not take a large one.
+            auto best = kept_.end();
+            for (auto it = kept_.begin(); it != kept_.end(); ++it)
+                if (it->bytes >= bytes && (best == kept_.end() || it->bytes < best->bytes)) best = it;
+            if (best != kept_.end()) {
+                block = std::move(*best);
+                kept_bytes_ -= block.bytes;
+                kept_.erase(best);
+            }
+        }
+        if (!block.memory) block = Block{allocate_zeroed(bytes), bytes};
+        void* data = block.memory.get();
+        return std::shared_ptr<void>(data, [this, held = std::make_shared<Block>(std::move(block))](void*) {
+            give_back(std::move(*held));
+        });
+    }
+
+    ScratchKept kept() {
+        std::lock_guard<std::mutex> lock(mutex_);
+        return {kept_.size(), kept_bytes_};
+    }
+
+    void release() {
+        std::deque<Block> freed;
+        std::lock_guard<std::mutex> lock(mutex_);
+        freed.swap(kept_);
+        kept_bytes_ = 0;
+    }
+
+private:
+    void give_back(Block block) {
+        if (block.bytes > kMaxKeptBytes) return;  // freed here
+        std::deque<Block> freed;                  // freed after the lock is let go
+        std::lock_guard<std::mutex> lock(mutex_);
+        kept_bytes_ += block.bytes;
+        kept_.push_back(std::move(block));
+        while (kept_.size() > kMaxKeptBlocks || kept_bytes_ > kMaxKeptBytes) {
+            kept_bytes_ -= kept_.front().bytes;
+            freed.push_back(std::move(kept_.front()));
+            kept_.pop_front();
+        }
+    }
+
+    std::mutex mutex_;
+    std::deque<Block> kept_;  // oldest first
+    std::size_t kept_bytes_ = 0;
+};
+
+// Never destroyed: blocks may be let go of by static objects' destructors at exit.
+ScratchPool& pool() {
+    static ScratchPool* instance = new ScratchPool;
+    return *instance;
+}
+
+}  // namespace
+
+std::shared_ptr<void> acquire_scratch(std::size_t bytes) { return pool().acquire(bytes); }
+ScratchKept scratch_kept() { return pool().kept(); }
+void release_scratch() { pool().release(); }
+
+}  // namespace voxmesh::detail

@@ -1,0 +1,142 @@
+// The scratch pool (src/core/scratch.hpp): blocks are kept for the next call that fits, within
+// its limits, and whatever an earlier call left in them never reaches a mesh.
+#include <catch2/catch.hpp>
+
+#include "core/scratch.hpp"
+#include "support/mesh_checks.hpp"
+#include "support/reference_mc.hpp"
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <vector>
+
+using namespace voxmesh::detail;
+using vmtest::Dims;
+
+TEST_CASE("scratch blocks are kept and handed out again, the smallest that fits first", "[core][scratch]") {
+    release_scratch();
+    CHECK(scratch_kept().blocks == 0);
+    void* small_at = nullptr;
+    void* large_at = nullptr;
+    {
+        const auto small = acquire_scratch(100 << 10);
+        const auto large = acquire_scratch(3 << 20);
+        small_at = small.get();
+        large_at = large.get();
+        std::memset(small.get(), 1, 100 << 10);  // writable, all of it
+        std::memset(large.get(), 2, 3 << 20);
+        CHECK(scratch_kept().blocks == 0);  // out, not kept
+    }
+    CHECK(scratch_kept().blocks == 2);
+    CHECK(scratch_kept().bytes == (100u << 10) + (3u << 20));
+    {
+        const auto a = acquire_scratch(50 << 10);  // fits both: gets the small one
+        CHECK(a.get() == small_at);
+        const auto b = acquire_scratch(1 << 20);  // fits only the large one
+        CHECK(b.get() == large_at);
+        CHECK(scratch_kept().blocks == 0);
+        const auto c = acquire_scratch(4 << 20);  // nothing fits: a new block
+        CHECK(c.get() != small_at);
+        CHECK(c.get() != large_at);
+    }
+    CHECK(scratch_kept().blocks == 3);
+    release_scratch();
+    CHECK(scratch_kept().blocks == 0);
+    CHECK(scratch_kept().bytes == 0);
+}
+
+TEST_CASE("the scratch pool keeps at most its limits, the oldest blocks going first", "[core][scratch]") {
+    release_scratch();
+    {
+        std::vector<std::shared_ptr<void>> many;
+        for (int i = 0; i < 100; ++i) many.push_back(acquire_scratch(4096));
+    }
+    CHECK(scratch_kept().blocks == 64);
+    {
+        // Larger than everything the pool may keep: freed, not kept, and nothing else goes.
+        const auto huge = acquire_scratch(std::size_t{600} << 20);
+        CHECK(huge.get() != nullptr);
+    }
+    CHECK(scratch_kept().blocks == 64);
+    release_scratch();
+    SECTION("an array's size that overflows is refused") {
+        CHECK_THROWS_AS(ScratchArray<std::uint64_t>(SIZE_MAX / 4), std::bad_alloc);
+    }
+}
+
+namespace {
+
+// Fills the pool with blocks of every size an extract below asks for, all bytes `garbage`.
+void dirty_pool(unsigned char garbage) {
+    release_scratch();
+    std::vector<std::shared_ptr<void>> blocks;
+    for (std::size_t bytes = 1 << 10; bytes <= std::size_t{8} << 20; bytes *= 2) {
+        blocks.push_back(acquire_scratch(bytes));
+        std::memset(blocks.back().get(), garbage, bytes);
+    }
+}
+
+voxmesh::Options cpu(double iso, unsigned threads) {
+    voxmesh::Options o;
+    o.iso = iso;
+    o.backend = voxmesh::Backend::Cpu;
+    o.threads = threads;
+    return o;
+}
+
+}  // namespace
+
+TEST_CASE("meshes from dirty scratch are the reference's", "[core][scratch]") {
+    // f32 keeps classify's bits in scratch, u8 does not; both keep row metadata and ids there.
+    const Dims dims{45, 38, 41};
+    const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));
+    std::vector<std::uint8_t> bytes(values.size());
+    for (std::size_t i = 0; i < values.size(); ++i) bytes[i] = static_cast<std::uint8_t>(std::lround(127 + 50 * values[i]));  // wavy: within ±2.5
+    vmtest::RefOptions ro;
+    ro.iso = 0.15;
+    const vmtest::RefMesh ref = vmtest::reference_mc(vmtest::to_doubles(values), dims, ro);
+    ro.iso = 131.5;
+    const vmtest::RefMesh ref_bytes = vmtest::reference_mc(vmtest::to_doubles(bytes), dims, ro);
+    for (unsigned char garbage : {0x00, 0xff, 0xa5}) {
+        for (unsigned threads : {1u, 2u, 3u}) {
+            INFO("garbage " << int(garbage) << ", threads " << threads);
+            dirty_pool(garbage);
+            const voxmesh::Mesh mesh = voxmesh::extract(vmtest::view_of(values, dims), cpu(0.15, threads));
+            REQUIRE(mesh.triangle_count() > 1000);
+            const vmtest::Comparison cmp = vmtest::compare_with_reference(mesh, ref);
+            INFO(cmp.first_problem);
+            CHECK(cmp.same_indices);
+            CHECK(cmp.max_position_error < 1e-5);
+
+            dirty_pool(garbage);
+            const voxmesh::Mesh mesh_bytes = voxmesh::extract(vmtest::view_of(bytes, dims), cpu(131.5, threads));
+            REQUIRE(mesh_bytes.triangle_count() > 1000);
+            const vmtest::Comparison cmp_bytes = vmtest::compare_with_reference(mesh_bytes, ref_bytes);
+            INFO(cmp_bytes.first_problem);
+            CHECK(cmp_bytes.same_indices);
+        }
+    }
+    release_scratch();
+}
+
+TEST_CASE("an extract's scratch is kept for the next one and release_scratch_memory frees it", "[core][scratch]") {
+    const Dims dims{64, 48, 40};
+    const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));
+    voxmesh::release_scratch_memory();
+    const voxmesh::Mesh first = voxmesh::extract(vmtest::view_of(values, dims), cpu(0.15, 2));
+    // Row metadata (20 bytes a row) and kept bits (8 bytes a row here) of every plane, and the
+    // id tables, at least one.
+    const ScratchKept kept = scratch_kept();
+    CHECK(kept.blocks >= 3);
+    CHECK(kept.bytes >= std::size_t{48} * 40 * (20 + 8));
+    const voxmesh::Mesh second = voxmesh::extract(vmtest::view_of(values, dims), cpu(0.15, 2));
+    CHECK(scratch_kept().blocks == kept.blocks);  // reused, none added
+    CHECK(scratch_kept().bytes == kept.bytes);
+    CHECK(first.indices == second.indices);
+    voxmesh::release_scratch_memory();
+    CHECK(scratch_kept().blocks == 0);
+}
