@@ -545,8 +545,11 @@ private:
 // slowest one. Each slab packs a plane or two again at its ends and builds the ids of the
 // next slab's first plane, so not too many: 8 and 16 per thread cost 2 threads 3-5 % of the
 // total over 4 and 6 (in-process A/B, sphere and gyroid, 256³ and 512³), and 2 and 3
-// left gyroid's cores waiting on each other (+5 %).
-constexpr unsigned kClassifySlabsPerThread = 4, kGenerateSlabsPerThread = 6;
+// left gyroid's cores waiting on each other (+5 %). Since the slabs shrink (shrinking_split),
+// 4 generate slabs per thread instead of 6: total 0.979-1.009 over nine A/B runs (2 threads,
+// extract_into; generate 0.976-1.002), 3 per thread up to +2.2 % on gyroid u8 512³, and 3
+// classify slabs per thread no better than 4.
+constexpr unsigned kClassifySlabsPerThread = 4, kGenerateSlabsPerThread = 4;
 
 // Slabs for `threads` requested threads over `planes` planes: one for a single thread, else
 // `per_thread` for each thread that actually runs (run_slabs caps them at the hardware's).
