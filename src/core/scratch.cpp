@@ -56,16 +56,20 @@ public:
     }
 
 private:
-    void give_back(Block block) {
+    // Called from a shared_ptr's deleter, so it must not throw: a block that cannot be kept
+    // is freed.
+    void give_back(Block block) noexcept {
         if (block.bytes > kMaxKeptBytes) return;  // freed here
-        std::deque<Block> freed;                  // freed after the lock is let go
         std::lock_guard<std::mutex> lock(mutex_);
-        kept_bytes_ += block.bytes;
-        kept_.push_back(std::move(block));
+        try {
+            kept_.push_back(std::move(block));
+        } catch (...) {
+            return;  // no room for the entry: the block is freed
+        }
+        kept_bytes_ += kept_.back().bytes;
         while (kept_.size() > kMaxKeptBlocks || kept_bytes_ > kMaxKeptBytes) {
             kept_bytes_ -= kept_.front().bytes;
-            freed.push_back(std::move(kept_.front()));
-            kept_.pop_front();
+            kept_.pop_front();  // freed (unmapped) under the lock: rare, and it allocates nothing
         }
     }
 
