@@ -23,8 +23,8 @@ TEST_CASE("scratch blocks are kept and handed out again, the smallest that fits 
     void* small_at = nullptr;
     void* large_at = nullptr;
     {
-        const auto small = acquire_scratch(100 << 10);
-        const auto large = acquire_scratch(3 << 20);
+        const auto small = acquire_scratch(100 << 10, Pages::Small);
+        const auto large = acquire_scratch(3 << 20, Pages::Small);
         small_at = small.get();
         large_at = large.get();
         std::memset(small.get(), 1, 100 << 10);  // writable, all of it
@@ -34,16 +34,24 @@ TEST_CASE("scratch blocks are kept and handed out again, the smallest that fits 
     CHECK(scratch_kept().blocks == 2);
     CHECK(scratch_kept().bytes == (100u << 10) + (3u << 20));
     {
-        const auto a = acquire_scratch(50 << 10);  // fits both: gets the small one
+        const auto a = acquire_scratch(50 << 10, Pages::Small);  // fits both: gets the small one
         CHECK(a.get() == small_at);
-        const auto b = acquire_scratch(1 << 20);  // fits only the large one
+        const auto b = acquire_scratch(1 << 20, Pages::Small);  // fits only the large one
         CHECK(b.get() == large_at);
         CHECK(scratch_kept().blocks == 0);
-        const auto c = acquire_scratch(4 << 20);  // nothing fits: a new block
+        const auto c = acquire_scratch(4 << 20, Pages::Small);  // nothing fits: a new block
         CHECK(c.get() != small_at);
         CHECK(c.get() != large_at);
     }
     CHECK(scratch_kept().blocks == 3);
+    {
+        // A block is handed out again only for its kind of pages.
+        const auto huge = acquire_scratch(50 << 10, Pages::Huge);
+        CHECK(huge.get() != small_at);
+        CHECK(huge.get() != large_at);
+        CHECK(scratch_kept().blocks == 3);
+    }
+    CHECK(scratch_kept().blocks == 4);
     release_scratch();
     CHECK(scratch_kept().blocks == 0);
     CHECK(scratch_kept().bytes == 0);
@@ -53,18 +61,18 @@ TEST_CASE("the scratch pool keeps at most its limits, the oldest blocks going fi
     release_scratch();
     {
         std::vector<std::shared_ptr<void>> many;
-        for (int i = 0; i < 100; ++i) many.push_back(acquire_scratch(4096));
+        for (int i = 0; i < 100; ++i) many.push_back(acquire_scratch(4096, Pages::Small));
     }
     CHECK(scratch_kept().blocks == 64);
     {
         // Larger than everything the pool may keep: freed, not kept, and nothing else goes.
-        const auto huge = acquire_scratch(std::size_t{600} << 20);
+        const auto huge = acquire_scratch(std::size_t{600} << 20, Pages::Small);
         CHECK(huge.get() != nullptr);
     }
     CHECK(scratch_kept().blocks == 64);
     release_scratch();
     SECTION("an array's size that overflows is refused") {
-        CHECK_THROWS_AS(ScratchArray<std::uint64_t>(SIZE_MAX / 4), std::bad_alloc);
+        CHECK_THROWS_AS(ScratchArray<std::uint64_t>(SIZE_MAX / 4, Pages::Small), std::bad_alloc);
     }
 }
 
@@ -74,10 +82,11 @@ namespace {
 void dirty_pool(unsigned char garbage) {
     release_scratch();
     std::vector<std::shared_ptr<void>> blocks;
-    for (std::size_t bytes = 1 << 10; bytes <= std::size_t{8} << 20; bytes *= 2) {
-        blocks.push_back(acquire_scratch(bytes));
-        std::memset(blocks.back().get(), garbage, bytes);
-    }
+    for (const Pages pages : {Pages::Small, Pages::Huge})
+        for (std::size_t bytes = 1 << 10; bytes <= std::size_t{8} << 20; bytes *= 2) {
+            blocks.push_back(acquire_scratch(bytes, pages));
+            std::memset(blocks.back().get(), garbage, bytes);
+        }
 }
 
 voxmesh::Options cpu(double iso, unsigned threads) {

@@ -22,20 +22,23 @@ void advise_huge_pages(const void* data, std::size_t bytes) {
 #endif
 }
 
-std::shared_ptr<void> allocate_zeroed(std::size_t bytes) {
+std::shared_ptr<void> allocate_zeroed(std::size_t bytes, bool huge_pages) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     constexpr std::size_t kHuge = std::size_t{2} << 20, kWorthIt = 2 * kHuge;
     if (bytes >= kWorthIt && bytes <= SIZE_MAX - kHuge) {
-        // A private anonymous mapping, one huge page longer so its start can be aligned.
+        // A private anonymous mapping, one huge page longer so its start can be aligned. Mapped
+        // even without the advice: calloc may take a block this large from a heap and zero it
+        // all, making every page resident however little of it is used.
         const std::size_t mapped = bytes + kHuge;
         void* raw = mmap(nullptr, mapped, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
         if (raw == MAP_FAILED) throw std::bad_alloc();
         const auto start = (reinterpret_cast<std::uintptr_t>(raw) + kHuge - 1) & ~std::uintptr_t{kHuge - 1};
         void* data = reinterpret_cast<void*>(start);
-        advise_huge_pages(data, bytes);
+        if (huge_pages) advise_huge_pages(data, bytes);
         return std::shared_ptr<void>(data, [raw, mapped](void*) { munmap(raw, mapped); });
     }
 #endif
+    (void)huge_pages;
     void* block = std::calloc(bytes == 0 ? 1 : bytes, 1);
     if (!block) throw std::bad_alloc();
     return std::shared_ptr<void>(block, std::free);

@@ -15,10 +15,10 @@ namespace voxmesh::detail {
 // left alone.
 void advise_huge_pages(const void* data, std::size_t bytes);
 
-// `bytes` of zeroed memory, advised for huge pages when large (fresh pages from the kernel
-// are already zero, so nothing is written here: pages are faulted in by their first user).
-// Throws std::bad_alloc when the memory cannot be had.
-std::shared_ptr<void> allocate_zeroed(std::size_t bytes);
+// `bytes` of zeroed memory, advised for huge pages when large and `huge_pages` (fresh pages
+// from the kernel are already zero, so nothing is written here: pages are faulted in by their
+// first user). Throws std::bad_alloc when the memory cannot be had.
+std::shared_ptr<void> allocate_zeroed(std::size_t bytes, bool huge_pages = true);
 
 // v.reserve(n), with new storage advised before anything touches it; then resize or assign.
 template <class T>

@@ -15,28 +15,31 @@ constexpr std::size_t kMaxKeptBlocks = 64;
 constexpr std::size_t kMaxKeptBytes = std::size_t{512} << 20;
 
 struct Block {
-    std::shared_ptr<void> memory;  // allocate_zeroed: huge pages where large
+    std::shared_ptr<void> memory;  // allocate_zeroed
     std::size_t bytes = 0;
+    Pages pages = Pages::Small;
 };
 
 class ScratchPool {
 public:
-    std::shared_ptr<void> acquire(std::size_t bytes) {
+    std::shared_ptr<void> acquire(std::size_t bytes, Pages pages) {
         bytes = std::max<std::size_t>(bytes, 1);
         Block block;
         {
             std::lock_guard<std::mutex> lock(mutex_);
-            // The smallest kept block that fits, so a small request does not take a large one.
+            // The smallest kept block of the kind that fits, so a small request does not take a
+            // large one.
             auto best = kept_.end();
             for (auto it = kept_.begin(); it != kept_.end(); ++it)
-                if (it->bytes >= bytes && (best == kept_.end() || it->bytes < best->bytes)) best = it;
+                if (it->pages == pages && it->bytes >= bytes && (best == kept_.end() || it->bytes < best->bytes))
+                    best = it;
             if (best != kept_.end()) {
                 block = std::move(*best);
                 kept_bytes_ -= block.bytes;
                 kept_.erase(best);
             }
         }
-        if (!block.memory) block = Block{allocate_zeroed(bytes), bytes};
+        if (!block.memory) block = Block{allocate_zeroed(bytes, pages == Pages::Huge), bytes, pages};
         void* data = block.memory.get();
         return std::shared_ptr<void>(data, [this, held = std::make_shared<Block>(std::move(block))](void*) {
             give_back(std::move(*held));
@@ -86,7 +89,7 @@ ScratchPool& pool() {
 
 }  // namespace
 
-std::shared_ptr<void> acquire_scratch(std::size_t bytes) { return pool().acquire(bytes); }
+std::shared_ptr<void> acquire_scratch(std::size_t bytes, Pages pages) { return pool().acquire(bytes, pages); }
 ScratchKept scratch_kept() { return pool().kept(); }
 void release_scratch() { pool().release(); }
 

@@ -18,9 +18,14 @@
 
 namespace voxmesh::detail {
 
+// Whether a large block is advised for transparent huge pages: for arrays read at scattered
+// rows (the id tables, a TLB miss per row with 4 KiB pages), not for arrays a call may use
+// only the start of, where huge pages make all of it resident.
+enum class Pages { Small, Huge };
+
 // At least `bytes` bytes (malloc's alignment), uninitialised (a kept block holds what its last
 // user wrote); back to the pool when the last owner lets go. Throws std::bad_alloc.
-std::shared_ptr<void> acquire_scratch(std::size_t bytes);
+std::shared_ptr<void> acquire_scratch(std::size_t bytes, Pages pages);
 
 // What the pool keeps now (for tests).
 struct ScratchKept {
@@ -39,8 +44,8 @@ class ScratchArray {
 
 public:
     ScratchArray() = default;
-    explicit ScratchArray(std::size_t n)
-        : storage_(acquire_scratch(n <= SIZE_MAX / sizeof(T) ? n * sizeof(T) : throw std::bad_alloc())),
+    ScratchArray(std::size_t n, Pages pages)
+        : storage_(acquire_scratch(n <= SIZE_MAX / sizeof(T) ? n * sizeof(T) : throw std::bad_alloc(), pages)),
           data_(static_cast<T*>(storage_.get())),
           size_(n) {}
 
