@@ -11,17 +11,10 @@
 #include <string>
 #include <vector>
 
+using vmtest::cpu_options;
 using vmtest::Dims;
 
 namespace {
-
-voxmesh::Options cpu_options(double iso, unsigned threads) {
-    voxmesh::Options o;
-    o.iso = iso;
-    o.backend = voxmesh::Backend::Cpu;
-    o.threads = threads;
-    return o;
-}
 
 bool bitwise_equal(const std::vector<float>& a, const std::vector<float>& b) {
     return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);

@@ -89,12 +89,26 @@ void dirty_pool(unsigned char garbage) {
         }
 }
 
-voxmesh::Options cpu(double iso, unsigned threads) {
-    voxmesh::Options o;
-    o.iso = iso;
-    o.backend = voxmesh::Backend::Cpu;
-    o.threads = threads;
-    return o;
+// Meshes `values` from scratch filled with each garbage byte, on 1 to 3 threads, and compares
+// with the reference mesh.
+template <class T>
+void check_from_dirty_scratch(const std::vector<T>& values, const Dims& dims, double iso) {
+    vmtest::RefOptions ro;
+    ro.iso = iso;
+    const vmtest::RefMesh ref = vmtest::reference_mc(vmtest::to_doubles(values), dims, ro);
+    for (unsigned char garbage : {0x00, 0xff, 0xa5}) {
+        for (unsigned threads : {1u, 2u, 3u}) {
+            INFO("garbage " << int(garbage) << ", threads " << threads);
+            dirty_pool(garbage);
+            const voxmesh::Mesh mesh = voxmesh::extract(vmtest::view_of(values, dims), vmtest::cpu_options(iso, threads));
+            REQUIRE(mesh.triangle_count() > 1000);
+            const vmtest::Comparison cmp = vmtest::compare_with_reference(mesh, ref);
+            INFO(cmp.first_problem);
+            CHECK(cmp.same_indices);
+            CHECK(cmp.max_position_error < 1e-5);
+        }
+    }
+    release_scratch();
 }
 
 }  // namespace
@@ -104,45 +118,23 @@ TEST_CASE("meshes from dirty scratch are the reference's", "[core][scratch]") {
     const Dims dims{45, 38, 41};
     const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));
     std::vector<std::uint8_t> bytes(values.size());
-    for (std::size_t i = 0; i < values.size(); ++i) bytes[i] = static_cast<std::uint8_t>(std::lround(127 + 50 * values[i]));  // wavy: within ±2.5
-    vmtest::RefOptions ro;
-    ro.iso = 0.15;
-    const vmtest::RefMesh ref = vmtest::reference_mc(vmtest::to_doubles(values), dims, ro);
-    ro.iso = 131.5;
-    const vmtest::RefMesh ref_bytes = vmtest::reference_mc(vmtest::to_doubles(bytes), dims, ro);
-    for (unsigned char garbage : {0x00, 0xff, 0xa5}) {
-        for (unsigned threads : {1u, 2u, 3u}) {
-            INFO("garbage " << int(garbage) << ", threads " << threads);
-            dirty_pool(garbage);
-            const voxmesh::Mesh mesh = voxmesh::extract(vmtest::view_of(values, dims), cpu(0.15, threads));
-            REQUIRE(mesh.triangle_count() > 1000);
-            const vmtest::Comparison cmp = vmtest::compare_with_reference(mesh, ref);
-            INFO(cmp.first_problem);
-            CHECK(cmp.same_indices);
-            CHECK(cmp.max_position_error < 1e-5);
-
-            dirty_pool(garbage);
-            const voxmesh::Mesh mesh_bytes = voxmesh::extract(vmtest::view_of(bytes, dims), cpu(131.5, threads));
-            REQUIRE(mesh_bytes.triangle_count() > 1000);
-            const vmtest::Comparison cmp_bytes = vmtest::compare_with_reference(mesh_bytes, ref_bytes);
-            INFO(cmp_bytes.first_problem);
-            CHECK(cmp_bytes.same_indices);
-        }
-    }
-    release_scratch();
+    for (std::size_t i = 0; i < values.size(); ++i)
+        bytes[i] = static_cast<std::uint8_t>(std::lround(127 + 50 * values[i]));  // wavy: within ±2.5
+    check_from_dirty_scratch(values, dims, 0.15);
+    check_from_dirty_scratch(bytes, dims, 131.5);
 }
 
 TEST_CASE("an extract's scratch is kept for the next one and release_scratch_memory frees it", "[core][scratch]") {
     const Dims dims{64, 48, 40};
     const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));
     voxmesh::release_scratch_memory();
-    const voxmesh::Mesh first = voxmesh::extract(vmtest::view_of(values, dims), cpu(0.15, 2));
+    const voxmesh::Mesh first = voxmesh::extract(vmtest::view_of(values, dims), vmtest::cpu_options(0.15, 2));
     // Row metadata (20 bytes a row) and kept bits (8 bytes a row here) of every plane, and the
     // id tables, at least one.
     const ScratchKept kept = scratch_kept();
     CHECK(kept.blocks >= 3);
     CHECK(kept.bytes >= std::size_t{48} * 40 * (20 + 8));
-    const voxmesh::Mesh second = voxmesh::extract(vmtest::view_of(values, dims), cpu(0.15, 2));
+    const voxmesh::Mesh second = voxmesh::extract(vmtest::view_of(values, dims), vmtest::cpu_options(0.15, 2));
     CHECK(scratch_kept().blocks == kept.blocks);  // reused, none added
     CHECK(scratch_kept().bytes == kept.bytes);
     CHECK(first.indices == second.indices);

@@ -93,6 +93,15 @@ voxmesh::VolumeView view_of(const std::vector<T>& data, const Dims& dims, std::a
     return v;
 }
 
+// Options for the CPU engine at `iso` on `threads` threads (0: all cores).
+inline voxmesh::Options cpu_options(double iso, unsigned threads) {
+    voxmesh::Options o;
+    o.iso = iso;
+    o.backend = voxmesh::Backend::Cpu;
+    o.threads = threads;
+    return o;
+}
+
 // Converts a double to T: rounded and clamped for integer types.
 template <class T>
 T to_scalar(double v) {
