@@ -208,7 +208,7 @@ constexpr unsigned kCellsToSum = 4;
 template <class T>
 [[gnu::always_inline]] inline void classify_planes_body(const CpuChunkPlan& plan, const VolumeView& volume,
                                                        T threshold, std::size_t a, std::size_t b, RowInfo* rows,
-                                                       PlaneCounts* plane_counts, const CpuChunkPlan* keep_bits) {
+                                                       PlaneCounts* plane_counts) {
     const std::size_t nx = volume.dims[0], ny = volume.dims[1], nz = volume.dims[2];
     PlaneBits<T> bits(volume, threshold);
     const std::size_t words = bits.stride();
@@ -235,8 +235,8 @@ template <class T>
             if (count_cells && j > 0) count_cell_row_body(here, up, info, busy.data(), j - 1, words, nx);
         }
         if (nan) throw_nan(k + 1);
-        if (keep_bits) {
-            Word* store = keep_bits->kept_bits(k - plan.range.begin);
+        if (plan.plane_bits.size() > 0) {
+            Word* store = plan.kept_bits(k - plan.range.begin);
             std::uint32_t at = 0;
             for (std::size_t j = 0; j < ny; ++j)
                 if (!info[j].empty()) {
@@ -265,19 +265,18 @@ template <class T>
 template <class T>
 __attribute__((target("popcnt"))) void classify_planes_popcnt(const CpuChunkPlan& plan, const VolumeView& volume,
                                                               T threshold, std::size_t a, std::size_t b, RowInfo* rows,
-                                                              PlaneCounts* plane_counts,
-                                                              const CpuChunkPlan* keep_bits) {
-    classify_planes_body<T>(plan, volume, threshold, a, b, rows, plane_counts, keep_bits);
+                                                              PlaneCounts* plane_counts) {
+    classify_planes_body<T>(plan, volume, threshold, a, b, rows, plane_counts);
 }
 #endif
 
 template <class T>
 void classify_planes(const CpuChunkPlan& plan, const VolumeView& volume, T threshold, std::size_t a, std::size_t b,
-                     RowInfo* rows, PlaneCounts* plane_counts, const CpuChunkPlan* keep_bits) {
+                     RowInfo* rows, PlaneCounts* plane_counts) {
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-    if (cpu_has_popcnt()) return classify_planes_popcnt<T>(plan, volume, threshold, a, b, rows, plane_counts, keep_bits);
+    if (cpu_has_popcnt()) return classify_planes_popcnt<T>(plan, volume, threshold, a, b, rows, plane_counts);
 #endif
-    classify_planes_body<T>(plan, volume, threshold, a, b, rows, plane_counts, keep_bits);
+    classify_planes_body<T>(plan, volume, threshold, a, b, rows, plane_counts);
 }
 
 // Slab i's share of a pass's work shrinks geometrically, the last slab's an eighth of the
@@ -644,7 +643,7 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
         run_slabs(slabs, threads, [&](unsigned w, unsigned) {
             if (cuts[w] == cuts[w + 1]) return;  // the shrinking split can leave a last slab empty
             classify_planes<T>(plan, volume, threshold.value, range.begin + cuts[w], range.begin + cuts[w + 1],
-                               plan.rows.data(), plan.planes.data(), plan.plane_bits.size() > 0 ? &plan : nullptr);
+                               plan.rows.data(), plan.planes.data());
         });
     });
     if (plan.uniform) return plan;

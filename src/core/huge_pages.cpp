@@ -37,8 +37,9 @@ std::shared_ptr<void> allocate_zeroed(std::size_t bytes, bool huge_pages) {
         if (huge_pages) advise_huge_pages(data, bytes);
         return std::shared_ptr<void>(data, [raw, mapped](void*) { munmap(raw, mapped); });
     }
-#endif
+#else
     (void)huge_pages;
+#endif
     void* block = std::calloc(bytes == 0 ? 1 : bytes, 1);
     if (!block) throw std::bad_alloc();
     return std::shared_ptr<void>(block, std::free);
