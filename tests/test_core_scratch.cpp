@@ -76,6 +76,42 @@ TEST_CASE("the scratch pool keeps at most its limits, the oldest blocks going fi
     }
 }
 
+TEST_CASE("a large block is not held for small requests and goes once it sits idle", "[core][scratch]") {
+    release_scratch();
+    void* large_at = nullptr;
+    {
+        const auto large = acquire_scratch(std::size_t{8} << 20, Pages::Small);
+        large_at = large.get();
+    }
+    CHECK(scratch_kept().bytes == std::size_t{8} << 20);
+    {
+        // Less than a quarter of it: a block of its own, the large one stays kept.
+        const auto small = acquire_scratch(std::size_t{1} << 20, Pages::Small);
+        CHECK(small.get() != large_at);
+        CHECK(scratch_kept().blocks == 1);
+        // A quarter or more: the large one.
+        const auto quarter = acquire_scratch(std::size_t{2} << 20, Pages::Small);
+        CHECK(quarter.get() == large_at);
+    }
+    CHECK(scratch_kept().blocks == 2);
+    {
+        // Below 1 MiB a kept block serves any smaller request.
+        const auto tiny = acquire_scratch(100, Pages::Small);
+        CHECK(tiny.get() != large_at);
+    }
+    // Small requests only, as a program meshing small volumes after a large one. The large
+    // block came back at request 3: it is kept through request 3 + kScratchIdleAcquires and
+    // goes at the next, while the small one keeps being reused.
+    for (std::size_t request = 5; request <= 3 + kScratchIdleAcquires; ++request)
+        acquire_scratch(std::size_t{1} << 20, Pages::Small);
+    CHECK(scratch_kept().blocks == 2);
+    CHECK(scratch_kept().bytes >= std::size_t{8} << 20);
+    acquire_scratch(std::size_t{1} << 20, Pages::Small);
+    CHECK(scratch_kept().blocks == 1);
+    CHECK(scratch_kept().bytes == std::size_t{1} << 20);
+    release_scratch();
+}
+
 namespace {
 
 // Fills the pool with blocks of every size an extract below asks for, all bytes `garbage`.

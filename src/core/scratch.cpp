@@ -13,12 +13,22 @@ namespace {
 // chunk, an id table per worker), and for 1024³ float volumes' kept bits (128 MB).
 constexpr std::size_t kMaxKeptBlocks = 64;
 constexpr std::size_t kMaxKeptBytes = std::size_t{512} << 20;
+// A request takes a kept block at most this many times its size, or any block up to
+// kAlwaysFits: a small volume's call does not hold on to a large one's blocks.
+constexpr std::size_t kMaxOversize = 4;
+constexpr std::size_t kAlwaysFits = std::size_t{1} << 20;
 
 struct Block {
     std::shared_ptr<void> memory;  // allocate_zeroed
     std::size_t bytes = 0;
     Pages pages = Pages::Small;
+    std::uint64_t given_back = 0;  // the request count when it came back
 };
+
+bool fits(const Block& block, std::size_t bytes, Pages pages) {
+    return block.pages == pages && block.bytes >= bytes &&
+           (block.bytes <= kAlwaysFits || block.bytes / kMaxOversize <= bytes);
+}
 
 class ScratchPool {
 public:
@@ -27,12 +37,13 @@ public:
         Block block;
         {
             std::lock_guard<std::mutex> lock(mutex_);
+            ++requests_;
+            drop_idle();
             // The smallest kept block of the kind that fits, so a small request does not take a
             // large one.
             auto best = kept_.end();
             for (auto it = kept_.begin(); it != kept_.end(); ++it)
-                if (it->pages == pages && it->bytes >= bytes && (best == kept_.end() || it->bytes < best->bytes))
-                    best = it;
+                if (fits(*it, bytes, pages) && (best == kept_.end() || it->bytes < best->bytes)) best = it;
             if (best != kept_.end()) {
                 block = std::move(*best);
                 kept_bytes_ -= block.bytes;
@@ -64,6 +75,7 @@ private:
     void give_back(Block block) noexcept {
         if (block.bytes > kMaxKeptBytes) return;  // freed here
         std::lock_guard<std::mutex> lock(mutex_);
+        block.given_back = requests_;
         try {
             kept_.push_back(std::move(block));
         } catch (...) {
@@ -76,9 +88,22 @@ private:
         }
     }
 
+    // Frees the kept blocks that kScratchIdleAcquires requests went by without (under the lock).
+    void drop_idle() {
+        for (auto it = kept_.begin(); it != kept_.end();) {
+            if (requests_ - it->given_back > kScratchIdleAcquires) {
+                kept_bytes_ -= it->bytes;
+                it = kept_.erase(it);
+            } else {
+                ++it;
+            }
+        }
+    }
+
     std::mutex mutex_;
     std::deque<Block> kept_;  // oldest first
     std::size_t kept_bytes_ = 0;
+    std::uint64_t requests_ = 0;  // acquisitions so far
 };
 
 // Never destroyed: blocks may be let go of by static objects' destructors at exit.

@@ -8,6 +8,9 @@
 // them and the other thread waited for it at the end of the pass. A block let go of is kept
 // here for the next call that fits in it; the pool keeps at most kMaxKeptBlocks blocks and
 // kMaxKeptBytes bytes (the oldest go first), and a block larger than that is never kept.
+// So that one large volume does not leave its blocks held for good, a block is handed out
+// only for a request at least a quarter of its size (below 1 MiB, any smaller one), and a
+// kept block that kScratchIdleAcquires requests went by without is freed.
 #pragma once
 
 #include <cstddef>
@@ -26,6 +29,10 @@ enum class Pages { Small, Huge };
 // At least `bytes` bytes (malloc's alignment), uninitialised (a kept block holds what its last
 // user wrote); back to the pool when the last owner lets go. Throws std::bad_alloc.
 std::shared_ptr<void> acquire_scratch(std::size_t bytes, Pages pages);
+
+// Requests after which a kept block nobody took is freed: a few dozen calls on 2 threads
+// (each takes the row metadata, the kept bits and an id table per worker).
+constexpr std::size_t kScratchIdleAcquires = 128;
 
 // What the pool keeps now (for tests).
 struct ScratchKept {
