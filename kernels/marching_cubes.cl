@@ -104,11 +104,24 @@ inline uint pack_word(__global const voxel* s, const voxel thr, int* finite) {
     return w;
 }
 
-// A row's nx samples at s into `words` words at out; 0 when a sample is not finite.
-inline int pack_row(__global const voxel* s, const voxel thr, const uint nx, const uint words, __global uint* out) {
+// What a packed row holds: all outside, all inside, or both (row_state, classify_rows' skip).
+#define ROW_OUTSIDE 0
+#define ROW_INSIDE 1
+#define ROW_MIXED 2
+
+// A row's nx samples at s into `words` words at out; 0 when a sample is not finite. *state:
+// the row's ROW_ kind.
+inline int pack_row(__global const voxel* s, const voxel thr, const uint nx, const uint words, __global uint* out,
+                    uint* state) {
     int finite = 1;
     const uint full = nx / 32;
-    for (uint q = 0; q < full; ++q) out[q] = pack_word(s + 32 * q, thr, &finite);
+    uint any = 0, all = ~0u;
+    for (uint q = 0; q < full; ++q) {
+        const uint w = pack_word(s + 32 * q, thr, &finite);
+        out[q] = w;
+        any |= w;
+        all &= w;
+    }
     if (full < words) {
         uint w = 0;
         for (uint x = 32 * full; x < nx; ++x) {
@@ -117,18 +130,23 @@ inline int pack_row(__global const voxel* s, const voxel thr, const uint nx, con
             w |= (uint)(v >= thr) << (x - 32 * full);
         }
         out[full] = w;
+        any |= w;
+        all &= w | ~bits_below(full, nx);
     }
+    *state = !any ? ROW_OUTSIDE : all == ~0u ? ROW_INSIDE : ROW_MIXED;
     return finite;
 }
 
-// One work-item per bit row: its nx samples into `words` words.
+// One work-item per bit row: its nx samples into `words` words, and its ROW_ kind.
 __kernel void classify_pack(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint words,
                             const uint begin, const uint first_sample, const uint rows, __global uint* bits,
-                            __global int* nan_plane) {
+                            __global uchar* row_state, __global int* nan_plane) {
     const uint r = (uint)get_global_id(0);
     if (r >= rows) return;
-    if (!pack_row(data + first_sample + r * nx, thr, nx, words, bits + r * words))
+    uint state;
+    if (!pack_row(data + first_sample + r * nx, thr, nx, words, bits + r * words, &state))
         atomic_min(nan_plane, (int)(begin + r / ny));
+    row_state[r] = (uchar)state;
 }
 
 // Bit k of the result is bit k+1 of the row: the neighbour in +x.
@@ -208,10 +226,13 @@ inline uint lowest_bit64(ulong w) { return 63u - (uint)clz(w & (0ul - w)); }
 // non-uniform cell (cell_groups: the words generate_triangles visits; on a sphere a crossed
 // row has two clusters of crossings and uniform words between them). A cell that is not
 // uniform has a crossed edge among row a's edges and row b's x- and z-edges (they join all
-// 8 corners), so cell rows without one are skipped.
-__kernel void classify_rows(__global const uint* bits, const uint nx, const uint ny, const uint nz, const uint words,
-                            const uint begin, const uint cell_end, const uint rows, __constant uchar* pair_corners,
-                            __global uint* vcount, __global uint* tcount, __global ulong* cell_groups) {
+// 8 corners), so cell rows without one are skipped. Where row a and its neighbours are all
+// inside or all outside alike (row_state; half a sphere's rows), no edge crosses and none of
+// the words is read.
+__kernel void classify_rows(__global const uint* bits, __global const uchar* row_state, const uint nx, const uint ny,
+                            const uint nz, const uint words, const uint begin, const uint cell_end, const uint rows,
+                            __constant uchar* pair_corners, __global uint* vcount, __global uint* tcount,
+                            __global ulong* cell_groups) {
     const uint r = (uint)get_global_id(0);
     if (r >= rows) return;
     const uint p = r / ny;
@@ -222,6 +243,14 @@ __kernel void classify_rows(__global const uint* bits, const uint nx, const uint
     __global const uint* c = row_z(bits, r, z, ny, nz, words);
     const int cells_here = b && z < cell_end;
     __global const uint* d = cells_here ? c + words : 0;
+    const uint state = row_state[r];
+    if (state != ROW_MIXED && (!b || row_state[r + 1] == state) && (!c || row_state[r + ny] == state) &&
+        (!cells_here || row_state[r + ny + 1] == state)) {
+        vcount[r] = 0;
+        tcount[r] = 0;
+        cell_groups[r] = 0;
+        return;
+    }
     uint v = 0, crossed = 0;
     for (uint q = 0; q < words; ++q) {
         const EdgeMasks m = edge_masks(a, b, c, q, words, nx);
@@ -267,7 +296,8 @@ __kernel void classify_repack(__global const voxel* data, const voxel thr, const
     __global const voxel* s = data + first_sample + r * nx;
     __global uint* out = bits + r * words;
     if (r >= meta_rows || scanned_count(vbase, r, meta_rows, vend) != 0) {
-        pack_row(s, thr, nx, words, out);
+        uint state;
+        pack_row(s, thr, nx, words, out, &state);
         return;
     }
     const uint fill = s[0] >= thr ? ~0u : 0u;

@@ -20,7 +20,7 @@ namespace {
 
 using namespace cl_engine;
 
-// Buffer slots of a Device (the OpenCL engine uses 0..6 and 1000 up, the scan 99 and 100 up).
+// Buffer slots of a Device (the OpenCL engine uses 0..7 and 1000 up, the scan 99 and 100 up).
 enum : unsigned { kStage = 200, kMeta, kCodes, kVid, kVCount, kTCount, kPositions, kNormals, kIndices, kTotals };
 
 constexpr unsigned kMetaWords = 16;  // M_WORDS in sculpt_blocks.cl; the word layout is there

@@ -51,7 +51,7 @@ double seconds_since(Clock::time_point t0) { return std::chrono::duration<double
 // while the last word starts at most 65535 edges in: 3 * 32 * (words - 1) <= 65535.
 constexpr std::size_t kMaxWordsFor16BitBases = 65535 / 96 + 1;  // 683 words, nx <= 21856
 
-enum : unsigned { kData, kBits, kWordBase, kPositions, kNormals, kIndices, kCounts };
+enum : unsigned { kData, kBits, kWordBase, kPositions, kNormals, kIndices, kCounts, kRowState };
 // Piece i's row buffers (counts, then their prefix sums; word groups) in a call: kept like the
 // others, so that calls after the first allocate nothing (for the first kKeptPieceRows
 // pieces; more take buffers of their own). Ids above the scan's.
@@ -415,7 +415,7 @@ ChunkShape Engine::shape(ZRange range) const {
 // Device bytes of a chunk besides its samples and outputs: bits, a vertex id per row word,
 // two counts and a word-group mask per row (+ the scan's block sums).
 std::size_t Engine::working_bytes(const DeviceJob& job, const ChunkShape& s) const {
-    return s.bit_words * 4 + s.rows * s.words * job.word_id_bytes + s.rows * 16 + s.rows / 128 + 64;
+    return s.bit_words * 4 + s.bit_rows + s.rows * s.words * job.word_id_bytes + s.rows * 16 + s.rows / 128 + 64;
 }
 
 // Device bytes of a chunk, outputs excluded.
@@ -705,9 +705,11 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
         d.queue.enqueueFillBuffer(counts, no_nan, kNanPlane * sizeof(cl_int), sizeof(cl_int), nullptr,
                                   &log.add(Pass::Transfer));
         const std::size_t first_sample = (range.begin - s.zlo) * plane_;  // of plane `begin` in the device's samples
+        // Each bit row's kind (all outside, all inside, both) for classify_rows, this piece only.
+        cl::Buffer& row_state = d.buffer(kRowState, s.bit_rows);
         cl::Kernel& pack = d.mc_kernel(job.options, "classify_pack");
         set_args(pack, data, ArgBytes{job.threshold}, u(nx_), u(ny_), u(s.words), u(range.begin), u(first_sample),
-                 u(s.bit_rows), bits, counts);
+                 u(s.bit_rows), bits, row_state, counts);
         launch(job, pack, s.bit_rows, Pass::Classify, log);
         if (piece.bits() == nullptr) {
             job.bits_of = range;
@@ -720,7 +722,7 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
         piece.cell_groups = piece_buffer(rows_slot + 2, s.rows * 8);
         job.pieces_counted += 1;
         cl::Kernel& rows = d.mc_kernel(job.options, "classify_rows");
-        set_args(rows, bits, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin),
+        set_args(rows, bits, row_state, u(nx_), u(ny_), u(nz_), u(s.words), u(range.begin),
                  u(s.cell_end), u(s.rows), d.pair_corners, piece.vbase, piece.tbase, piece.cell_groups);
         launch(job, rows, s.rows, Pass::Classify, log);
 
