@@ -30,8 +30,8 @@ enum class Pages { Small, Huge };
 // user wrote); back to the pool when the last owner lets go. Throws std::bad_alloc.
 std::shared_ptr<void> acquire_scratch(std::size_t bytes, Pages pages);
 
-// Requests after which a kept block nobody took is freed: a few dozen calls on 2 threads
-// (each takes the row metadata, the kept bits and an id table per worker).
+// Requests after which a kept block nobody took is freed: about 35 calls on 2 threads (each
+// takes the row metadata, the kept bits for 16- to 64-bit samples and an id table per worker).
 constexpr std::size_t kScratchIdleAcquires = 128;
 
 // What the pool keeps now (for tests).
