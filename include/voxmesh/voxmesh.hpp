@@ -131,8 +131,9 @@ void extract_into(const VolumeView& volume, const Options& options, Mesh& mesh, 
 // to 64-bit samples, vertex-id tables) from one extract to the next, at most 512 MB, so that
 // a later extract does not page-fault it in again: after a 512³ volume on 2 threads, 28 MB
 // for float samples and 11 MB for 8-bit ones. A kept block left unused while later calls
-// made 128 requests for scratch (about 35 calls on 2 threads) is freed by the pool itself. This frees what is
-// kept at once, for a program done meshing large volumes; the next extract allocates anew.
+// made 128 requests for scratch (about 35 calls on 2 threads) is freed by the pool itself.
+// This frees what is kept at once, for a program done meshing large volumes; the next
+// extract allocates anew.
 void release_scratch_memory();
 
 // Writes .stl (binary), .ply (binary) or .obj, chosen by extension, through a temporary
