@@ -100,9 +100,9 @@ TEST_CASE("a large block is not held for small requests and goes once it sits id
         CHECK(tiny.get() != large_at);
     }
     // Small requests only, as a program meshing small volumes after a large one. The large
-    // block came back at request 3: it is kept through request 3 + kScratchIdleAcquires and
+    // block came back at request 3: it is kept through request 3 + kScratchIdleRequests and
     // goes at the next, while the small one keeps being reused.
-    for (std::size_t request = 5; request <= 3 + kScratchIdleAcquires; ++request)
+    for (std::size_t request = 5; request <= 3 + kScratchIdleRequests; ++request)
         acquire_scratch(std::size_t{1} << 20, Pages::Small);
     CHECK(scratch_kept().blocks == 2);
     CHECK(scratch_kept().bytes >= std::size_t{8} << 20);

@@ -235,7 +235,7 @@ template <class T>
             if (count_cells && j > 0) count_cell_row_body(here, up, info, busy.data(), j - 1, words, nx);
         }
         if (nan) throw_nan(k + 1);
-        if (plan.plane_bits.size() > 0) {
+        if (plan.keeps_bits()) {
             Word* store = plan.kept_bits(k - plan.range.begin);
             std::uint32_t at = 0;
             for (std::size_t j = 0; j < ny; ++j)
@@ -424,7 +424,7 @@ private:
 
     void fill_bits(std::size_t z, int slot) {
         const std::size_t p = z - plan_.range.begin;
-        const bool kept = plan_.plane_bits.size() > 0 && p < plan_.meta_planes;
+        const bool kept = plan_.keeps_bits() && p < plan_.meta_planes;
         bits_.fill(planes_[slot], z, meta_rows(z), kept ? plan_.kept_bits(p) : nullptr);
     }
 

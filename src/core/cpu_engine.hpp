@@ -59,6 +59,7 @@ struct CpuChunkPlan {
     // than to keep.
     ScratchArray<Word> plane_bits;
     std::size_t plane_bit_words = 0;         // room per plane: ny rows' words
+    bool keeps_bits() const { return plane_bits.size() > 0; }
     Word* kept_bits(std::size_t p) const { return plane_bits.data() + p * plane_bit_words; }
     std::vector<PlaneCounts> planes;         // meta_planes
     std::uint64_t vertices = 0;   // owned by the range (excludes plane `end`)

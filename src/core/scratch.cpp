@@ -88,10 +88,10 @@ private:
         }
     }
 
-    // Frees the kept blocks that kScratchIdleAcquires requests went by without (under the lock).
+    // Frees the kept blocks that kScratchIdleRequests requests went by without (under the lock).
     void drop_idle() {
         for (auto it = kept_.begin(); it != kept_.end();) {
-            if (requests_ - it->given_back > kScratchIdleAcquires) {
+            if (requests_ - it->given_back > kScratchIdleRequests) {
                 kept_bytes_ -= it->bytes;
                 it = kept_.erase(it);
             } else {
@@ -103,7 +103,7 @@ private:
     std::mutex mutex_;
     std::deque<Block> kept_;  // oldest first
     std::size_t kept_bytes_ = 0;
-    std::uint64_t requests_ = 0;  // acquisitions so far
+    std::uint64_t requests_ = 0;  // acquire() calls so far
 };
 
 // Never destroyed: blocks may be let go of by static objects' destructors at exit.

@@ -10,7 +10,7 @@
 // kMaxKeptBytes bytes (the oldest go first), and a block larger than that is never kept.
 // So that one large volume does not leave its blocks held for good, a block is handed out
 // only for a request at least a quarter of its size (below 1 MiB, any smaller one), and a
-// kept block that kScratchIdleAcquires requests went by without is freed.
+// kept block that kScratchIdleRequests requests went by without is freed.
 #pragma once
 
 #include <cstddef>
@@ -32,7 +32,7 @@ std::shared_ptr<void> acquire_scratch(std::size_t bytes, Pages pages);
 
 // Requests after which a kept block nobody took is freed: about 35 calls on 2 threads (each
 // takes the row metadata, the kept bits for 16- to 64-bit samples and an id table per worker).
-constexpr std::size_t kScratchIdleAcquires = 128;
+constexpr std::size_t kScratchIdleRequests = 128;
 
 // What the pool keeps now (for tests).
 struct ScratchKept {
