@@ -256,6 +256,24 @@ TEST_CASE("cli: bad input exits 2 with a message and leaves no output", "[cli]")
     expect_rejected(s, "mesh " + quote(nan) + " -o " + quote(out) + " --dims 3 3 3 --type f32 --iso 0.5", "nan.raw", out,
                     "NaN");
 
+    // Spacing or origin that would put vertices past FLT_MAX (inf in the mesh file).
+    const std::string far = s.write("far.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n"
+                                                "spacings: 1e300 1 1\n\n" + std::string(4, '\0') + std::string(4, '\xff'));
+    expect_rejected(s, "mesh " + quote(far) + " -o " + quote(out), "far.nrrd", out, "float");
+    std::vector<float> ramp(27);
+    for (std::size_t i = 0; i < ramp.size(); ++i) ramp[i] = static_cast<float>(i);
+    const std::string ramp_raw = s.write("ramp.raw", f32_bytes(ramp));
+    expect_rejected(s,
+                    "mesh " + quote(ramp_raw) + " -o " + quote(out) +
+                        " --dims 3 3 3 --type f32 --origin 0 0 3e38 --spacing 1 1 1e38",
+                    "ramp.raw", out, "float");
+    // Negative raw spacing is its magnitude, as in headers; it used to fail without naming the file.
+    const Result neg = run(s, "mesh " + quote(ramp_raw) + " -o " + quote(out) + " --dims 3 3 3 --type f32 --spacing -1 1 1");
+    INFO(neg.err);
+    CHECK(neg.code == 0);
+    CHECK(stl_triangles(out) > 0);
+    fs::remove(out);
+
     expect_rejected(s, "mesh " + head + " -o " + quote(s.path("out.xyz")), "out.xyz", s.path("out.xyz"), "format");
     const std::string odd = s.write("volume.foo", "abc");
     expect_rejected(s, "mesh " + quote(odd) + " -o " + quote(out), "volume.foo", out);

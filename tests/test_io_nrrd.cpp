@@ -174,6 +174,11 @@ TEST_CASE("nrrd: bad headers and data are errors naming the file", "[io][nrrd][e
                                 "space directions: (1,0,0) (0,1,0) (0,0,1)\n\n", data),
           "contradictory");
     fails(attached(kHeader343 + "encoding: raw\nspacings: 1 0 1\n\n", data), "spacing");
+    // Finite doubles, but samples past FLT_MAX would mesh to inf coordinates.
+    fails(attached(kHeader343 + "encoding: raw\nspacings: 1e300 1 1\n\n", data), "beyond the range of float");
+    fails(attached(kHeader343 + "encoding: raw\nspace dimension: 3\nspace origin: (0,0,1e39)\n\n", data), "axis 2");
+    CHECK_THROWS_WITH(read_volume_info(attached(kHeader343 + "encoding: raw\nspacings: 1 2e38 1\n\n", data)),
+                      Contains("bad.nrrd") && Contains("axis 1"));
     fails(attached(kHeader343 + "encoding: raw\n\n", data.substr(0, data.size() - 3)), "truncated");
     fails(attached(kHeader343 + "encoding: raw\n\n", data + "xx"), "do not match");
     fails(attached(kHeader343 + "encoding: raw\nencoding: raw\n\n", data), "twice");

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 #include <voxmesh/io.hpp>
 
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -101,4 +102,26 @@ TEST_CASE("raw: sizes that do not match the file are errors naming it", "[io][ra
     RawLayout spacing = layout;
     spacing.spacing = {1, 0, 1};
     fails(s.file("s.raw", data), spacing, "spacing");
+    // Samples past FLT_MAX would mesh to inf coordinates.
+    RawLayout far = layout;
+    far.spacing = {1, 1e300, 1};
+    fails(s.file("far.raw", data), far, "beyond the range of float");
+    far.spacing = {1, 1, 1};
+    far.origin = {0, 0, -3.4e38};
+    far.spacing[2] = -1e38;  // magnitude 1e38: the last of 3 samples is at -3.4e38 + 2e38
+    CHECK(read_raw(s.file("near.raw", data), far).origin[2] == -3.4e38);
+    far.origin[2] = 3.4e38;
+    fails(s.file("far.raw", data), far, "axis 2");
+}
+
+TEST_CASE("raw: negative spacing is taken as its magnitude, as in headers", "[io][raw]") {
+    Scratch s;
+    RawLayout layout;
+    layout.dims = {5, 4, 3};
+    layout.type = ScalarType::F32;
+    layout.spacing = {-1, 2, -3};
+    const std::string path = s.file("n.raw", f32_samples(60, false));
+    const std::array<double, 3> magnitude{1, 2, 3};
+    CHECK(read_raw(path, layout).spacing == magnitude);
+    CHECK(read_raw_info(path, layout).spacing == magnitude);
 }

@@ -106,6 +106,10 @@ TEST_CASE("stl: bad files are errors naming the file", "[io][stl][errors]") {
     fails("garbage.stl", "solid x\nhello\n", "expected 'facet' or 'endsolid'");
     fails("garbage.stl", "solid x\n", "ends inside a solid");
     fails("garbage.stl", "solid x\nendsolid x\n", "no triangles");
+    // Binary bytes in a token are shown as '?': a NUL used to cut the message short.
+    const char nul[] = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0 0 0\nvertex 1 1 1\n"
+                       "end\0loop\nendfacet\nendsolid\n";
+    fails("nul.stl", std::string(nul, sizeof nul - 1), "found 'end?loop' (as binary STL");
     fails("garbage.stl", "\x01\x02 random bytes", "not an STL file");
     fails("nan.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 nan\nvertex 0 0 0\nvertex 1 1 1\n"
                      "endloop\nendfacet\nendsolid\n",

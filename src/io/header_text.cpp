@@ -9,6 +9,7 @@ namespace voxmesh::io {
 
 namespace {
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f'; }
+}  // namespace
 
 std::string shown(std::string_view token) {
     // Keep messages readable when the token is binary garbage or huge.
@@ -17,7 +18,6 @@ std::string shown(std::string_view token) {
     if (token.size() > 40) out += "...";
     return out;
 }
-}  // namespace
 
 std::string_view trim(std::string_view text) {
     while (!text.empty() && is_space(text.front())) text.remove_prefix(1);

@@ -10,6 +10,8 @@
 namespace voxmesh::io {
 
 std::string_view trim(std::string_view text);
+// `token` fit for an error message: at most 40 characters, control and non-ASCII bytes as '?'.
+std::string shown(std::string_view token);
 std::string lower(std::string_view text);
 std::vector<std::string_view> split_words(std::string_view text);
 

@@ -3,6 +3,8 @@
 #include "input_file.hpp"
 #include "readers.hpp"
 
+#include <cfloat>
+#include <charconv>
 #include <cmath>
 
 namespace voxmesh::io {
@@ -31,7 +33,25 @@ double checked_origin(const std::string& path, const char* field, double value) 
 
 namespace {
 
-VolumeHeader read_header(const std::string& path) {
+// Shortest round-trip text: std::to_string would print 1e300 with 300 digits.
+std::string number(double value) {
+    char buffer[64];
+    const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+    return std::string(buffer, result.ptr);
+}
+
+// Mesh vertices are floats: a grid whose samples lie past FLT_MAX would mesh to inf.
+void check_extent(const std::string& path, const VolumeInfo& info) {
+    for (std::size_t a = 0; a < 3; ++a) {
+        const double steps = info.dims[a] > 0 ? static_cast<double>(info.dims[a] - 1) : 0.0;
+        const double far = info.origin[a] + steps * info.spacing[a];
+        if (!(std::fabs(info.origin[a]) <= FLT_MAX && std::fabs(far) <= FLT_MAX))
+            fail(path, "origin and spacing put samples along axis " + std::to_string(a) + " at " + number(far) +
+                           ", beyond the range of float mesh coordinates");
+    }
+}
+
+VolumeHeader parse_header(const std::string& path) {
     if (ends_with_nocase(path, ".nrrd") || ends_with_nocase(path, ".nhdr")) return read_nrrd_header(path);
     if (ends_with_nocase(path, ".mhd") || ends_with_nocase(path, ".mha")) return read_metaimage_header(path);
     if (ends_with_nocase(path, ".nii") || ends_with_nocase(path, ".nii.gz")) return read_nifti_header(path);
@@ -40,18 +60,34 @@ VolumeHeader read_header(const std::string& path) {
     fail(path, "unknown volume format (expected .nrrd, .nhdr, .mhd, .mha, .nii or .nii.gz)");
 }
 
-SampleLayout raw_layout(const std::string& path, const RawLayout& raw) {
-    SampleLayout layout;
+VolumeHeader read_header(const std::string& path) {
+    VolumeHeader h = parse_header(path);
+    check_extent(path, h.info);
+    return h;
+}
+
+// The caller's layout checked like a header: spacing is taken as its magnitude, as there.
+VolumeHeader raw_header(const std::string& path, const RawLayout& raw) {
+    VolumeHeader h;
+    VolumeInfo& info = h.info;
+    info.format = "raw";
+    info.encoding = "raw";
+    info.type = raw.type;
+    info.dims = raw.dims;
+    info.big_endian = raw.big_endian;
+    info.data_file = path;
+    for (std::size_t a = 0; a < 3; ++a) {
+        info.spacing[a] = checked_spacing(path, "spacing", raw.spacing[a]);
+        info.origin[a] = checked_origin(path, "origin", raw.origin[a]);
+    }
+    check_extent(path, info);
+    SampleLayout& layout = h.layout;
     layout.type = raw.type;
     layout.dims = raw.dims;
     layout.big_endian = raw.big_endian;
     layout.data_path = path;
     layout.offset = raw.offset;
-    for (std::size_t a = 0; a < 3; ++a) {
-        checked_spacing(path, "spacing", raw.spacing[a]);
-        checked_origin(path, "origin", raw.origin[a]);
-    }
-    return layout;
+    return h;
 }
 
 }  // namespace
@@ -76,24 +112,17 @@ VolumeInfo read_volume_info(const std::string& path) {
 }
 
 Volume read_raw(const std::string& path, const RawLayout& layout) {
-    Volume v = io::load_samples(path, io::raw_layout(path, layout));
-    v.spacing = layout.spacing;
-    v.origin = layout.origin;
+    const io::VolumeHeader h = io::raw_header(path, layout);
+    Volume v = io::load_samples(path, h.layout);
+    v.spacing = h.info.spacing;
+    v.origin = h.info.origin;
     return v;
 }
 
 VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout) {
-    VolumeInfo info;
-    info.format = "raw";
-    info.type = layout.type;
-    info.dims = layout.dims;
-    info.spacing = layout.spacing;
-    info.origin = layout.origin;
-    info.encoding = "raw";
-    info.big_endian = layout.big_endian;
-    info.file_bytes = io::check_samples(path, io::raw_layout(path, layout));
-    info.data_file = path;
-    return info;
+    io::VolumeHeader h = io::raw_header(path, layout);
+    h.info.file_bytes = io::check_samples(path, h.layout);
+    return h.info;
 }
 
 }  // namespace voxmesh

@@ -104,7 +104,7 @@ void read_ascii(const std::string& path, std::string_view text, Mesh& mesh) {
         if (io::lower(got) == word) return;
         // Built with append: gcc 12 gives a false -Wrestrict on some operator+ chains.
         std::string found = "'";
-        found.append(got.substr(0, 40)).append("'");
+        found.append(io::shown(got)).append("'");
         fail(path, where() + "expected '" + word + "', found " + (got.empty() ? std::string("end of file") : found));
     };
     auto number = [&] {
@@ -113,7 +113,7 @@ void read_ascii(const std::string& path, std::string_view text, Mesh& mesh) {
         float value = 0;
         const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), value);
         if (ec != std::errc() || end != word.data() + word.size() || word.empty())
-            fail(path, where() + "'" + std::string(word.substr(0, 40)) + "' is not a number");
+            fail(path, where() + "'" + io::shown(word) + "' is not a number");
         return value;
     };
 
@@ -128,7 +128,7 @@ void read_ascii(const std::string& path, std::string_view text, Mesh& mesh) {
             break;
         }
         if (!in_solid) {
-            if (keyword != "solid") fail(path, where() + "expected 'solid', found '" + std::string(word.substr(0, 40)) + "'");
+            if (keyword != "solid") fail(path, where() + "expected 'solid', found '" + io::shown(word) + "'");
             tokens.skip_line();  // the solid's name
             in_solid = true;
         } else if (keyword == "endsolid") {
@@ -148,7 +148,7 @@ void read_ascii(const std::string& path, std::string_view text, Mesh& mesh) {
             expect("endfacet");
             ++triangle;
         } else {
-            fail(path, where() + "expected 'facet' or 'endsolid', found '" + std::string(word.substr(0, 40)) + "'");
+            fail(path, where() + "expected 'facet' or 'endsolid', found '" + io::shown(word) + "'");
         }
     }
 }
