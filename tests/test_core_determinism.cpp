@@ -4,6 +4,8 @@
 #include "support/mesh_checks.hpp"
 #include "support/reference_mc.hpp"
 
+#include "core/cpu_engine.hpp"
+
 #include <voxmesh/voxmesh.hpp>
 
 #include <cmath>
@@ -36,7 +38,52 @@ voxmesh::Mesh extract_as(const std::vector<double>& field, const Dims& dims, dou
     return voxmesh::extract(vmtest::view_of(typed, dims), cpu_options(iso, 3));
 }
 
+// The volume meshed as separate z-ranges [cuts[i], cuts[i+1]) into one mesh, each at its
+// first vertex and triangle, as Hybrid assembles the pieces its CPU worker takes.
+template <class T>
+voxmesh::Mesh extract_by_ranges(const std::vector<T>& values, const Dims& dims, double iso,
+                                const std::vector<std::size_t>& cuts) {
+    namespace d = voxmesh::detail;
+    const voxmesh::VolumeView view = vmtest::view_of(values, dims);
+    const voxmesh::Options options = cpu_options(iso, 2);
+    std::vector<d::CpuChunkPlan> plans;
+    std::uint64_t vertices = 0, triangles = 0;
+    for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
+        plans.push_back(d::cpu_classify(view, options, d::ZRange{cuts[i], cuts[i + 1]}, 2));
+        vertices += plans.back().vertices;
+        triangles += plans.back().triangles;
+    }
+    voxmesh::Mesh mesh;
+    d::allocate_output(mesh, vertices, triangles, true, 1);
+    std::uint64_t first_vertex = 0, first_triangle = 0;
+    for (const d::CpuChunkPlan& plan : plans) {
+        d::cpu_generate(plan, view, options, 2,
+                        d::MeshOut{mesh.positions.data() + 3 * first_vertex, mesh.normals.data() + 3 * first_vertex,
+                                   mesh.indices.data() + 3 * first_triangle, static_cast<std::uint32_t>(first_vertex)});
+        first_vertex += plan.vertices;
+        first_triangle += plan.triangles;
+    }
+    return mesh;
+}
+
 }  // namespace
+
+TEST_CASE("z-ranges meshed apart make the whole volume's mesh, the last plane alone included", "[core]") {
+    // The last sample plane alone owns vertices (its x- and y-edges) but no cells: a range of
+    // it alone once wrote nothing, leaving those vertices at 0 under an identical index buffer.
+    const Dims dims{19, 7, 9};
+    const std::vector<float> smooth = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));
+    const std::vector<std::uint8_t> bytes = vmtest::random_field<std::uint8_t>(dims, 11, 0, 200);
+    const voxmesh::Mesh whole_f32 = voxmesh::extract(vmtest::view_of(smooth, dims), cpu_options(0.15, 1));
+    const voxmesh::Mesh whole_u8 = voxmesh::extract(vmtest::view_of(bytes, dims), cpu_options(100, 1));
+    const std::vector<std::vector<std::size_t>> splits = {
+        {0, 8, 9}, {0, 1, 9}, {0, 4, 5, 9}, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9}, {0, 3, 8, 9}};
+    for (const auto& cuts : splits) {
+        INFO("cuts at " << cuts[1] << ", " << cuts[2] << ", ... (" << cuts.size() - 1 << " ranges)");
+        require_identical(whole_f32, extract_by_ranges(smooth, dims, 0.15, cuts));  // kept bits
+        require_identical(whole_u8, extract_by_ranges(bytes, dims, 100, cuts));     // bits packed again
+    }
+}
 
 TEST_CASE("identical meshes for threads 1, 2, 3, 4, 7, 16 on odd dims", "[core]") {
     const Dims dims{37, 23, 51};

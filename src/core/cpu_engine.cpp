@@ -670,7 +670,8 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
 
 void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Options& options, unsigned threads,
                   const MeshOut& out) {
-    if (plan.uniform || plan.triangles == 0) return;
+    // A range can own vertices and no triangles: the volume's last plane alone has no cells.
+    if (plan.uniform || (plan.vertices == 0 && plan.triangles == 0)) return;
     const std::size_t planes = plan.range.end - plan.range.begin;
     // Balance by work (classify's estimate per plane), not by planes.
     std::vector<double> cost(planes);
