@@ -336,6 +336,26 @@ TEST_CASE("sculpt: integer volumes clamp, floats stay finite", "[sculpt]") {
     const float* p = static_cast<const float*>(f.view().data);
     for (std::size_t i = 0; i < 20 * 20 * 20; ++i) REQUIRE(std::isfinite(p[i]));
     require_equals_extract(f);
+
+    // A radius whose inverse overflows, centred on a sample, and a strength times scale that
+    // overflows: they wrote NaN (0 * inf at the centre, inf * a falloff that underflows to 0).
+    const float before = p[5 + 20 * (5 + 20 * 5)];
+    f.add({5, 5, 5}, 1e-320, 1);
+    CHECK(p[5 + 20 * (5 + 20 * 5)] > before);  // the sample it sits on, at full weight
+    SculptOptions huge = f.options();
+    huge.strength_scale = 1e300;
+    Sculpt g = Sculpt::from_function(d, ScalarType::F32, [](double x, double, double) { return x - 10; }, huge);
+    g.add({10, 10, 10}, 6, 1e300);
+    g.subtract({3, 10, 10}, 6, 1e300);
+    g.update();
+    const float* q = static_cast<const float*>(g.view().data);
+    for (std::size_t i = 0; i < 20 * 20 * 20; ++i) {
+        REQUIRE(std::isfinite(p[i]));
+        REQUIRE(std::isfinite(q[i]));
+    }
+    f.update();
+    require_equals_extract(f);
+    require_equals_extract(g);
 }
 
 TEST_CASE("sculpt: world units map through origin and spacing", "[sculpt]") {

@@ -21,6 +21,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cfloat>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -225,7 +226,10 @@ struct Sculpt::Impl {
         T* data = static_cast<T*>(volume.data);
         const std::size_t sy = n[0], sz = n[0] * n[1];
         std::array<Span, 3> changed;
-        const double inv[3] = {1 / r[0], 1 / r[1], 1 / r[2]};
+        // Capped: 1 / r overflows for a radius below about 1e-308 samples, and 0 * inf at the
+        // centre would write NaN. Such a brush touches only a sample it sits exactly on.
+        const auto inverse = [](double radius) { return std::min(1 / radius, DBL_MAX); };
+        const double inv[3] = {inverse(r[0]), inverse(r[1]), inverse(r[2])};
 
         // Smoothing reads the old values only (Jacobi), so the result does not depend on the
         // visiting order. Planes are done in increasing z: plane z+1 is still untouched in the
@@ -251,8 +255,10 @@ struct Sculpt::Impl {
             return plane[(x - px.lo) + pnx * (y - py.lo)];
         };
 
-        const double amount = op == BrushOp::Subtract ? -strength * options.strength_scale
-                                                      : strength * options.strength_scale;
+        // Finite whatever strength and scale are (inf times a falloff that underflows to 0 is
+        // NaN); the sum saturates in store_value like any large strength.
+        const double scaled = std::clamp(strength * options.strength_scale, -DBL_MAX, DBL_MAX);
+        const double amount = op == BrushOp::Subtract ? -scaled : scaled;
         for (std::size_t z = box[2].lo; z <= box[2].hi; ++z) {
             const bool has_below = z > 0, has_above = z + 1 < n[2];
             if (op == BrushOp::Smooth) {
