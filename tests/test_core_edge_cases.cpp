@@ -59,6 +59,19 @@ TEST_CASE("invalid views are Errors", "[core]") {
         v.spacing = {1, 1, -2};
         CHECK_THROWS_AS(voxmesh::extract(v, cpu_options(0.5)), voxmesh::Error);
     }
+    SECTION("samples past the float range (vertex positions would be inf)") {
+        v.spacing = {1, 1e300, 1};
+        CHECK_THROWS_WITH(voxmesh::extract(v, cpu_options(0.5)), Catch::Contains("along y") && Catch::Contains("float"));
+        v.spacing = {1, 1, 1};
+        v.origin = {0, 0, -3.4e38};
+        CHECK_NOTHROW(voxmesh::extract(v, cpu_options(0.5)));  // the last sample at -3.4e38 + 2
+        v.spacing = {1, 1, 1e38};
+        v.origin = {0, 0, 3.3e38};
+        CHECK_THROWS_WITH(voxmesh::extract(v, cpu_options(0.5)), Catch::Contains("along z"));
+        v.origin = {1e39, 0, 0};
+        v.spacing = {1, 1, 1};
+        CHECK_THROWS_WITH(voxmesh::extract(v, cpu_options(0.5)), Catch::Contains("along x"));
+    }
     SECTION("Error is a std::runtime_error") {
         v.data = nullptr;
         CHECK_THROWS_AS(voxmesh::extract(v, cpu_options(0.5)), std::runtime_error);
