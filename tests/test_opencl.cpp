@@ -697,6 +697,10 @@ TEST_CASE("OpenCL errors are clear", "[opencl]") {
     if (std::none_of(list_devices().begin(), list_devices().end(),
                      [](const DeviceInfo& d) { return d.type == DeviceType::Accelerator; })) {
         CHECK_THROWS_AS(extract(view_of(v.data(), ScalarType::F32, g), o), Error);
+        // Auto with a device type nobody has: the advice is not "use Backend::Auto".
+        o.backend = Backend::Auto;
+        CHECK_THROWS_WITH(extract(view_of(v.data(), ScalarType::F32, g), o),
+                          Catch::Contains("no OpenCL device matches") && Catch::Contains("leave devices and device_type unset"));
     }
 }
 

@@ -1076,7 +1076,11 @@ Mesh Engine::run(Stats& stats) {
                                               "engine's threads (name one in Options::devices, or set device_type "
                                               "to Cpu, to use it anyway)"
                                             : "no OpenCL device matches the requested devices/device_type";
-        if (!hybrid_) throw Error(why + "; use Backend::Cpu, Backend::Auto or check the OpenCL installation (clinfo)");
+        // Auto comes here only with devices or device_type set: advise what applies to the caller.
+        const std::string advice = all.empty() ? "use Backend::Cpu, Backend::Auto or check the OpenCL installation (clinfo)"
+                                               : "list_devices() shows the devices there are; use Backend::Cpu, or "
+                                                 "leave devices and device_type unset with Backend::Auto";
+        if (!hybrid_) throw Error(why + "; " + advice);
         warn(why + "; the hybrid backend runs the CPU engine alone");
         report();
         return cpu_extract(volume_, options_, stats, std::move(storage_));

@@ -4,6 +4,8 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
+#include <new>
+#include <string>
 #include <utility>
 
 namespace voxmesh {
@@ -17,8 +19,7 @@ void warn(const Options& options, Stats& stats, const std::string& message) {
 bool is_discrete(const DeviceInfo& d) { return d.type == DeviceType::Gpu || d.type == DeviceType::Accelerator; }
 
 // The engine options.backend picks; the result reuses `storage`'s arrays.
-Mesh run_engine(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage) {
-    stats = Stats{};
+Mesh pick_engine(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage) {
     detail::validate_volume(volume);
     switch (options.backend) {
         case Backend::Cpu:
@@ -53,6 +54,17 @@ Mesh run_engine(const VolumeView& volume, const Options& options, Stats& stats, 
         }
     }
     throw Error("unknown backend");
+}
+
+// Every failure is an Error: out of memory (the mesh, an engine's scratch) included.
+Mesh run_engine(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage) {
+    stats = Stats{};
+    try {
+        return pick_engine(volume, options, stats, std::move(storage));
+    } catch (const std::bad_alloc&) {
+        throw Error("out of memory meshing a " + std::to_string(volume.dims[0]) + "x" + std::to_string(volume.dims[1]) +
+                    "x" + std::to_string(volume.dims[2]) + " volume (the mesh and the engine's working memory)");
+    }
 }
 
 }  // namespace
