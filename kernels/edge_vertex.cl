@@ -32,6 +32,21 @@ typedef VOXEL_T voxel;
 #define ISO_MINUS(v) ((float)(iso_int - (long)(v)) + iso_frac)
 #endif
 
+// t = (iso - v0) / (v1 - v0). A float difference can overflow (samples near ±DBL_MAX, or
+// near ±FLT_MAX without fp64), giving inf / inf = NaN: there it is taken on halves, as the
+// CPU engine does for double samples.
+#ifdef VOXEL_INTEGER
+#define EDGE_T(v0, v1) (ISO_MINUS(v0) / DIFF(v1, v0))
+#else
+#define EDGE_T(v0, v1) edge_t(iso, v0, v1)
+inline real edge_t(const real iso, const voxel v0, const voxel v1) {
+    const real d = DIFF(v1, v0);
+    if (isfinite(d)) return (iso - (real)v0) / d;
+    const real h = (real)0.5;
+    return (h * iso - h * (real)v0) / (h * (real)v1 - h * (real)v0);
+}
+#endif
+
 // Central differences, one-sided at the volume border, divided by spacing (as the CPU).
 // pos: the global coordinate on this axis, idx: the data index, stride: the data's stride.
 inline real axis_diff(__global const voxel* data, uint idx, uint pos, uint n, uint stride, real inv) {
@@ -93,7 +108,7 @@ VERTEX_INLINE inline void sample_vertices(__global const voxel* data, const uint
         const uint stride = axis == 0 ? 1u : axis == 1 ? stride_y : stride_z;
         const uint idx1 = idx + stride;
         const voxel v1 = data[idx1];
-        const real t = ISO_MINUS(v0) / DIFF(v1, v0);
+        const real t = EDGE_T(v0, v1);
         position[0] = (float)(ox + ((real)x + (axis == 0 ? t : (real)0)) * sx);
         position[1] = (float)(oy + ((real)y + (axis == 1 ? t : (real)0)) * sy);
         position[2] = (float)(oz + ((real)z + (axis == 2 ? t : (real)0)) * sz);

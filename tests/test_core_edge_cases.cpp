@@ -251,6 +251,26 @@ TEST_CASE("infinite samples give an Error or finite positions, never NaN", "[cor
     }
 }
 
+TEST_CASE("double samples near the ends of the double range give finite positions on the edge", "[core]") {
+    // v1 - v0 overflows to inf here: t was inf / inf = NaN, a NaN vertex and no Error.
+    const double big = std::numeric_limits<double>::max();
+    std::vector<double> v(8, -big);
+    v[7] = big;  // corner (1, 1, 1)
+    for (double iso : {0.0, 1e308, -1e308}) {
+        INFO("iso " << iso);
+        const voxmesh::Mesh mesh = voxmesh::extract(vmtest::view_of(v, {2, 2, 2}), cpu_options(iso, 1));
+        REQUIRE(mesh.vertex_count() == 3);
+        CHECK(vmtest::structural_problem(mesh).empty());  // no NaN/inf position or normal
+        for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+            CHECK(mesh.positions[i] >= 0.0f);
+            CHECK(mesh.positions[i] <= 1.0f);
+        }
+        // Vertex 0 is on the z-edge of sample (1, 1, 0) (the first in canonical order): z = t.
+        const double t = (0.5 * iso + 0.5 * big) / big;
+        CHECK(mesh.positions[2] == Approx(t).margin(1e-6));
+    }
+}
+
 TEST_CASE("a vanishing gradient still gives a unit normal pointing outward along the edge", "[core]") {
     // Along x: -1, 0, -1 (constant in y and z), iso 0. The middle sample is inside and the
     // central difference there is 0, so both vertices (t = 1 and t = 0) sit on it with a

@@ -212,6 +212,40 @@ TEST_CASE("OpenCL without fp64 (float interpolation, f64 converted per chunk) ma
     compare(view_of(f64.data(), ScalarType::F64, g), o);
 }
 
+// An edge between samples near -max and +max: the difference overflows, and t was NaN.
+TEST_CASE("OpenCL gives the CPU engine's vertices for samples near the ends of the float and double range",
+          "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{2, 2, 2}};
+    const double dmax = std::numeric_limits<double>::max();
+    const float fmax = std::numeric_limits<float>::max();
+    std::vector<double> f64(8, -dmax);
+    std::vector<float> f32(8, -fmax);
+    f64[7] = dmax;
+    f32[7] = fmax;
+    Options o;
+    for (double iso : {0.0, 1e38}) {
+        o.iso = iso;
+        INFO("iso " << iso);
+        compare(view_of(f64.data(), ScalarType::F64, g), o);
+        compare(view_of(f32.data(), ScalarType::F32, g), o);
+        // In float the gradients overflow too: the normals fall back to the edge's axis where
+        // the CPU's double gradients do not, so only positions are compared.
+        const Pretend no_fp64(detail::opencl_pretend_no_fp64);
+        const Mesh cpu = run(view_of(f32.data(), ScalarType::F32, g), o, Backend::Cpu);
+        for (const ScalarType type : {ScalarType::F32, ScalarType::F64}) {
+            const Mesh m = run(view_of(type == ScalarType::F32 ? static_cast<const void*>(f32.data()) : f64.data(), type, g),
+                               o, Backend::OpenCL);
+            CHECK(m.indices == cpu.indices);
+            REQUIRE(m.positions.size() == cpu.positions.size());
+            for (float n : m.normals) CHECK(std::isfinite(n));
+            if (type == ScalarType::F32)  // f64 is clamped to float on the way: other t's
+                for (std::size_t i = 0; i < m.positions.size(); ++i) CHECK(m.positions[i] == Approx(cpu.positions[i]).margin(1e-6));
+            for (float p : m.positions) CHECK(std::isfinite(p));
+        }
+    }
+}
+
 // Copies go through two pinned blocks in turns: with the default blocks (one per copy here)
 // and with blocks of 1000 bytes, not a multiple of a sample or a vertex, so that every upload
 // and read-back runs through many of them.

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
 namespace voxmesh::detail {
 
@@ -134,7 +135,7 @@ public:
             if (!(axes >> axis & 1)) continue;
             const std::size_t idx1 = idx0 + stride_[axis];
             const double v1 = static_cast<double>(data_[idx1]);
-            const double t = (iso_ - v0) / (v1 - v0);
+            const double t = edge_t(v0, v1);
             if (normal) {
                 double g1[3];
                 if (interior) {
@@ -156,6 +157,19 @@ public:
 
 private:
     static double to_double(std::size_t p) { return static_cast<double>(static_cast<std::int64_t>(p)); }
+
+    // (iso - v0) / (v1 - v0). Only double samples can overflow the difference (near ±DBL_MAX,
+    // where it gave inf / inf = NaN): there it is taken on halves (the kernels do the same).
+    double edge_t(double v0, double v1) const {
+        if constexpr (std::is_same_v<T, double>) {
+            const double d = v1 - v0;
+            if (!std::isfinite(d)) [[unlikely]]
+                return (0.5 * iso_ - 0.5 * v0) / (0.5 * v1 - 0.5 * v0);
+            return (iso_ - v0) / d;
+        } else {
+            return (iso_ - v0) / (v1 - v0);
+        }
+    }
 
     // 1 <= p and p + 1 <= n - 2: p and its +1 neighbour both have two neighbours along the axis.
     static bool away_from_border(std::size_t p, std::size_t n) { return p >= 1 && p + 3 <= n; }
