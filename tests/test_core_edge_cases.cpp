@@ -72,6 +72,10 @@ TEST_CASE("invalid views are Errors", "[core]") {
         v.spacing = {1, 1, 1};
         CHECK_THROWS_WITH(voxmesh::extract(v, cpu_options(0.5)), Catch::Contains("along x"));
     }
+    SECTION("rows too long for 32-bit row counts") {
+        v.dims = {(std::size_t{1} << 29) + 1, 2, 2};  // refused before a sample is read
+        CHECK_THROWS_WITH(voxmesh::extract(v, cpu_options(0.5)), Catch::Contains("536870913 samples"));
+    }
     SECTION("Error is a std::runtime_error") {
         v.data = nullptr;
         CHECK_THROWS_AS(voxmesh::extract(v, cpu_options(0.5)), std::runtime_error);

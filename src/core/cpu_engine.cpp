@@ -610,6 +610,10 @@ void validate_volume(const VolumeView& volume) {
             throw Error("volume dimension " + std::string(1, "xyz"[d]) + " is " + std::to_string(volume.dims[d]) +
                         "; marching cubes needs at least 2 samples along every axis");
     checked_volume_bytes(volume.dims, volume.type);
+    // Per-row counts are 32-bit (RowInfo, the kernels' row counts): up to 5 triangles a cell.
+    if (volume.dims[0] > kMaxRowSamples)
+        throw Error("volume rows of " + std::to_string(volume.dims[0]) + " samples are longer than the " +
+                    std::to_string(kMaxRowSamples) + " supported (mesh it in parts along x)");
     if (!volume.data) throw Error("volume has no data");
     for (int d = 0; d < 3; ++d)
         if (!(volume.spacing[d] > 0) || !std::isfinite(volume.spacing[d]) || !std::isfinite(volume.origin[d]))

@@ -90,7 +90,11 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
 // `storage`: a mesh whose arrays' capacity the result reuses (extract_into).
 Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage = {});
 
-// Throws Error unless every dimension is >= 2, data is set and the size is addressable.
+// The longest row (nx) a volume may have: a row's vertex and triangle counts stay 32-bit.
+constexpr std::size_t kMaxRowSamples = std::size_t{1} << 29;
+
+// Throws Error unless every dimension is >= 2, data is set, the size is addressable, rows are
+// at most kMaxRowSamples long and every sample's position fits a float.
 void validate_volume(const VolumeView& volume);
 
 // Throws Error when a mesh of `vertices` vertices cannot be indexed by 32-bit indices. Every
