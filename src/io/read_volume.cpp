@@ -9,6 +9,15 @@
 
 namespace voxmesh::io {
 
+namespace {
+// Shortest round-trip text: std::to_string would print 1e300 with 300 digits.
+std::string number(double value) {
+    char buffer[64];
+    const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
+    return std::string(buffer, result.ptr);
+}
+}  // namespace
+
 std::array<std::size_t, 3> volume_dims(const std::string& path, const std::vector<std::size_t>& sizes) {
     if (sizes.size() < 3)
         fail(path, "has " + std::to_string(sizes.size()) + " dimensions; a volume needs 3");
@@ -21,7 +30,7 @@ std::array<std::size_t, 3> volume_dims(const std::string& path, const std::vecto
 
 double checked_spacing(const std::string& path, const char* field, double value) {
     if (!std::isfinite(value) || value == 0)
-        fail(path, std::string("'") + field + "' gives spacing " + std::to_string(value) +
+        fail(path, std::string("'") + field + "' gives spacing " + number(value) +
                        "; spacing must be finite and non-zero");
     return std::fabs(value);
 }
@@ -32,13 +41,6 @@ double checked_origin(const std::string& path, const char* field, double value) 
 }
 
 namespace {
-
-// Shortest round-trip text: std::to_string would print 1e300 with 300 digits.
-std::string number(double value) {
-    char buffer[64];
-    const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-    return std::string(buffer, result.ptr);
-}
 
 // Mesh vertices are floats: a grid whose samples lie past FLT_MAX would mesh to inf.
 void check_extent(const std::string& path, const VolumeInfo& info) {
