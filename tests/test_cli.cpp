@@ -295,6 +295,20 @@ TEST_CASE("cli: bad input exits 2 with a message and leaves no output", "[cli]")
                     "v.raw", s.path("v.raw"));
 }
 
+TEST_CASE("cli: voxelize refuses a grid larger than physical memory", "[cli]") {
+    // At most 4608^3 f32 samples (resolution 4096, padding 256): about 391 GB.
+    const double physical = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGESIZE));
+    if (physical >= 4.0 * 4608 * 4608 * 4608) {
+        WARN("this machine has " << physical << " bytes of memory; the grid might fit");
+        return;
+    }
+    Scratch s;
+    const std::string vol = s.path("huge.nrrd");
+    expect_rejected(s, "voxelize " + quote(data_file("20mm-xyz-cube.stl")) + " -o " + quote(vol) +
+                           " --resolution 4096 --padding 256",
+                    "resolution 4096", vol, "physical memory");
+}
+
 TEST_CASE("cli: devices and demo", "[cli]") {
     Scratch s;
     const Result d = run(s, "devices");

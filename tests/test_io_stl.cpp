@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 #include <voxmesh/io.hpp>
 
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -119,4 +120,29 @@ TEST_CASE("stl: bad files are errors naming the file", "[io][stl][errors]") {
     std::filesystem::create_directory(s.dir + "/dir.stl");
     CHECK_THROWS_WITH(read_stl(s.dir + "/dir.stl"), Contains("dir.stl") && Contains("directory"));
     CHECK_THROWS_WITH(read_stl(s.dir + "/missing.stl"), Contains("missing.stl") && Contains("does not exist"));
+}
+
+TEST_CASE("stl: ASCII numbers beyond float range are errors, underflow reads as zero", "[io][stl][errors]") {
+    Scratch s;
+    auto triangle = [](const std::string& z) {
+        return "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 " + z +
+               "\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\nendsolid\n";
+    };
+    for (const char* big : {"1e39", "-1e39", "+3.5e38", "1e400", "0.00001e44", "123456789e31"}) {
+        const std::string path = s.file("big.stl", triangle(big));
+        const std::string shown = big[0] == '+' ? big + 1 : big;  // the reader drops a leading '+'
+        CHECK_THROWS_WITH(read_stl(path), Contains(path) && Contains("'" + shown + "'") &&
+                                              Contains("beyond the range of float"));
+    }
+    for (const char* tiny : {"1e-50", "-1e-50", "1e-400", "0.0001e-44", "1000e-49"}) {
+        INFO(tiny);
+        const Mesh m = read_stl(s.file("tiny.stl", triangle(tiny)));
+        REQUIRE(m.vertex_count() == 3);
+        CHECK(m.positions[2] == 0.0f);
+        CHECK_FALSE(std::signbit(m.positions[2]));  // -0 welds to +0
+    }
+    // Denormals and the largest float still read as themselves.
+    CHECK(read_stl(s.file("denormal.stl", triangle("1e-40"))).positions[2] == 1e-40f);
+    CHECK(read_stl(s.file("max.stl", triangle("3.4028234e38"))).positions[2] == FLT_MAX);
+    CHECK_THROWS_WITH(read_stl(s.file("junk.stl", triangle("1e39x"))), Contains("'1e39x' is not a number"));
 }

@@ -402,6 +402,11 @@ TEST_CASE("sculpt: construction errors", "[sculpt]") {
     SculptOptions o;
     o.block_size = 1;
     REQUIRE_THROWS_AS(Sculpt(v, o), voxmesh::Error);
+    SculptOptions bad_device;
+    bad_device.device = -5;  // only -1 means "choose one"; it used to be treated like -1
+    REQUIRE_THROWS_WITH(Sculpt(v, bad_device), Catch::Contains("device") && Catch::Contains("-5"));
+    bad_device.backend = voxmesh::Backend::Auto;
+    REQUIRE_THROWS_WITH(Sculpt(v, bad_device), Catch::Contains("device") && Catch::Contains("-5"));
     v.dims = {1, 8, 8};
     REQUIRE_THROWS_AS(Sculpt(v), voxmesh::Error);
     REQUIRE_THROWS_AS(Sculpt::from_function({8, 8, 8}, ScalarType::F32, [](double, double, double) { return NAN; }),

@@ -112,6 +112,11 @@ TEST_CASE("sculpt strokes: the built-in path winds over the sphere model", "[scu
     CHECK(ops[1] > 50);
     CHECK(ops[2] == 60);
     REQUIRE_THROWS_AS(voxmesh::builtin_stroke_path(0, {64, 64, 64}), voxmesh::Error);
+    // Too few samples to sculpt: an error naming the dims, not centres near 2^63 (dims - 1 wrapped).
+    REQUIRE_THROWS_WITH(voxmesh::builtin_stroke_path(10, {0, 0, 0}), Catch::Contains("0x0x0"));
+    REQUIRE_THROWS_WITH(voxmesh::builtin_stroke_path(10, {64, 1, 64}), Catch::Contains("at least 2 samples"));
+    for (const auto& d : voxmesh::builtin_stroke_path(10, {5, 5, 5}))  // small but valid: inside the volume
+        for (double c : d.dab.center) CHECK((c >= 0 && c <= 4));
 
     const auto s = voxmesh::summarize_latencies({5, 1, 4, 2, 3});
     CHECK(s.p50 == 3);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -12,6 +13,8 @@
 #include <numbers>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 namespace {
 
@@ -296,4 +299,46 @@ TEST_CASE("voxelize: open, non-manifold and empty meshes are rejected", "[voxeli
     CHECK_THROWS_WITH(voxmesh::voxelize(bad_index, vo), Catch::Contains("out of range"));
     vo.resolution = 1;
     CHECK_THROWS_WITH(voxmesh::voxelize(octahedron(1), vo), Catch::Contains("resolution"));
+}
+
+TEST_CASE("voxelize: a grid larger than physical memory is refused before allocating", "[voxelize]") {
+    // The largest grid the options allow: 4608^3 f32 samples, about 391 GB.
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 4096;
+    vo.padding = 256;
+    const double bytes = 4.0 * 4608.0 * 4608.0 * 4608.0;
+    const double physical = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGESIZE));
+    if (!(physical > 0) || physical >= bytes) {
+        WARN("this machine has " << physical << " bytes of memory; the largest grid fits, nothing to refuse");
+        return;
+    }
+    CHECK_THROWS_WITH(voxmesh::voxelize(subdivided_box({0, 0, 0}, {1, 1, 1}, 1), vo),
+                      Catch::Contains("4608x4608x4608") && Catch::Contains("resolution 4096") &&
+                          Catch::Contains("physical memory"));
+}
+
+TEST_CASE("voxelize: models near the float limit give finite samples or a clear error", "[voxelize]") {
+    // A tetrahedron in the cube [-a, a]^3: the cube's corner (-a, -a, -a) is 1.15 a from it,
+    // and the grid's padded corner samples farther still.
+    const float a = 1e38f;
+    voxmesh::Mesh tet;
+    tet.positions = {a, a, a, a, -a, -a, -a, a, -a, -a, -a, a};
+    tet.indices = {0, 1, 2, 0, 3, 1, 0, 2, 3, 1, 3, 2};
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 2;
+    vo.padding = 2;  // samples at +-2.5e38: in range, the corner's distance 3.75e38 is not
+    vo.band = 4;
+    const voxmesh::Volume v = voxmesh::voxelize(tet, vo);
+    const auto* d = static_cast<const float*>(v.data);
+    for (std::size_t i = 0; i < v.sample_count(); ++i) REQUIRE(std::isfinite(d[i]));
+    REQUIRE(v.dims == std::array<std::size_t, 3>{6, 6, 6});
+    CHECK(d[0] == -FLT_MAX);              // the (-, -, -) corner, clamped
+    CHECK(d[3 + 6 * (3 + 6 * 3)] > 0);    // (0.5 a, 0.5 a, 0.5 a) is inside
+    voxmesh::Options eo;
+    eo.backend = voxmesh::Backend::Cpu;
+    const voxmesh::Mesh back = voxmesh::extract(v.view(), eo);
+    CHECK(back.triangle_count() > 0);
+
+    vo.padding = 3;  // samples at +-3.5e38: no float vertex can stand for them
+    CHECK_THROWS_WITH(voxmesh::voxelize(tet, vo), Catch::Contains("beyond the range of float"));
 }

@@ -82,7 +82,8 @@ void write_nrrd(const std::string& path, const VolumeView& volume,
 // STL, binary or ASCII (binary when 84 + 50*n == file size, whatever the header says),
 // welded by exact float position (-0 and +0 are one position): positions and indices
 // filled, normals empty. Triangles keep the file's order and winding; non-finite
-// coordinates are an error.
+// coordinates are an error, and so is an ASCII number beyond the float range (one too small
+// for a float reads as 0).
 Mesh read_stl(const std::string& path);
 
 }  // namespace voxmesh

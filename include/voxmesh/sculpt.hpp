@@ -55,7 +55,8 @@ struct SculptOptions {
     // when there is one, else the CPU). Hybrid is not supported (an Error). Without a usable
     // OpenCL device, OpenCL and Auto mesh on the CPU; OpenCL says so through `log`.
     Backend backend = Backend::Cpu;
-    int device = -1;  // OpenCL device: an index into list_devices(); -1 = a GPU/accelerator, else the first
+    int device = -1;  // OpenCL device: an index into list_devices(); -1 = a GPU/accelerator, else the first;
+                      // other negative values are an Error
     std::function<void(const std::string&)> log;  // warnings (fallback to the CPU); may be empty
 };
 
@@ -193,7 +194,7 @@ void run_stroke_script(Sculpt& sculpt, const std::string& path,
 
 // n_dabs (>= 1) dabs in sample coordinates along a curve winding over the surface of
 // make_sculpt_sphere(n) for a volume of `dims`: mostly add/subtract, every fifth a smooth,
-// radius varying between radius_min and radius_max samples.
+// radius varying between radius_min and radius_max samples. Every dim must be >= 2 (Error).
 std::vector<ScriptDab> builtin_stroke_path(std::size_t n_dabs, std::array<std::size_t, 3> dims,
                                            double radius_min = 8, double radius_max = 16);
 

@@ -29,7 +29,7 @@ enum class VoxelField {
     Distance,   // f32 signed Euclidean distance in model units, positive inside, negative
                 // outside; mesh it back at iso 0 (the default inside = value >= iso gives
                 // outward normals). Exact within `band` voxels of the surface, clamped to
-                // +-band*h farther away.
+                // +-band*h farther away, and to +-FLT_MAX (models spanning most of the float range).
 };
 
 struct VoxelizeOptions {
@@ -42,7 +42,10 @@ struct VoxelizeOptions {
 };
 
 // `mesh` must be closed (every edge in two triangles); open or non-manifold input, an empty
-// mesh, non-finite positions or out-of-range indices are rejected with Error.
+// mesh, non-finite positions or out-of-range indices are rejected with Error. So are, before
+// anything large is allocated, a grid whose bytes exceed the machine's physical memory
+// (sysconf(_SC_PHYS_PAGES) * page size) and a grid with samples beyond the range of float
+// (a model near +-3.4e38 plus padding), which extract() could not mesh.
 Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options);
 
 }  // namespace voxmesh

@@ -691,6 +691,9 @@ std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarT
     dispatch_sculpt_type(type, [](auto) {});  // rejects other types
     if (options.block_size < 2 || options.block_size > 256)
         throw Error("sculpt: block size must be 2..256 cells, got " + std::to_string(options.block_size));
+    if (options.device < -1)  // -1 is the documented "choose one"; other negatives are mistakes
+        throw Error("sculpt: device must be -1 (choose a GPU/accelerator) or a device index, got " +
+                    std::to_string(options.device));
     check_finite(options.iso, "iso value");
     check_finite(options.strength_scale, "strength scale");
     VolumeView probe;

@@ -152,6 +152,10 @@ std::vector<ScriptDab> builtin_stroke_path(std::size_t n_dabs, std::array<std::s
     if (n_dabs == 0) throw Error("sculpt: the stroke path needs at least one dab");
     if (!(radius_min > 0) || !(radius_max >= radius_min) || !std::isfinite(radius_max))
         throw Error("sculpt: stroke radii must satisfy 0 < min <= max");
+    // sphere_model takes dims - 1: a 0 would wrap; fewer than 2 samples is no volume to sculpt.
+    if (std::min({dims[0], dims[1], dims[2]}) < 2)
+        throw Error("sculpt: the stroke path needs a volume of at least 2 samples per axis, got " +
+                    std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]));
     const SphereModel m = sphere_model(dims);
     const double pi = std::numbers::pi;
     std::vector<ScriptDab> dabs(n_dabs);

@@ -14,11 +14,14 @@
 
 #include <algorithm>
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
 #include <string>
 #include <vector>
+
+#include <unistd.h>
 
 namespace voxmesh {
 
@@ -146,7 +149,31 @@ Grid make_grid(const Soup& soup, const VoxelizeOptions& options) {
         g.dims[d] = m + 2 * pad;
         g.origin[d] = 0.5 * (lo[d] + hi[d]) - (0.5 * double(m - 1) + double(pad)) * g.h;
     }
+    // Volumes are meshed to float vertices (extract and the readers refuse samples past
+    // FLT_MAX): a model near the float limit plus padding must be refused here, not later.
+    for (int d = 0; d < 3; ++d) {
+        const double last = g.origin[d] + double(g.dims[d] - 1) * g.h;
+        if (!(std::fabs(g.origin[d]) <= FLT_MAX && std::fabs(last) <= FLT_MAX))
+            throw Error(std::string("voxelize: with padding ") + std::to_string(pad) + " the grid's samples along " +
+                        "xyz"[d] + " reach beyond the range of float coordinates (about 3.4e38); "
+                        "move the model nearer the origin or reduce the padding");
+    }
     return g;
+}
+
+// Refuses a grid that cannot fit in this machine's physical memory, before allocating it:
+// the volume is written in full, so overcommit would only defer the failure to the OOM killer.
+void check_grid_memory(const Grid& g, const VoxelizeOptions& options, std::size_t sample_bytes) {
+    const std::size_t bytes = g.dims[0] * g.dims[1] * g.dims[2] * sample_bytes;  // < 2^41 (kMaxDim^3 * 4)
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+    if (pages <= 0 || page <= 0) return;  // unknown: Volume::allocate still reports a failure
+    const std::size_t physical = std::size_t(pages) * std::size_t(page);
+    if (bytes > physical)
+        throw Error("voxelize: the " + std::to_string(g.dims[0]) + "x" + std::to_string(g.dims[1]) + "x" +
+                    std::to_string(g.dims[2]) + " grid (resolution " + std::to_string(options.resolution) +
+                    ", padding " + std::to_string(options.padding) + ") needs " + std::to_string(bytes) +
+                    " bytes, more than the " + std::to_string(physical) +
+                    " bytes of physical memory; use a lower resolution");
 }
 
 using Lattice = std::array<std::int64_t, 3>;
@@ -221,7 +248,9 @@ Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
     const std::size_t nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
     static_assert(kMaxResolution + 2 * kMaxPadding <= kMaxDim);
 
-    Volume volume = Volume::allocate(distance ? ScalarType::F32 : ScalarType::U8, grid.dims);
+    const ScalarType type = distance ? ScalarType::F32 : ScalarType::U8;
+    check_grid_memory(grid, options, scalar_size(type));
+    Volume volume = Volume::allocate(type, grid.dims);
     volume.spacing = {grid.h, grid.h, grid.h};
     volume.origin = grid.origin;
 
@@ -334,7 +363,10 @@ Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
                     while (passed < hits.size() && hits[passed] < double(i)) ++passed;
                     const bool inside = passed % 2 == 1;
                     if (distance) {
-                        const double d = std::sqrt(double(dist[base + i])) * grid.h;
+                        // Clamped: band * h can pass FLT_MAX (a model spanning most of the
+                        // float range, a wide band) and double -> float out of range is UB.
+                        // Only samples far from the surface reach it; the zero crossing stays.
+                        const double d = std::min(std::sqrt(double(dist[base + i])) * grid.h, double(FLT_MAX));
                         dist[base + i] = static_cast<float>(inside ? d : -d);
                     } else {
                         occ[base + i] = inside ? 255 : 0;
