@@ -728,8 +728,8 @@ TEST_CASE("OpenCL errors are clear", "[opencl]") {
     o.devices.clear();
     o.device_type = DeviceType::Accelerator;
     v[10] = 0;
-    if (std::none_of(list_devices().begin(), list_devices().end(),
-                     [](const DeviceInfo& d) { return d.type == DeviceType::Accelerator; })) {
+    const auto devices = list_devices();  // one vector: begin and end of two temporaries is UB
+    if (std::none_of(devices.begin(), devices.end(), [](const DeviceInfo& d) { return d.type == DeviceType::Accelerator; })) {
         CHECK_THROWS_AS(extract(view_of(v.data(), ScalarType::F32, g), o), Error);
         // Auto with a device type nobody has: the advice is not "use Backend::Auto".
         o.backend = Backend::Auto;
