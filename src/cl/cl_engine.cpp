@@ -199,6 +199,7 @@ struct DeviceJob {
     std::size_t word_id_bytes = 4;             // of the per-word vertex id bases (2 or 4)
     std::size_t pieces_counted = 0;            // in this call
     std::size_t fronts_taken = 0;              // single chunks take_front gave it, in this call
+    bool counting_done = false;                // its count worker returned (g_deal_first_chunks)
     std::size_t resident_bytes = 0;            // of pieces' own samples and bits
     // The range whose samples / bits the kData / kBits buffers hold now (empty: none), and
     // those buffers' handles then: generate uploads or packs again only when they differ.
@@ -477,12 +478,18 @@ std::vector<ZRange> Engine::make_chunks(const std::vector<DeviceJob>& jobs) cons
 bool Engine::take_front(DeviceJob& job, std::size_t& first, std::size_t& count) {
     std::unique_lock<std::mutex> lock(queue_mutex_);
     if (g_deal_first_chunks && job.fronts_taken > 0) {
-        // A worker that failed before taking a chunk must not hang the others: a time limit.
-        dealt_.wait_for(lock, std::chrono::seconds(10), [&] {
+        // Until every device has taken a chunk (or stopped taking) and the CPU worker a run.
+        // The queue can also empty, or a worker fail, without a notify: the wait looks again
+        // every millisecond, and a worker that failed before taking a chunk must not hang the
+        // others: a time limit.
+        const auto dealt = [&] {
             return abort_ || lo_ >= hi_ ||
-                   (std::all_of(jobs_->begin(), jobs_->end(), [](const DeviceJob& j) { return j.fronts_taken > 0; }) &&
+                   (std::all_of(jobs_->begin(), jobs_->end(),
+                                [](const DeviceJob& j) { return j.fronts_taken > 0 || j.counting_done; }) &&
                     (!hybrid_ || cpu_took_));
-        });
+        };
+        const auto until = Clock::now() + std::chrono::seconds(10);
+        while (!dealt() && Clock::now() < until) dealt_.wait_for(lock, std::chrono::milliseconds(1));
     }
     if (abort_ || lo_ >= hi_) return false;
     first = lo_;
@@ -827,6 +834,11 @@ void Engine::device_count_worker(DeviceJob& job, unsigned worker) {
         job.count_chunk_s = s / static_cast<double>(n);  // the latest: the first also pays for set-up
         job.counted.add(s, static_cast<double>((range.end - range.begin) * plane_));
     }
+    {
+        std::lock_guard<std::mutex> lock(queue_mutex_);
+        job.counting_done = true;
+    }
+    dealt_.notify_all();
     job.stats.wall_s += seconds_since(t0);
 }
 
