@@ -363,6 +363,7 @@ void Engine::prepare(DeviceJob& job) {
     job.zero_copy = job.host_memory && !job.convert;
     job.options = std::string("-cl-std=CL1.2 -DVOXEL_T=") + cl_type_name(job.device_type);
     if (is_integer(job.device_type)) job.options += " -DVOXEL_INTEGER";
+    if (job.device_type == ScalarType::F64) job.options += " -DVOXEL_DOUBLE";
     if (job.device->info.type == DeviceType::Cpu) job.options += " -DCPU_PREFETCH";
     job.word_id_bytes = (nx_ + 31) / 32 <= kMaxWordsFor16BitBases ? 2 : 4;
     job.options += job.word_id_bytes == 2 ? " -Dword_id=ushort" : " -Dword_id=uint";
