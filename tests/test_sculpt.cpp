@@ -411,6 +411,15 @@ TEST_CASE("sculpt: construction errors", "[sculpt]") {
     REQUIRE_THROWS_AS(Sculpt(v), voxmesh::Error);
     REQUIRE_THROWS_AS(Sculpt::from_function({8, 8, 8}, ScalarType::F32, [](double, double, double) { return NAN; }),
                       voxmesh::Error);
+    // NaN written through data(): invalidate_all refuses it (update() meshed it silently).
+    v.dims = {8, 8, 8};
+    Sculpt g(v);
+    g.update();
+    static_cast<float*>(g.data())[100] = NAN;
+    REQUIRE_THROWS_WITH(g.invalidate_all(), Catch::Contains("NaN"));
+    static_cast<float*>(g.data())[100] = 2;
+    g.invalidate_all();
+    REQUIRE(g.dirty());
     // iso outside the type's range: never a surface, never a crash.
     SculptOptions high;
     high.iso = 300;

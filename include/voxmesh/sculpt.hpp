@@ -131,7 +131,8 @@ public:
     void smooth(std::array<double, 3> center, double radius, double strength, Units units = Units::Samples);
     // Every sample with lo <= coordinate <= hi on each axis := value (clamped to the type).
     void set_region(std::array<double, 3> lo, std::array<double, 3> hi, double value, Units units = Units::Samples);
-    // Marks every block dirty (after writing to the samples through data()).
+    // Marks every block dirty (after writing to the samples through data()); an Error, marking
+    // nothing, where the samples now hold NaN or infinities.
     void invalidate_all();
 
     // ---- meshing

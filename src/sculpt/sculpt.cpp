@@ -618,6 +618,16 @@ namespace {
 std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarType type, std::array<double, 3> spacing,
                                         std::array<double, 3> origin, const SculptOptions& options);
 
+// extract() refuses NaN and infinite samples; so does the sculpt, which must mesh alike.
+void check_samples_finite(const Volume& volume) {
+    if (volume.type != ScalarType::F32) return;
+    const float* p = static_cast<const float*>(volume.data);
+    const std::size_t count = volume.sample_count();
+    bool bad = false;
+    for (std::size_t i = 0; i < count; ++i) bad |= !std::isfinite(p[i]);
+    if (bad) throw Error("sculpt: the volume has NaN or infinite samples; replace them first");
+}
+
 }  // namespace
 
 Sculpt::Sculpt(const VolumeView& volume, const SculptOptions& options) {
@@ -625,13 +635,7 @@ Sculpt::Sculpt(const VolumeView& volume, const SculptOptions& options) {
     impl_ = make_impl(volume.dims, volume.type, volume.spacing, volume.origin, options);
     const std::size_t bytes = impl_->volume.byte_size();
     std::memcpy(impl_->volume.data, volume.data, bytes);
-    if (volume.type == ScalarType::F32) {
-        const float* p = static_cast<const float*>(impl_->volume.data);
-        const std::size_t count = impl_->volume.sample_count();
-        for (std::size_t i = 0; i < count; ++i)
-            if (!std::isfinite(p[i]))
-                throw Error("sculpt: the volume has NaN or infinite samples; replace them first");
-    }
+    check_samples_finite(impl_->volume);
 }
 
 Sculpt Sculpt::from_function(std::array<std::size_t, 3> dims, ScalarType type,
@@ -757,7 +761,10 @@ void Sculpt::set_region(std::array<double, 3> lo, std::array<double, 3> hi, doub
     dispatch_sculpt_type(impl_->volume.type, [&](auto tag) { impl_->set_box<decltype(tag)>(lo, hi, value); });
 }
 
-void Sculpt::invalidate_all() { impl_->mark_all(); }
+void Sculpt::invalidate_all() {
+    check_samples_finite(impl_->volume);  // written through data(): the blocks must not mesh NaN
+    impl_->mark_all();
+}
 
 UpdateResult Sculpt::update() { return impl_->update(); }
 bool Sculpt::dirty() const { return !impl_->dirty_list.empty(); }
