@@ -68,6 +68,12 @@ TEST_CASE("metaimage: .mha LOCAL, .mhd detached, compressed, big endian", "[io][
         check_u16(read_volume(path), kCount);
         CHECK(read_volume_info(path).encoding == "gzip");
     }
+    SECTION("a data file name with spaces (as SimpleITK writes for 'my scan.mhd')") {
+        const std::string data = s.file("my scan.raw", u16_samples(kCount, false));
+        const std::string path = s.file("my scan.mhd", kHead + "ElementDataFile = my scan.raw\n");
+        check_u16(read_volume(path), kCount);
+        CHECK(read_volume_info(path).data_file == data);
+    }
     SECTION("4-D with a size-1 axis") {
         const std::string path = s.file("v.mha", "NDims = 4\nDimSize = 4 3 2 1\nElementType = MET_USHORT\n"
                                                  "ElementDataFile = LOCAL\n" + u16_samples(kCount, false));

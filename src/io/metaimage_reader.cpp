@@ -144,7 +144,9 @@ VolumeHeader read_metaimage_header(const std::string& path) {
         layout.offset = data_start;
     } else {
         if (data_file.empty()) fail(path, "ElementDataFile is empty");
-        if (data_file == "LIST" || split_words(data_file).size() > 1)
+        // MetaIO takes LIST and names holding '%' (printf patterns, "img%03d.raw 1 10 1") as
+        // several files; anything else is one file name, spaces included ("my scan.raw").
+        if (data_file == "LIST" || data_file.find('%') != std::string::npos)
             fail(path, "ElementDataFile '" + data_file + "': lists and file patterns are not supported");
         layout.data_path = sibling_path(path, data_file);
         layout.offset = 0;
