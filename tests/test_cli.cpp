@@ -185,6 +185,30 @@ TEST_CASE("cli: voxelize then mesh round trip on a real STL", "[cli]") {
     CHECK(run(s, "info " + quote(raw) + " --dims 16 16 16 --type f32").code == 0);
 }
 
+TEST_CASE("cli: info reports an axis stored in the negative direction", "[cli]") {
+    Scratch s;
+    const std::vector<float> samples(4 * 3 * 2, 1.f);
+    const std::string flipped = s.write("flip.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 4 3 2\n"
+                                                     "endian: little\nencoding: raw\nspace: left-posterior-superior\n"
+                                                     "space directions: (-2,0,0) (0,1,0) (0,0,1)\n"
+                                                     "space origin: (10,20,30)\n\n" + f32_bytes(samples));
+    const Result info = run(s, "info " + quote(flipped));
+    INFO(info.out << info.err);
+    REQUIRE(info.code == 0);
+    CHECK(info.out.find("flipped:   x (stored in the negative direction") != std::string::npos);
+    CHECK(info.out.find("origin:    4 20 30") != std::string::npos);  // the minimum corner: 10 - 2 * 3
+    CHECK(info.out.find("rotation:") == std::string::npos);
+
+    const std::string rotated = s.write("rot.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 4 3 2\n"
+                                                    "endian: little\nencoding: raw\nspace: left-posterior-superior\n"
+                                                    "space directions: (0,1,0) (1,0,0) (0,0,1)\n\n" +
+                                                    f32_bytes(samples));
+    const Result rot = run(s, "info " + quote(rotated));
+    REQUIRE(rot.code == 0);
+    CHECK(rot.out.find("rotation:  dropped") != std::string::npos);
+    CHECK(rot.out.find("flipped:") == std::string::npos);
+}
+
 // The AVX2 row packers, the AVX2/BMI copy of the generator and the batched normals must give
 // the portable code's bits (no fused multiply-adds; IEEE divide and square root), for every
 // sample type's packer: the [core] tests under VOXMESH_ISA=portable only compare with the

@@ -1,6 +1,7 @@
 #include <catch2/catch.hpp>
 #include <voxmesh/io.hpp>
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -36,7 +37,72 @@ void check_u16(const Volume& v, std::size_t count) {
 const std::string kHead = "ObjectType = Image\nNDims = 3\nDimSize = 4 3 2\nElementType = MET_USHORT\n";
 constexpr std::size_t kCount = 24;
 
+// u16_samples name their index: sample (i,j,k) must be the file's (n-1-i, j, k) on each
+// flipped axis.
+void check_flipped_u16(const Volume& v, std::array<bool, 3> flipped) {
+    const std::array<std::size_t, 3> n{4, 3, 2};
+    REQUIRE(v.dims == n);
+    const auto* s = static_cast<const std::uint16_t*>(v.data);
+    std::array<std::size_t, 3> p{};
+    for (p[2] = 0; p[2] < n[2]; ++p[2])
+        for (p[1] = 0; p[1] < n[1]; ++p[1])
+            for (p[0] = 0; p[0] < n[0]; ++p[0]) {
+                std::array<std::size_t, 3> f = p;
+                for (std::size_t a = 0; a < 3; ++a)
+                    if (flipped[a]) f[a] = n[a] - 1 - p[a];
+                INFO("sample " << p[0] << "," << p[1] << "," << p[2]);
+                REQUIRE(s[p[0] + 4 * (p[1] + 3 * p[2])] ==
+                        static_cast<std::uint16_t>((f[0] + 4 * (f[1] + 3 * f[2])) * 3 + 1000));
+            }
+}
+
 }  // namespace
+
+TEST_CASE("metaimage: a TransformMatrix axis in the negative direction is reversed", "[io][metaimage]") {
+    Scratch s;
+    const std::string geometry =
+        "ElementSpacing = 0.5 0.25 2\nOffset = -1 2 3.5\nTransformMatrix = -1 0 0 0 1 0 0 0 1\n";
+    auto check_x_flip = [](const std::string& path) {
+        const Volume v = read_volume(path);
+        check_flipped_u16(v, {true, false, false});
+        CHECK(v.spacing == std::array<double, 3>{0.5, 0.25, 2});
+        CHECK(v.origin == std::array<double, 3>{-1 - 0.5 * 3, 2, 3.5});  // x sample 3 of the file
+        const VolumeInfo info = read_volume_info(path);
+        CHECK(info.flipped == std::array<bool, 3>{true, false, false});
+        CHECK_FALSE(info.rotation_dropped);
+        CHECK(info.spacing == v.spacing);
+        CHECK(info.origin == v.origin);
+    };
+    SECTION(".mha LOCAL, big endian") {
+        check_x_flip(s.file("v.mha", kHead + geometry + "ElementByteOrderMSB = True\nElementDataFile = LOCAL\n" +
+                                         u16_samples(kCount, true)));
+    }
+    SECTION(".mhd with a detached file (memory-mapped): the file is not changed") {
+        const std::string samples = u16_samples(kCount, false);
+        const std::string data = s.file("v.raw", samples);
+        check_x_flip(s.file("v.mhd", kHead + geometry + "ElementDataFile = v.raw\n"));
+        CHECK(iotest::read_file(data) == samples);
+    }
+    SECTION("compressed, with z flipped too (Rotation, MetaIO's other spelling)") {
+        const std::string path =
+            s.file("v.mha", kHead + "Offset = -1 2 3.5\nRotation = -1 0 0 0 1 0 0 0 -1\nCompressedData = True\n"
+                                    "ElementDataFile = LOCAL\n" +
+                                    iotest::deflate_bytes(u16_samples(kCount, false), false));
+        const Volume v = read_volume(path);
+        check_flipped_u16(v, {true, false, true});
+        CHECK(v.origin == std::array<double, 3>{-1 - 3, 2, 3.5 - 1});
+        CHECK(read_volume_info(path).flipped == std::array<bool, 3>{true, false, true});
+    }
+    SECTION("a permutation is dropped, not flipped") {
+        const std::string path = s.file("v.mha", kHead + "Offset = -1 2 3.5\nTransformMatrix = 0 -1 0 -1 0 0 0 0 1\n"
+                                                         "ElementDataFile = LOCAL\n" + u16_samples(kCount, false));
+        check_flipped_u16(read_volume(path), {false, false, false});
+        const VolumeInfo info = read_volume_info(path);
+        CHECK(info.rotation_dropped);
+        CHECK(info.flipped == std::array<bool, 3>{false, false, false});
+        CHECK(info.origin == std::array<double, 3>{-1, 2, 3.5});
+    }
+}
 
 TEST_CASE("metaimage: .mha LOCAL, .mhd detached, compressed, big endian", "[io][metaimage]") {
     Scratch s;

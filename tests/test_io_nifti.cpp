@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 #include <voxmesh/io.hpp>
 
+#include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -64,7 +66,87 @@ void check_samples(const Volume& v) {
     CHECK(v.origin == std::array<double, 3>{10, 20, 30});
 }
 
+// Nifti's samples name their index (-3 * linear index): sample (i,j,k) must be the file's
+// (n-1-i, j, k) on each flipped axis.
+void check_flipped_samples(const Volume& v, std::array<bool, 3> flipped) {
+    const std::array<std::size_t, 3> n{4, 3, 2};
+    REQUIRE(v.dims == n);
+    const auto* s = static_cast<const std::int16_t*>(v.data);
+    std::array<std::size_t, 3> p{};
+    for (p[2] = 0; p[2] < n[2]; ++p[2])
+        for (p[1] = 0; p[1] < n[1]; ++p[1])
+            for (p[0] = 0; p[0] < n[0]; ++p[0]) {
+                std::array<std::size_t, 3> f = p;
+                for (std::size_t a = 0; a < 3; ++a)
+                    if (flipped[a]) f[a] = n[a] - 1 - p[a];
+                INFO("sample " << p[0] << "," << p[1] << "," << p[2]);
+                REQUIRE(s[p[0] + 4 * (p[1] + 3 * p[2])] == -3 * static_cast<int>(f[0] + 4 * (f[1] + 3 * f[2])));
+            }
+}
+
+// read_volume and read_volume_info agree, and report the flips expected.
+void check_geometry(const std::string& path, std::array<bool, 3> flipped, std::array<double, 3> spacing,
+                    std::array<double, 3> origin) {
+    const Volume v = read_volume(path);
+    check_flipped_samples(v, flipped);
+    CHECK(v.spacing == spacing);
+    CHECK(v.origin == origin);
+    const VolumeInfo info = read_volume_info(path);
+    CHECK(info.flipped == flipped);
+    CHECK_FALSE(info.rotation_dropped);
+    CHECK(info.spacing == spacing);
+    CHECK(info.origin == origin);
+}
+
+// srow_x, srow_y, srow_z (4 values each) and sform_code 4 (MNI).
+void put_sform(Nifti& n, const std::array<float, 12>& rows) {
+    n.put<std::int16_t>(254, 4);
+    for (std::size_t i = 0; i < 12; ++i) n.put<float>(280 + 4 * i, rows[i]);
+}
+
 }  // namespace
+
+TEST_CASE("nifti: axes in the negative direction are reversed from the minimum corner", "[io][nifti]") {
+    Scratch s;
+    SECTION("sform diag(-2, 2, 2) with the MNI offset, little and big endian, gzip") {
+        for (const bool big : {false, true}) {
+            Nifti n(big);
+            for (std::size_t a = 1; a <= 3; ++a) n.put<float>(76 + 4 * a, 2);
+            put_sform(n, {-2, 0, 0, 90, 0, 2, 0, -126, 0, 0, 2, -72});
+            const std::array<double, 3> corner{90 - 2 * 3, -126, -72};  // x sample 3 of the file
+            check_geometry(s.file("mni.nii", n.file()), {true, false, false}, {2, 2, 2}, corner);
+            check_geometry(s.file("mni.nii.gz", iotest::deflate_bytes(n.file(), true)), {true, false, false},
+                           {2, 2, 2}, corner);
+        }
+    }
+    SECTION("qform with qfac = pixdim[0] = -1 flips z") {
+        Nifti n(false);
+        n.put<float>(76, -1);
+        check_geometry(s.file("q.nii", n.file()), {false, false, true}, {1.5, 2, 2.5}, {10, 20, 30 - 2.5 * 1});
+    }
+    SECTION("qform rotated 180 degrees about y, qfac -1: x flipped (LAS, as dcm2niix writes)") {
+        Nifti n(false);
+        n.put<float>(76, -1);
+        n.put<float>(260, 1);  // quatern_c
+        check_geometry(s.file("las.nii", n.file()), {true, false, false}, {1.5, 2, 2.5}, {10 - 1.5 * 3, 20, 30});
+    }
+    SECTION("sform wins over a flipping qform") {
+        Nifti n(false);
+        n.put<float>(76, -1);
+        put_sform(n, {1.5, 0, 0, 1, 0, -2, 0, 2, 0, 0, 2.5, 3});
+        check_geometry(s.file("s.nii", n.file()), {false, true, false}, {1.5, 2, 2.5}, {1, 2 - 2 * 2, 3});
+    }
+    SECTION("a permuting sform is dropped, not flipped") {
+        Nifti n(false);
+        put_sform(n, {0, -2, 0, 1, -1.5, 0, 0, 2, 0, 0, 2.5, 3});
+        const std::string path = s.file("p.nii", n.file());
+        const VolumeInfo info = read_volume_info(path);
+        CHECK(info.rotation_dropped);
+        CHECK(info.flipped == std::array<bool, 3>{false, false, false});
+        CHECK(info.origin == std::array<double, 3>{1, 2, 3});
+        check_flipped_samples(read_volume(path), {false, false, false});
+    }
+}
 
 TEST_CASE("nifti: real MRI reads with pixdim spacing and sform origin", "[io][nifti]") {
     const std::string path = std::string(VOXMESH_TEST_DATA) + "/mri_someones_anatomy.nii.gz";
@@ -75,6 +157,8 @@ TEST_CASE("nifti: real MRI reads with pixdim spacing and sform origin", "[io][ni
     CHECK(info.dims == std::array<std::size_t, 3>{57, 67, 56});
     CHECK(info.spacing == std::array<double, 3>{2.75, 2.75, 2.75});
     CHECK(info.origin == std::array<double, 3>{-78, -91, -91});
+    CHECK(info.flipped == std::array<bool, 3>{false, false, false});  // sform diag(2.75, 2.75, 2.75)
+    CHECK_FALSE(info.rotation_dropped);
     // scl_slope / scl_inter are reported, not applied.
     CHECK(info.value_scale == Approx(0.35246).epsilon(1e-4));
     CHECK(info.value_offset == Approx(6.6784).epsilon(1e-4));

@@ -1,6 +1,9 @@
 #include <catch2/catch.hpp>
 #include <voxmesh/io.hpp>
 
+#include <algorithm>
+#include <array>
+#include <bit>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -37,7 +40,94 @@ void check_i16(const Volume& v, std::size_t count) {
 
 const std::string kHeader343 = "NRRD0004\ntype: short\ndimension: 3\nsizes: 3 4 5\nendian: little\n";
 
+// 4x3x2 samples of type T whose value names their index: x + 10*y + 100*z.
+constexpr std::array<std::size_t, 3> kDims432{4, 3, 2};
+template <class T>
+std::string indexed_samples(bool big_endian) {
+    std::string out;
+    for (std::size_t z = 0; z < 2; ++z)
+        for (std::size_t y = 0; y < 3; ++y)
+            for (std::size_t x = 0; x < 4; ++x) {
+                const auto value = static_cast<T>(x + 10 * y + 100 * z);
+                char b[sizeof(T)];
+                std::memcpy(b, &value, sizeof(T));
+                if (big_endian != (std::endian::native == std::endian::big)) std::reverse(b, b + sizeof(T));
+                out.append(b, sizeof(T));
+            }
+    return out;
+}
+
+// Sample (i,j,k) is the file's (n-1-i, j, k) on each flipped axis.
+template <class T>
+void check_indexed(const Volume& v, std::array<bool, 3> flipped) {
+    REQUIRE(v.dims == kDims432);
+    const auto* s = static_cast<const T*>(v.data);
+    std::array<std::size_t, 3> p{};
+    for (p[2] = 0; p[2] < 2; ++p[2])
+        for (p[1] = 0; p[1] < 3; ++p[1])
+            for (p[0] = 0; p[0] < 4; ++p[0]) {
+                std::array<std::size_t, 3> f = p;
+                for (std::size_t a = 0; a < 3; ++a)
+                    if (flipped[a]) f[a] = kDims432[a] - 1 - p[a];
+                INFO("sample " << p[0] << "," << p[1] << "," << p[2]);
+                REQUIRE(s[p[0] + 4 * (p[1] + 3 * p[2])] == static_cast<T>(f[0] + 10 * f[1] + 100 * f[2]));
+            }
+}
+
 }  // namespace
+
+TEST_CASE("nrrd: an axis in the negative direction is reversed from the minimum corner", "[io][nrrd]") {
+    Scratch s;
+    const std::string space = "space: left-posterior-superior\nspace origin: (10,20,30)\n";
+    const std::string short_432 = "NRRD0004\ntype: short\ndimension: 3\nsizes: 4 3 2\n";
+    const std::string x_down = "space directions: (-2,0,0) (0,1,0) (0,0,1)\n";
+    auto check_x_flip = [](const std::string& path) {
+        const Volume v = read_volume(path);
+        check_indexed<std::int16_t>(v, {true, false, false});
+        CHECK(v.spacing == std::array<double, 3>{2, 1, 1});
+        CHECK(v.origin == std::array<double, 3>{10 - 2 * 3, 20, 30});  // sample 3 of the file's x
+        const VolumeInfo info = read_volume_info(path);
+        CHECK(info.flipped == std::array<bool, 3>{true, false, false});
+        CHECK_FALSE(info.rotation_dropped);
+        CHECK(info.spacing == v.spacing);
+        CHECK(info.origin == v.origin);
+    };
+    SECTION("detached raw (memory-mapped): the file is not changed") {
+        const std::string samples = indexed_samples<std::int16_t>(false);
+        const std::string data = s.file("x.raw", samples);
+        check_x_flip(
+            s.file("x.nhdr", short_432 + "endian: little\nencoding: raw\ndata file: x.raw\n" + space + x_down));
+        CHECK(iotest::read_file(data) == samples);
+    }
+    SECTION("attached gzip, big endian") {
+        check_x_flip(s.file("x.nrrd", short_432 + "endian: big\nencoding: gzip\n" + space + x_down + "\n" +
+                                          iotest::deflate_bytes(indexed_samples<std::int16_t>(true), true)));
+    }
+    SECTION("y and z down, 1- and 8-byte samples") {
+        const std::string yz_down = "space directions: (0.5,0,0) (0,-1,0) (0,0,-3)\n";
+        const std::string u8 = s.file("u8.nrrd", "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 4 3 2\nencoding: raw\n" +
+                                                     space + yz_down + "\n" + indexed_samples<std::uint8_t>(false));
+        check_indexed<std::uint8_t>(read_volume(u8), {false, true, true});
+        const std::string f64 =
+            s.file("f64.nrrd", "NRRD0004\ntype: double\ndimension: 3\nsizes: 4 3 2\nendian: little\nencoding: raw\n" +
+                                   space + yz_down + "\n" + indexed_samples<double>(false));
+        const Volume v = read_volume(f64);
+        check_indexed<double>(v, {false, true, true});
+        CHECK(v.origin == std::array<double, 3>{10, 20 - 1 * 2, 30 - 3 * 1});
+        CHECK(read_volume_info(f64).flipped == std::array<bool, 3>{false, true, true});
+    }
+    SECTION("positive directions and plain spacings are not flipped") {
+        const std::string path = s.file("p.nrrd", short_432 + "endian: little\nencoding: raw\n" + space +
+                                                      "space directions: (2,0,0) (0,1,0) (0,0,1)\n\n" +
+                                                      indexed_samples<std::int16_t>(false));
+        const Volume v = read_volume(path);
+        check_indexed<std::int16_t>(v, {false, false, false});
+        CHECK(v.origin == std::array<double, 3>{10, 20, 30});
+        const VolumeInfo info = read_volume_info(path);
+        CHECK(info.flipped == std::array<bool, 3>{false, false, false});
+        CHECK_FALSE(info.rotation_dropped);
+    }
+}
 
 TEST_CASE("nrrd: real headsq CT reads as 64x64x93 i16", "[io][nrrd]") {
     const std::string path = std::string(VOXMESH_TEST_DATA) + "/headsq.nrrd";
@@ -128,10 +218,20 @@ TEST_CASE("nrrd: encodings, byte orders, detached headers", "[io][nrrd]") {
                                    "space directions: (0,2,0) (3,0,0) (0,0,-4)\nspace origin: (1.5,-2,3)\n\n";
         const std::string path = s.file("a.nrrd", header + iotest::deflate_bytes(i16_samples(n, false), true));
         const Volume v = read_volume(path);
-        check_i16(v, n);
+        // x and y are swapped (dropped); z points down, so it is reversed from the minimum corner.
+        REQUIRE(v.sample_count() == n);
+        const auto* samples = static_cast<const std::int16_t*>(v.data);
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::size_t file_i = i % 12 + 12 * (4 - i / 12);
+            REQUIRE(samples[i] == static_cast<std::int16_t>(file_i * 7 - 100));
+        }
         CHECK(v.spacing == std::array<double, 3>{2, 3, 4});
-        CHECK(v.origin == std::array<double, 3>{1.5, -2, 3});
-        CHECK(read_volume_info(path).encoding == "gzip");
+        CHECK(v.origin == std::array<double, 3>{1.5, -2, 3 - 4 * 4});
+        const VolumeInfo info = read_volume_info(path);
+        CHECK(info.encoding == "gzip");
+        CHECK(info.flipped == std::array<bool, 3>{false, false, true});
+        CHECK(info.rotation_dropped);
+        CHECK(info.origin == v.origin);
     }
     SECTION("detached raw with byte skip -1 (data at the end)") {
         s.file("d.raw", "JUNKJUNK!" + i16_samples(n, false));

@@ -9,12 +9,22 @@
 // memory-mapped (Volume::storage owns the mapping; MAP_PRIVATE, so writes through
 // Volume::data never reach the file; the file must not be truncated while the Volume
 // lives). Data in the other byte order, misaligned, or compressed is copied into a heap
-// block.
+// block. A volume with a flipped axis (see Geometry) is reversed in place after loading;
+// for a mapped one that writes every page, so it costs as much memory as a copy.
 //
-// Geometry: a Volume has spacing and origin but no orientation. NRRD `space directions`
-// give the spacing as each axis vector's length and the rotation is dropped; MetaImage
-// TransformMatrix and NIfTI qform/sform rotations are likewise dropped. Origins are taken
-// as written, in the file's own world frame (NIfTI: RAS+, not converted to LPS).
+// Geometry: a Volume has spacing and origin but no orientation; sample (i,j,k) lies at
+// origin + (i,j,k) * spacing in the file's own world frame (NIfTI: RAS+, not converted to
+// LPS). The direction of index axis a comes from NRRD `space directions`, MetaImage
+// TransformMatrix, or NIfTI's sform (sform_code > 0) else qform (qform_code > 0, quaternion
+// and qfac = pixdim[0] as in the NIfTI-1 standard). Spacing is the NRRD vector's length,
+// MetaImage ElementSpacing, NIfTI pixdim.
+// An axis whose direction is the negative of its own world axis (e.g. the common NIfTI
+// sform diag(-2, 2, 2)) is "flipped": its samples are reversed on load and the origin moved
+// to the grid's minimum corner (origin_a - spacing_a * (n_a - 1)), so every sample keeps
+// its position and meshes land where the file says, unmirrored. VolumeInfo::flipped says
+// which axes. Any other direction (a rotation, an axis permutation, an oblique axis) is
+// dropped: that axis keeps its spacing and the origin as written, and
+// VolumeInfo::rotation_dropped says so.
 //
 // NIfTI scl_slope / scl_inter are NOT applied: the samples keep their stored type and
 // values (so they can be mapped, and an iso value means the same as in other tools that
@@ -53,7 +63,12 @@ struct VolumeInfo {
     ScalarType type = ScalarType::U8;
     std::array<std::size_t, 3> dims{0, 0, 0};
     std::array<double, 3> spacing{1, 1, 1};
-    std::array<double, 3> origin{0, 0, 0};
+    std::array<double, 3> origin{0, 0, 0};  // the minimum corner, after flips (see Geometry)
+    // Axes stored in the negative direction, reversed on load (see Geometry).
+    std::array<bool, 3> flipped{false, false, false};
+    // The direction matrix is not diagonal (a rotation, an axis permutation, an oblique axis):
+    // that part is dropped, as before (see Geometry).
+    bool rotation_dropped = false;
     std::string encoding;     // "raw", "gzip" (zlib streams, as in MetaImage, count as "gzip")
     bool big_endian = false;  // byte order of the stored samples
     std::size_t file_bytes = 0;  // size of the file named (the header for .nhdr / .mhd)

@@ -1,6 +1,7 @@
 // voxmesh info FILE [raw flags]: the header first (no samples loaded), then the value range.
 #include "common.hpp"
 
+#include <array>
 #include <iostream>
 #include <memory>
 
@@ -12,6 +13,14 @@ struct InfoArgs {
     std::string input;
     RawFlags raw;
 };
+
+// "x z" for flips of the first and last axes; empty for none.
+std::string flipped_axes(const std::array<bool, 3>& flipped) {
+    std::string out;
+    for (std::size_t a = 0; a < 3; ++a)
+        if (flipped[a]) out += std::string(out.empty() ? "" : " ") + "xyz"[a];
+    return out;
+}
 
 int run_info(const InfoArgs& a) {
     check_input_file(a.input);
@@ -32,6 +41,11 @@ int run_info(const InfoArgs& a) {
               << "origin:    " << triple_text(info.origin) << "\n"
               << "size:      " << format_bytes(std::uint64_t(samples) * scalar_size(info.type)) << " of samples; file "
               << format_bytes(info.file_bytes) << "\n";
+    if (const std::string axes = flipped_axes(info.flipped); !axes.empty())
+        std::cout << "flipped:   " << axes
+                  << " (stored in the negative direction; reversed on load, origin is the minimum corner)\n";
+    if (info.rotation_dropped)
+        std::cout << "rotation:  dropped (the direction matrix is not axis-aligned; spacing and origin as above)\n";
     if (!info.data_file.empty() && info.data_file != a.input) std::cout << "data file: " << info.data_file << "\n";
     if (info.value_scale != 1 || info.value_offset != 0)
         std::cout << "scaling:   physical = stored * " << format_double(info.value_scale) << " + "

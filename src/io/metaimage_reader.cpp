@@ -1,11 +1,14 @@
 // MetaImage (ITK's MetaIO): "Key = Value" lines ending with ElementDataFile, which names
 // the data file or says LOCAL (samples follow that line: .mha). CompressedData is a zlib
-// stream. Orientation (TransformMatrix, AnatomicalOrientation) is ignored.
+// stream. TransformMatrix gives flipped axes (see io.hpp); AnatomicalOrientation is ignored.
 #include "header_text.hpp"
 #include "input_file.hpp"
 #include "readers.hpp"
 
+#include <array>
+#include <cstddef>
 #include <map>
+#include <vector>
 
 namespace voxmesh::io {
 
@@ -31,6 +34,19 @@ bool parse_bool(const std::string& path, const char* field, const std::string& v
     if (v == "true" || v == "1") return true;
     if (v == "false" || v == "0") return false;
     fail(path, std::string("'") + field + "' must be True or False, not '" + value + "'");
+}
+
+// Index axes' direction vectors from a TransformMatrix (none: empty vectors). As in ITK,
+// the i-th run of NDims values is axis i's direction.
+std::array<std::vector<double>, 3> transform_axes(const std::string& path, const std::string* matrix,
+                                                 std::size_t ndims) {
+    std::array<std::vector<double>, 3> axes;
+    if (!matrix) return axes;
+    const std::vector<double> m = parse_doubles(path, "TransformMatrix", *matrix, ndims * ndims);
+    for (std::size_t a = 0; a < 3; ++a)
+        axes[a].assign(m.begin() + static_cast<std::ptrdiff_t>(a * ndims),
+                       m.begin() + static_cast<std::ptrdiff_t>((a + 1) * ndims));
+    return axes;
 }
 
 }  // namespace
@@ -111,6 +127,10 @@ VolumeHeader read_metaimage_header(const std::string& path) {
         const std::vector<double> o = parse_doubles(path, "Offset", *optional(origin_name), ndims);
         for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "Offset", o[a]);
     }
+    const std::string* matrix = optional("transformmatrix");  // MetaIO's other spellings:
+    if (!matrix) matrix = optional("rotation");
+    if (!matrix) matrix = optional("orientation");
+    apply_directions(h, axis_directions(transform_axes(path, matrix, ndims)));
 
     const std::string* msb = optional("binarydatabyteordermsb");
     const std::string* element_msb = optional("elementbyteordermsb");

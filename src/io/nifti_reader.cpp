@@ -5,6 +5,7 @@
 #include "input_file.hpp"
 #include "readers.hpp"
 
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -51,6 +52,34 @@ ScalarType nifti_type(const std::string& path, int datatype) {
     }
     fail(path, "unsupported NIfTI datatype " + std::to_string(datatype) +
                    " (supported: scalar 8/16/32-bit integers, float32, float64; not complex, RGB or 64-bit integers)");
+}
+
+// Index axis a's direction is column a of the sform's 3x3 part (srow_x, srow_y, srow_z).
+std::array<std::vector<double>, 3> sform_axes(const HeaderBytes& hdr) {
+    std::array<std::vector<double>, 3> axes;
+    for (std::size_t a = 0; a < 3; ++a)
+        for (std::size_t row = 0; row < 3; ++row) axes[a].push_back(hdr.f32(280 + 16 * row + 4 * a));
+    return axes;
+}
+
+// Columns of the qform rotation: the quaternion (b, c, d; a = sqrt(1 - b^2 - c^2 - d^2)),
+// its third column times qfac (-1 when pixdim[0] < 0, else 1), as nifti1_io computes them.
+std::array<std::vector<double>, 3> qform_axes(const HeaderBytes& hdr) {
+    double b = hdr.f32(256), c = hdr.f32(260), d = hdr.f32(264);
+    double a = 1 - (b * b + c * c + d * d);
+    if (a < 1e-7) {  // a 180-degree rotation, stored slightly denormalized: normalize b, c, d
+        const double scale = 1 / std::sqrt(b * b + c * c + d * d);
+        b *= scale;
+        c *= scale;
+        d *= scale;
+        a = 0;
+    } else {
+        a = std::sqrt(a);
+    }
+    const double qfac = hdr.f32(76) < 0 ? -1 : 1;
+    return {{{a * a + b * b - c * c - d * d, 2 * (b * c + a * d), 2 * (b * d - a * c)},
+             {2 * (b * c - a * d), a * a + c * c - b * b - d * d, 2 * (c * d + a * b)},
+             {qfac * 2 * (b * d + a * c), qfac * 2 * (c * d - a * b), qfac * (a * a + d * d - c * c - b * b)}}};
 }
 
 }  // namespace
@@ -132,13 +161,18 @@ VolumeHeader read_nifti_header(const std::string& path) {
         info.value_offset = std::isfinite(inter) ? inter : 0.0;
     }
 
-    // sform (code > 0) wins over qform, as in most readers; with neither the origin is 0.
+    // sform (code > 0) wins over qform, as in most readers; with neither the origin is 0
+    // and no axis is flipped.
     const int qform_code = hdr.i16(252), sform_code = hdr.i16(254);
+    std::array<std::vector<double>, 3> axes;
     if (sform_code > 0) {
         for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "srow", hdr.f32(280 + 16 * a + 12));
+        axes = sform_axes(hdr);
     } else if (qform_code > 0) {
         for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "qoffset", hdr.f32(268 + 4 * a));
+        axes = qform_axes(hdr);
     }
+    apply_directions(h, axis_directions(axes));
 
     layout.type = info.type;
     layout.dims = info.dims;

@@ -5,8 +5,10 @@
 #include "input_file.hpp"
 #include "readers.hpp"
 
+#include <array>
 #include <cmath>
 #include <map>
+#include <vector>
 
 namespace voxmesh::io {
 
@@ -199,6 +201,7 @@ VolumeHeader read_nrrd_header(const std::string& path) {
         if (given == 0 || given > 16) fail(path, "'space dimension' must be between 1 and 16");
         space_dim = given;
     }
+    std::array<std::vector<double>, 3> axes;  // spatial axes' directions; empty without them
     if (directions) {
         const auto vectors = parse_vectors(path, "space directions", *directions);
         if (vectors.size() != dimension)
@@ -217,6 +220,7 @@ VolumeHeader read_nrrd_header(const std::string& path) {
                 double norm2 = 0;
                 for (double c : vectors[a]) norm2 += c * c;
                 info.spacing[a] = checked_spacing(path, "space directions", std::sqrt(norm2));
+                axes[a] = vectors[a];
             }
         }
     }
@@ -228,6 +232,7 @@ VolumeHeader read_nrrd_header(const std::string& path) {
         for (std::size_t a = 0; a < 3 && a < space_dim; ++a)
             info.origin[a] = checked_origin(path, "space origin", vectors[0][a]);
     }
+    apply_directions(h, axis_directions(axes));
 
     layout.type = info.type;
     layout.dims = info.dims;

@@ -40,6 +40,34 @@ double checked_origin(const std::string& path, const char* field, double value) 
     return value;
 }
 
+AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes) {
+    AxisDirections d;
+    for (std::size_t a = 0; a < 3; ++a) {
+        const std::vector<double>& v = axes[a];
+        double norm2 = 0;
+        for (double c : v) norm2 += c * c;
+        if (norm2 == 0) continue;
+        // Headers store directions as floats or rounded text: off-axis parts this small are noise.
+        const double noise = 1e-6 * std::sqrt(norm2);
+        bool off_axis = false;
+        for (std::size_t c = 0; c < v.size(); ++c)
+            if (c != a && std::fabs(v[c]) > noise) off_axis = true;
+        if (off_axis || a >= v.size()) d.rotation_dropped = true;
+        else d.flipped[a] = v[a] < 0;
+    }
+    return d;
+}
+
+void apply_directions(VolumeHeader& h, const AxisDirections& d) {
+    VolumeInfo& info = h.info;
+    for (std::size_t a = 0; a < 3; ++a)
+        if (d.flipped[a] && info.dims[a] > 0)
+            info.origin[a] -= info.spacing[a] * static_cast<double>(info.dims[a] - 1);
+    info.flipped = d.flipped;
+    info.rotation_dropped = d.rotation_dropped;
+    h.layout.flipped = d.flipped;
+}
+
 namespace {
 
 // Mesh vertices are floats: a grid whose samples lie past FLT_MAX would mesh to inf.

@@ -6,6 +6,7 @@
 
 #include <voxmesh/io.hpp>
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -26,5 +27,20 @@ std::array<std::size_t, 3> volume_dims(const std::string& path, const std::vecto
 // Spacing must be finite and non-zero (negative is taken as its magnitude).
 double checked_spacing(const std::string& path, const char* field, double value);
 double checked_origin(const std::string& path, const char* field, double value);
+
+// What a Volume keeps of a direction matrix: which index axes run in the negative
+// direction of their own world axis, and whether anything else (a rotation) is dropped.
+struct AxisDirections {
+    std::array<bool, 3> flipped{false, false, false};
+    bool rotation_dropped = false;
+};
+// `axes[a]` is index axis a's direction vector in world components (any length; components
+// past the third count as off-axis). A zero vector says nothing and is left alone.
+AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes);
+
+// Records `d` in the header and moves the origin of each flipped axis to the grid's minimum
+// corner; load_samples then reverses those axes, so every sample keeps its world position.
+// Call once spacing, origin and dims are final.
+void apply_directions(VolumeHeader& h, const AxisDirections& d);
 
 }  // namespace voxmesh::io

@@ -84,6 +84,10 @@ InputFile open_data(const std::string& header_path, const SampleLayout& layout) 
     }
 }
 
+bool any_flipped(const SampleLayout& layout) {
+    return layout.flipped[0] || layout.flipped[1] || layout.flipped[2];
+}
+
 bool host_order(const SampleLayout& layout) {
     return scalar_size(layout.type) == 1 || layout.big_endian == (std::endian::native == std::endian::big);
 }
@@ -128,6 +132,9 @@ Volume load_samples(const std::string& header_path, const SampleLayout& layout) 
         v.dims = layout.dims;
         v.data = mapping.get() + at.start;
         v.storage = std::move(mapping);
+        // Reversing writes every page of the private mapping: as much memory as a copy.
+        if (any_flipped(layout)) check_memory(file.path(), bytes);
+        reverse_axes(v, layout.flipped);
         return v;
     }
 
@@ -151,7 +158,26 @@ Volume load_samples(const std::string& header_path, const SampleLayout& layout) 
                                   " samples need (dims do not match the data)" + ctx);
     }
     if (!host_order(layout)) swap_bytes(v.data, bytes / value_size, value_size);
+    reverse_axes(v, layout.flipped);
     return v;
+}
+
+void reverse_axes(Volume& volume, std::array<bool, 3> flipped) {
+    // Along axis a the samples form `outer` runs of dims[a] blocks; a block is everything
+    // below axis a (one sample for x, one row for y, one slice for z) and moves whole.
+    auto* data = static_cast<unsigned char*>(volume.data);
+    for (std::size_t a = 0; a < 3; ++a) {
+        if (!flipped[a]) continue;
+        std::size_t block = scalar_size(volume.type), outer = 1;
+        for (std::size_t b = 0; b < a; ++b) block *= volume.dims[b];
+        for (std::size_t b = a + 1; b < 3; ++b) outer *= volume.dims[b];
+        const std::size_t count = volume.dims[a];
+        for (std::size_t o = 0; o < outer; ++o) {
+            unsigned char* run = data + o * count * block;
+            for (std::size_t i = 0; i < count / 2; ++i)
+                std::swap_ranges(run + i * block, run + (i + 1) * block, run + (count - 1 - i) * block);
+        }
+    }
 }
 
 }  // namespace voxmesh::io

@@ -4,6 +4,7 @@
 
 #include <voxmesh/io.hpp>
 
+#include <array>
 #include <cstddef>
 #include <string>
 
@@ -19,6 +20,7 @@ struct SampleLayout {
     bool compressed = false;      // zlib or gzip stream
     std::size_t skip = 0;         // compressed: decompressed bytes before the first sample
     std::size_t compressed_size = 0;  // compressed: stream length; 0 = to the end of the file
+    std::array<bool, 3> flipped{false, false, false};  // axes to reverse once loaded
 };
 
 // Overflow-checked byte size of the samples; errors name `path`. Zero dims are an error.
@@ -29,8 +31,12 @@ std::size_t sample_bytes(const std::string& path, std::array<std::size_t, 3> dim
 // file's size. `header_path` names the header in errors about a detached file.
 std::size_t check_samples(const std::string& header_path, const SampleLayout& layout);
 
-// The samples, mapped when possible (see io.hpp), otherwise copied / inflated / swapped.
+// The samples, mapped when possible (see io.hpp), otherwise copied / inflated / swapped;
+// then reversed along layout.flipped.
 Volume load_samples(const std::string& header_path, const SampleLayout& layout);
+
+// Reverses the samples' order along each axis with flipped[a], in place.
+void reverse_axes(Volume& volume, std::array<bool, 3> flipped);
 
 // Reverses the byte order of `count` values of `size` bytes each, in place.
 void swap_bytes(void* data, std::size_t count, std::size_t size);
