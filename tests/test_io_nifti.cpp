@@ -72,16 +72,10 @@ void check_flipped_samples(const Volume& v, std::array<bool, 3> flipped) {
     const std::array<std::size_t, 3> n{4, 3, 2};
     REQUIRE(v.dims == n);
     const auto* s = static_cast<const std::int16_t*>(v.data);
-    std::array<std::size_t, 3> p{};
-    for (p[2] = 0; p[2] < n[2]; ++p[2])
-        for (p[1] = 0; p[1] < n[1]; ++p[1])
-            for (p[0] = 0; p[0] < n[0]; ++p[0]) {
-                std::array<std::size_t, 3> f = p;
-                for (std::size_t a = 0; a < 3; ++a)
-                    if (flipped[a]) f[a] = n[a] - 1 - p[a];
-                INFO("sample " << p[0] << "," << p[1] << "," << p[2]);
-                REQUIRE(s[p[0] + 4 * (p[1] + 3 * p[2])] == -3 * static_cast<int>(f[0] + 4 * (f[1] + 3 * f[2])));
-            }
+    iotest::for_each_sample_of_file(n, flipped, [&](std::size_t at, std::array<std::size_t, 3> f) {
+        INFO("sample " << at);
+        REQUIRE(s[at] == -3 * static_cast<int>(f[0] + 4 * (f[1] + 3 * f[2])));
+    });
 }
 
 // read_volume and read_volume_info agree, and report the flips expected.

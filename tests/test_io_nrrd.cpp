@@ -62,16 +62,10 @@ template <class T>
 void check_indexed(const Volume& v, std::array<bool, 3> flipped) {
     REQUIRE(v.dims == kDims432);
     const auto* s = static_cast<const T*>(v.data);
-    std::array<std::size_t, 3> p{};
-    for (p[2] = 0; p[2] < 2; ++p[2])
-        for (p[1] = 0; p[1] < 3; ++p[1])
-            for (p[0] = 0; p[0] < 4; ++p[0]) {
-                std::array<std::size_t, 3> f = p;
-                for (std::size_t a = 0; a < 3; ++a)
-                    if (flipped[a]) f[a] = kDims432[a] - 1 - p[a];
-                INFO("sample " << p[0] << "," << p[1] << "," << p[2]);
-                REQUIRE(s[p[0] + 4 * (p[1] + 3 * p[2])] == static_cast<T>(f[0] + 10 * f[1] + 100 * f[2]));
-            }
+    iotest::for_each_sample_of_file(kDims432, flipped, [&](std::size_t at, std::array<std::size_t, 3> f) {
+        INFO("sample " << at);
+        REQUIRE(s[at] == static_cast<T>(f[0] + 10 * f[1] + 100 * f[2]));
+    });
 }
 
 }  // namespace

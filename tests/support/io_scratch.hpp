@@ -2,6 +2,8 @@
 // directories, whole-file reads and writes, zlib streams.
 #pragma once
 
+#include <array>
+#include <cstddef>
 #include <string>
 
 namespace iotest {
@@ -22,5 +24,20 @@ struct Scratch {
         return path;
     }
 };
+
+// For every sample p of a volume of dims n as loaded, check(at, f): `at` its index in the
+// loaded samples, `f` the position the file stored it at ((n-1-i) on each flipped axis).
+template <class Check>
+void for_each_sample_of_file(std::array<std::size_t, 3> n, std::array<bool, 3> flipped, Check check) {
+    std::array<std::size_t, 3> p{};
+    for (p[2] = 0; p[2] < n[2]; ++p[2])
+        for (p[1] = 0; p[1] < n[1]; ++p[1])
+            for (p[0] = 0; p[0] < n[0]; ++p[0]) {
+                std::array<std::size_t, 3> f = p;
+                for (std::size_t a = 0; a < 3; ++a)
+                    if (flipped[a]) f[a] = n[a] - 1 - p[a];
+                check(p[0] + n[0] * (p[1] + n[1] * p[2]), f);
+            }
+}
 
 }  // namespace iotest
