@@ -3,6 +3,7 @@
 #include "bit_rows.hpp"
 #include "case_tables.hpp"
 #include "edge_vertex.hpp"
+#include "float_extent.hpp"
 #include "huge_pages.hpp"
 #include "normal_batch.hpp"
 #include "parallel.hpp"
@@ -12,7 +13,6 @@
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <cfloat>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -618,13 +618,9 @@ void validate_volume(const VolumeView& volume) {
     for (int d = 0; d < 3; ++d)
         if (!(volume.spacing[d] > 0) || !std::isfinite(volume.spacing[d]) || !std::isfinite(volume.origin[d]))
             throw Error("volume spacing must be positive and finite, origin finite");
-    // Vertex positions are floats: samples past FLT_MAX would give inf coordinates.
-    for (int d = 0; d < 3; ++d) {
-        const double last = volume.origin[d] + static_cast<double>(volume.dims[d] - 1) * volume.spacing[d];
-        if (!(std::fabs(volume.origin[d]) <= FLT_MAX && std::fabs(last) <= FLT_MAX))
-            throw Error("volume origin and spacing put samples along " + std::string(1, "xyz"[d]) +
-                        " beyond the range of float vertex coordinates");
-    }
+    if (const int d = axis_beyond_float(volume.dims, volume.spacing, volume.origin); d >= 0)
+        throw Error("volume origin and spacing put samples along " + std::string(1, "xyz"[d]) +
+                    " beyond the range of float vertex coordinates");
 }
 
 CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRange range, unsigned threads) {

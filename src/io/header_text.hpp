@@ -12,6 +12,9 @@ namespace voxmesh::io {
 std::string_view trim(std::string_view text);
 // `token` fit for an error message: at most 40 characters, control and non-ASCII bytes as '?'.
 std::string shown(std::string_view token);
+// The shortest text that reads back as the same double (std::to_string prints 1e300 with 300
+// digits, and 1e-300 as 0.000000).
+std::string shortest_text(double value);
 std::string lower(std::string_view text);
 std::vector<std::string_view> split_words(std::string_view text);
 

@@ -1,11 +1,11 @@
 // write_nrrd: a NRRD0004 header (raw encoding, host byte order) followed by the samples,
 // written through a temporary file so a failure never leaves a partial output.
 #include "core/atomic_file.hpp"
+#include "header_text.hpp"
 
 #include <voxmesh/io.hpp>
 
 #include <bit>
-#include <charconv>
 #include <cmath>
 
 namespace voxmesh {
@@ -24,13 +24,6 @@ const char* nrrd_type(ScalarType type) {
         case ScalarType::F64: return "double";
     }
     throw Error("unknown scalar type");
-}
-
-// Shortest text that reads back as the same double.
-std::string number(double value) {
-    char buffer[64];
-    const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-    return std::string(buffer, result.ptr);
 }
 
 }  // namespace
@@ -57,13 +50,13 @@ void write_nrrd(const std::string& path, const VolumeView& volume,
     header += "space dimension: 3\n";
     header += "sizes: " + std::to_string(volume.dims[0]) + " " + std::to_string(volume.dims[1]) + " " +
               std::to_string(volume.dims[2]) + "\n";
-    header += "space directions: (" + number(volume.spacing[0]) + ",0,0) (0," + number(volume.spacing[1]) +
-              ",0) (0,0," + number(volume.spacing[2]) + ")\n";
+    header += "space directions: (" + io::shortest_text(volume.spacing[0]) + ",0,0) (0," + io::shortest_text(volume.spacing[1]) +
+              ",0) (0,0," + io::shortest_text(volume.spacing[2]) + ")\n";
     header += "kinds: domain domain domain\n";
     header += std::string("endian: ") + (std::endian::native == std::endian::big ? "big" : "little") + "\n";
     header += "encoding: raw\n";
-    header += "space origin: (" + number(volume.origin[0]) + "," + number(volume.origin[1]) + "," +
-              number(volume.origin[2]) + ")\n";
+    header += "space origin: (" + io::shortest_text(volume.origin[0]) + "," + io::shortest_text(volume.origin[1]) + "," +
+              io::shortest_text(volume.origin[2]) + ")\n";
     for (const auto& [key, value] : key_values) {
         if (key.empty() || key.find(":=") != std::string::npos || key.find('\n') != std::string::npos ||
             value.find('\n') != std::string::npos)

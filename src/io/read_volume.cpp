@@ -1,22 +1,13 @@
 // read_volume / read_volume_info: pick the reader by extension, then load or check the
 // samples the header describes. Also read_raw, the same path with a caller-given header.
+#include "core/float_extent.hpp"
+#include "header_text.hpp"
 #include "input_file.hpp"
 #include "readers.hpp"
 
-#include <cfloat>
-#include <charconv>
 #include <cmath>
 
 namespace voxmesh::io {
-
-namespace {
-// Shortest round-trip text: std::to_string would print 1e300 with 300 digits.
-std::string number(double value) {
-    char buffer[64];
-    const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-    return std::string(buffer, result.ptr);
-}
-}  // namespace
 
 std::array<std::size_t, 3> volume_dims(const std::string& path, const std::vector<std::size_t>& sizes) {
     if (sizes.size() < 3)
@@ -30,7 +21,7 @@ std::array<std::size_t, 3> volume_dims(const std::string& path, const std::vecto
 
 double checked_spacing(const std::string& path, const char* field, double value) {
     if (!std::isfinite(value) || value == 0)
-        fail(path, std::string("'") + field + "' gives spacing " + number(value) +
+        fail(path, std::string("'") + field + "' gives spacing " + shortest_text(value) +
                        "; spacing must be finite and non-zero");
     return std::fabs(value);
 }
@@ -72,13 +63,11 @@ namespace {
 
 // Mesh vertices are floats: a grid whose samples lie past FLT_MAX would mesh to inf.
 void check_extent(const std::string& path, const VolumeInfo& info) {
-    for (std::size_t a = 0; a < 3; ++a) {
-        const double steps = info.dims[a] > 0 ? static_cast<double>(info.dims[a] - 1) : 0.0;
-        const double far = info.origin[a] + steps * info.spacing[a];
-        if (!(std::fabs(info.origin[a]) <= FLT_MAX && std::fabs(far) <= FLT_MAX))
-            fail(path, "origin and spacing put samples along axis " + std::to_string(a) + " at " + number(far) +
-                           ", beyond the range of float mesh coordinates");
-    }
+    const int a = detail::axis_beyond_float(info.dims, info.spacing, info.origin);
+    if (a < 0) return;
+    const double far = detail::last_sample_at(info.origin[a], info.spacing[a], info.dims[a]);
+    fail(path, "origin and spacing put samples along axis " + std::to_string(a) + " at " + shortest_text(far) +
+                   ", beyond the range of float mesh coordinates");
 }
 
 VolumeHeader parse_header(const std::string& path) {

@@ -10,6 +10,7 @@
 
 #include <voxmesh/voxelize.hpp>
 
+#include "core/float_extent.hpp"
 #include "core/parallel.hpp"
 
 #include <algorithm>
@@ -151,13 +152,10 @@ Grid make_grid(const Soup& soup, const VoxelizeOptions& options) {
     }
     // Volumes are meshed to float vertices (extract and the readers refuse samples past
     // FLT_MAX): a model near the float limit plus padding must be refused here, not later.
-    for (int d = 0; d < 3; ++d) {
-        const double last = g.origin[d] + double(g.dims[d] - 1) * g.h;
-        if (!(std::fabs(g.origin[d]) <= FLT_MAX && std::fabs(last) <= FLT_MAX))
-            throw Error(std::string("voxelize: with padding ") + std::to_string(pad) + " the grid's samples along " +
-                        "xyz"[d] + " reach beyond the range of float coordinates (about 3.4e38); "
-                        "move the model nearer the origin or reduce the padding");
-    }
+    if (const int d = detail::axis_beyond_float(g.dims, {g.h, g.h, g.h}, g.origin); d >= 0)
+        throw Error(std::string("voxelize: with padding ") + std::to_string(pad) + " the grid's samples along " +
+                    "xyz"[d] + " reach beyond the range of float coordinates (about 3.4e38); "
+                    "move the model nearer the origin or reduce the padding");
     return g;
 }
 
