@@ -130,6 +130,11 @@ TEST_CASE("nifti: axes in the negative direction are reversed from the minimum c
         put_sform(n, {1.5, 0, 0, 1, 0, -2, 0, 2, 0, 0, 2.5, 3});
         check_geometry(s.file("s.nii", n.file()), {false, true, false}, {1.5, 2, 2.5}, {1, 2 - 2 * 2, 3});
     }
+    SECTION("the sform's column lengths are the spacing where pixdim disagrees") {
+        Nifti n(false);  // pixdim 1.5, 2, 2.5
+        put_sform(n, {3, 0, 0, 1, 0, -0.5, 0, 2, 0, 0, 4, 3});
+        check_geometry(s.file("s.nii", n.file()), {false, true, false}, {3, 0.5, 4}, {1, 2 - 0.5 * 2, 3});
+    }
     SECTION("a permuting sform is dropped, not flipped") {
         Nifti n(false);
         put_sform(n, {0, -2, 0, 1, -1.5, 0, 0, 2, 0, 0, 2.5, 3});
