@@ -86,6 +86,17 @@ TEST_CASE("metaimage: a TransformMatrix axis in the negative direction is revers
         CHECK(v.origin == std::array<double, 3>{-1 - 3, 2, 3.5 - 1});
         CHECK(read_volume_info(path).flipped == std::array<bool, 3>{true, false, true});
     }
+    SECTION("a negative ElementSpacing runs its axis the other way; with a flipping matrix it cancels") {
+        const std::string path =
+            s.file("v.mha", kHead + "ElementSpacing = -0.5 0.25 -2\nOffset = -1 2 3.5\n"
+                                    "TransformMatrix = 1 0 0 0 1 0 0 0 -1\nElementDataFile = LOCAL\n" +
+                                    u16_samples(kCount, false));
+        const Volume v = read_volume(path);
+        check_flipped_u16(v, {true, false, false});
+        CHECK(v.spacing == std::array<double, 3>{0.5, 0.25, 2});
+        CHECK(v.origin == std::array<double, 3>{-1 - 0.5 * 3, 2, 3.5});
+        CHECK(read_volume_info(path).flipped == std::array<bool, 3>{true, false, false});
+    }
     SECTION("a permutation is dropped, not flipped") {
         const std::string path = s.file("v.mha", kHead + "Offset = -1 2 3.5\nTransformMatrix = 0 -1 0 -1 0 0 0 0 1\n"
                                                          "ElementDataFile = LOCAL\n" + u16_samples(kCount, false));

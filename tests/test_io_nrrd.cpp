@@ -110,6 +110,16 @@ TEST_CASE("nrrd: an axis in the negative direction is reversed from the minimum 
         CHECK(v.origin == std::array<double, 3>{10, 20 - 1 * 2, 30 - 3 * 1});
         CHECK(read_volume_info(f64).flipped == std::array<bool, 3>{false, true, true});
     }
+    SECTION("a negative 'spacings' value runs its axis down from 0") {
+        const std::string path =
+            s.file("n.nrrd", short_432 + "endian: little\nencoding: raw\nspacings: 2 -0.5 nan\n\n" +
+                                 indexed_samples<std::int16_t>(false));
+        const Volume v = read_volume(path);
+        check_indexed<std::int16_t>(v, {false, true, false});
+        CHECK(v.spacing == std::array<double, 3>{2, 0.5, 1});
+        CHECK(v.origin == std::array<double, 3>{0, -0.5 * 2, 0});  // the file's y sample 2
+        CHECK(read_volume_info(path).flipped == std::array<bool, 3>{false, true, false});
+    }
     SECTION("positive directions and plain spacings are not flipped") {
         const std::string path = s.file("p.nrrd", short_432 + "endian: little\nencoding: raw\n" + space +
                                                       "space directions: (2,0,0) (0,1,0) (0,0,1)\n\n" +

@@ -107,21 +107,35 @@ TEST_CASE("raw: sizes that do not match the file are errors naming it", "[io][ra
     far.spacing = {1, 1e300, 1};
     fails(s.file("far.raw", data), far, "beyond the range of float");
     far.spacing = {1, 1, 1};
-    far.origin = {0, 0, -3.4e38};
-    far.spacing[2] = -1e38;  // magnitude 1e38: the last of 3 samples is at -3.4e38 + 2e38
-    CHECK(read_raw(s.file("near.raw", data), far).origin[2] == -3.4e38);
-    far.origin[2] = 3.4e38;
+    far.origin = {0, 0, 3.4e38};
+    far.spacing[2] = -1e38;  // z runs down: the last of 3 samples is at 3.4e38 - 2e38
+    CHECK(read_raw(s.file("near.raw", data), far).origin[2] == 3.4e38 - 2e38);
+    far.origin[2] = -3.4e38;
     fails(s.file("far.raw", data), far, "axis 2");
 }
 
-TEST_CASE("raw: negative spacing is taken as its magnitude, as in headers", "[io][raw]") {
+TEST_CASE("raw: a negative spacing runs its axis the other way, as in headers", "[io][raw]") {
     Scratch s;
     RawLayout layout;
     layout.dims = {5, 4, 3};
     layout.type = ScalarType::F32;
     layout.spacing = {-1, 2, -3};
+    layout.origin = {10, 20, 30};
     const std::string path = s.file("n.raw", f32_samples(60, false));
     const std::array<double, 3> magnitude{1, 2, 3};
-    CHECK(read_raw(path, layout).spacing == magnitude);
-    CHECK(read_raw_info(path, layout).spacing == magnitude);
+    const std::array<double, 3> corner{10 - 1 * 4, 20, 30 - 3 * 2};  // the file's last x and z samples
+    const Volume v = read_raw(path, layout);
+    CHECK(v.spacing == magnitude);
+    CHECK(v.origin == corner);
+    // Every sample keeps its position: (i, j, k) here is the file's (4 - i, j, 2 - k).
+    const auto* got = static_cast<const float*>(v.data);
+    const Volume file = read_raw(path, RawLayout{layout.dims, layout.type, false, 0, {1, 1, 1}, {0, 0, 0}});
+    const auto* want = static_cast<const float*>(file.data);
+    for (std::size_t k = 0; k < 3; ++k)
+        for (std::size_t j = 0; j < 4; ++j)
+            for (std::size_t i = 0; i < 5; ++i) REQUIRE(got[i + 5 * (j + 4 * k)] == want[(4 - i) + 5 * (j + 4 * (2 - k))]);
+    const VolumeInfo info = read_raw_info(path, layout);
+    CHECK(info.spacing == magnitude);
+    CHECK(info.origin == corner);
+    CHECK(info.flipped == std::array<bool, 3>{true, false, true});
 }

@@ -113,9 +113,13 @@ VolumeHeader read_metaimage_header(const std::string& path) {
 
     const std::string* spacing = optional("elementspacing");
     if (!spacing) spacing = optional("elementsize");
+    std::array<bool, 3> negative_spacing{false, false, false};
     if (spacing) {
         const std::vector<double> s = parse_doubles(path, "ElementSpacing", *spacing, ndims);
-        for (std::size_t a = 0; a < 3; ++a) info.spacing[a] = checked_spacing(path, "ElementSpacing", s[a]);
+        for (std::size_t a = 0; a < 3; ++a) {
+            info.spacing[a] = checked_spacing(path, "ElementSpacing", s[a]);
+            negative_spacing[a] = s[a] < 0;
+        }
     }
     const char* origin_name = nullptr;
     for (const char* key : {"offset", "position", "origin"})
@@ -130,7 +134,10 @@ VolumeHeader read_metaimage_header(const std::string& path) {
     const std::string* matrix = optional("transformmatrix");  // MetaIO's other spellings:
     if (!matrix) matrix = optional("rotation");
     if (!matrix) matrix = optional("orientation");
-    apply_directions(h, axis_directions(transform_axes(path, matrix, ndims)));
+    std::array<std::vector<double>, 3> axes = transform_axes(path, matrix, ndims);
+    for (std::size_t a = 0; a < 3; ++a)
+        if (negative_spacing[a]) reverse_direction(axes, a);  // position = Offset + M (index * spacing)
+    apply_directions(h, axis_directions(axes));
 
     const std::string* msb = optional("binarydatabyteordermsb");
     const std::string* element_msb = optional("elementbyteordermsb");

@@ -181,6 +181,7 @@ VolumeHeader read_nrrd_header(const std::string& path) {
     const std::string* spacings = optional("spacings");
     const std::string* directions = optional("space directions");
     if (spacings && directions) fail(path, "header has both 'spacings' and 'space directions' (contradictory)");
+    std::array<std::vector<double>, 3> axes;  // spatial axes' directions; empty without them
     if (spacings) {
         std::vector<double> values;
         for (std::string_view word : split_words(*spacings))
@@ -188,8 +189,10 @@ VolumeHeader read_nrrd_header(const std::string& path) {
         if (values.size() != dimension)
             fail(path, "'dimension' is " + std::to_string(dimension) + " but 'spacings' lists " +
                            std::to_string(values.size()) + " values");
-        for (std::size_t a = 0; a < 3; ++a)
+        for (std::size_t a = 0; a < 3; ++a) {
             info.spacing[a] = std::isnan(values[a]) ? 1.0 : checked_spacing(path, "spacings", values[a]);
+            if (values[a] < 0) reverse_direction(axes, a);  // samples run toward lower positions
+        }
     }
 
     std::size_t space_dim = 0;
@@ -201,7 +204,6 @@ VolumeHeader read_nrrd_header(const std::string& path) {
         if (given == 0 || given > 16) fail(path, "'space dimension' must be between 1 and 16");
         space_dim = given;
     }
-    std::array<std::vector<double>, 3> axes;  // spatial axes' directions; empty without them
     if (directions) {
         const auto vectors = parse_vectors(path, "space directions", *directions);
         if (vectors.size() != dimension)

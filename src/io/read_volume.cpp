@@ -49,6 +49,14 @@ AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes) {
     return d;
 }
 
+void reverse_direction(std::array<std::vector<double>, 3>& axes, std::size_t a) {
+    if (axes[a].empty()) {
+        axes[a].assign(3, 0.0);
+        axes[a][a] = 1;
+    }
+    for (double& c : axes[a]) c = -c;
+}
+
 void apply_directions(VolumeHeader& h, const AxisDirections& d) {
     VolumeInfo& info = h.info;
     for (std::size_t a = 0; a < 3; ++a)
@@ -85,7 +93,7 @@ VolumeHeader read_header(const std::string& path) {
     return h;
 }
 
-// The caller's layout checked like a header: spacing is taken as its magnitude, as there.
+// The caller's layout checked like a header: a negative spacing reverses its axis, as there.
 VolumeHeader raw_header(const std::string& path, const RawLayout& raw) {
     VolumeHeader h;
     VolumeInfo& info = h.info;
@@ -95,10 +103,13 @@ VolumeHeader raw_header(const std::string& path, const RawLayout& raw) {
     info.dims = raw.dims;
     info.big_endian = raw.big_endian;
     info.data_file = path;
+    std::array<std::vector<double>, 3> axes;
     for (std::size_t a = 0; a < 3; ++a) {
         info.spacing[a] = checked_spacing(path, "spacing", raw.spacing[a]);
         info.origin[a] = checked_origin(path, "origin", raw.origin[a]);
+        if (raw.spacing[a] < 0) reverse_direction(axes, a);
     }
+    apply_directions(h, axis_directions(axes));
     check_extent(path, info);
     SampleLayout& layout = h.layout;
     layout.type = raw.type;

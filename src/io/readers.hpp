@@ -24,7 +24,8 @@ VolumeHeader read_nifti_header(const std::string& path);
 // N-D sizes as 3-D dims: N must be at least 3, and axes past the third must have size 1.
 std::array<std::size_t, 3> volume_dims(const std::string& path, const std::vector<std::size_t>& sizes);
 
-// Spacing must be finite and non-zero (negative is taken as its magnitude).
+// Spacing must be finite and non-zero; the magnitude is returned (a caller whose format
+// gives a negative spacing a direction passes that on with reverse_direction).
 double checked_spacing(const std::string& path, const char* field, double value);
 double checked_origin(const std::string& path, const char* field, double value);
 
@@ -37,6 +38,9 @@ struct AxisDirections {
 // `axes[a]` is index axis a's direction vector in world components (any length; components
 // past the third count as off-axis). A zero vector says nothing and is left alone.
 AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes);
+// A negative spacing along index axis a: its direction reversed, or, where the header gives
+// none, the negative of world axis a.
+void reverse_direction(std::array<std::vector<double>, 3>& axes, std::size_t a);
 
 // Records `d` in the header and moves the origin of each flipped axis to the grid's minimum
 // corner; load_samples then reverses those axes, so every sample keeps its world position.
