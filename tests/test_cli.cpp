@@ -207,6 +207,16 @@ TEST_CASE("cli: info reports an axis stored in the negative direction", "[cli]")
     REQUIRE(rot.code == 0);
     CHECK(rot.out.find("rotation:  dropped") != std::string::npos);
     CHECK(rot.out.find("flipped:") == std::string::npos);
+
+    // mesh warns about the dropped rotation (the mesh would otherwise look misplaced silently),
+    // and only then.
+    const Result mesh_rot = run(s, "mesh " + quote(rotated) + " -o " + quote(s.path("rot.stl")) + " --iso 0.5");
+    INFO(mesh_rot.err);
+    REQUIRE(mesh_rot.code == 0);
+    CHECK(mesh_rot.err.find("rotation is dropped") != std::string::npos);
+    const Result mesh_flip = run(s, "mesh " + quote(flipped) + " -o " + quote(s.path("flip.stl")) + " --iso 0.5");
+    REQUIRE(mesh_flip.code == 0);
+    CHECK(mesh_flip.err.find("rotation") == std::string::npos);
 }
 
 // The AVX2 row packers, the AVX2/BMI copy of the generator and the batched normals must give

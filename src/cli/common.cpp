@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <iostream>
 #include <limits>
 #include <system_error>
 
@@ -57,7 +58,7 @@ void add_raw_flags(CLI::App* sub, RawFlags& raw) {
         ->check(CLI::IsMember({"little", "big"}))
         ->group(group);
     sub->add_option("--offset", raw.offset, "bytes to skip before the first sample")->group(group);
-    sub->add_option("--spacing", raw.spacing, "sample spacing SX SY SZ (default 1 1 1)")->expected(3)->group(group);
+    sub->add_option("--spacing", raw.spacing, "sample spacing SX SY SZ (default 1 1 1; a negative one runs its axis down from the origin)")->expected(3)->group(group);
     sub->add_option("--origin", raw.origin, "position of the first sample OX OY OZ (default 0 0 0)")
         ->expected(3)
         ->group(group);
@@ -122,6 +123,12 @@ Volume load_volume(const std::string& path, const RawFlags& raw) {
     if (!is_raw && raw.any_given())
         throw BadInput("'" + path + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
     Volume v = about_file(path, [&] { return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path); });
+    // A Volume has no orientation: say so when the file's direction matrix is thrown away,
+    // since the mesh then lies in index-aligned axes, not where other tools put it.
+    if (!is_raw && about_file(path, [&] { return read_volume_info(path); }).rotation_dropped)
+        std::cerr << "voxmesh: warning: '" << path
+                  << "': the direction matrix is not axis-aligned; its rotation is dropped and the mesh is in the "
+                     "volume's index axes (spacing and origin as written)\n";
     if (v.type == ScalarType::F32 || v.type == ScalarType::F64) {
         const ValueRange r = value_range(v.view());
         if (r.nonfinite)
