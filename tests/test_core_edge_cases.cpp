@@ -82,6 +82,30 @@ TEST_CASE("invalid views are Errors", "[core]") {
     }
 }
 
+TEST_CASE("a spacing too fine for float coordinates at the grid's place is warned about", "[core]") {
+    std::vector<float> data(4 * 4 * 4);
+    for (std::size_t i = 0; i < data.size(); ++i) data[i] = (i % 4) < 2 ? 1.f : 0.f;  // a plane across x
+    voxmesh::VolumeView v = vmtest::view_of(data, {4, 4, 4});
+    auto warnings = [&] {
+        voxmesh::Stats stats;
+        voxmesh::extract(v, cpu_options(0.5), stats);
+        return stats.warnings;
+    };
+    CHECK(warnings().empty());
+    v.spacing = {1e-30, 1e-30, 1e-30};  // tiny, but near 0 floats resolve it
+    CHECK(warnings().empty());
+    // Far from 0, 1e-3 is a few float steps apart (0.0625 near 1e6): vertices snap.
+    v.spacing = {1, 1, 1e-3};
+    v.origin = {0, 0, 1e6};
+    const auto snapped = warnings();
+    REQUIRE(snapped.size() == 1);
+    CHECK_THAT(snapped[0], Contains("spacing 0.001 along z") && Contains("too fine for float"));
+    v.spacing = {1, 1, 1};  // 1 at 1e6: 16 float steps, fewer than 256: warned
+    CHECK(warnings().size() == 1);
+    v.spacing = {1, 1, 64};  // 1024 steps between samples: fine
+    CHECK(warnings().empty());
+}
+
 TEST_CASE("a constant volume gives an empty mesh", "[core]") {
     const Dims dims{7, 5, 9};
     const std::vector<float> f(dims[0] * dims[1] * dims[2], 3.0f);

@@ -1,9 +1,12 @@
 #include "cpu_engine.hpp"
+#include "float_extent.hpp"
 #include "opencl_hook.hpp"
 
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <new>
 #include <string>
 #include <utility>
@@ -18,9 +21,30 @@ void warn(const Options& options, Stats& stats, const std::string& message) {
 
 bool is_discrete(const DeviceInfo& d) { return d.type == DeviceType::Gpu || d.type == DeviceType::Accelerator; }
 
+std::string number_text(double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", value);
+    return text;
+}
+
+// Vertices are floats: far from 0 a tiny spacing leaves them few positions between samples.
+void warn_if_too_fine(const VolumeView& volume, const Options& options, Stats& stats) {
+    const int a = detail::axis_too_fine_for_float(volume.dims, volume.spacing, volume.origin);
+    if (a < 0) return;
+    const auto au = static_cast<std::size_t>(a);
+    const double far = std::max(std::fabs(volume.origin[au]),
+                                std::fabs(detail::last_sample_at(volume.origin[au], volume.spacing[au], volume.dims[au])));
+    warn(options, stats,
+         std::string("spacing ") + number_text(volume.spacing[au]) + " along " + "xyz"[a] +
+             " is too fine for float vertex coordinates as far from 0 as " + number_text(far) +
+             ": vertices snap to steps of up to " + number_text(detail::float_step_near(far)) +
+             " (an origin nearer 0, or larger units, keeps their precision)");
+}
+
 // The engine options.backend picks; the result reuses `storage`'s arrays.
 Mesh pick_engine(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage) {
     detail::validate_volume(volume);
+    warn_if_too_fine(volume, options, stats);
     switch (options.backend) {
         case Backend::Cpu:
             return detail::cpu_extract(volume, options, stats, std::move(storage));
