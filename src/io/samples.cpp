@@ -162,11 +162,44 @@ Volume load_samples(const std::string& header_path, const SampleLayout& layout) 
     return v;
 }
 
-void reverse_axes(Volume& volume, std::array<bool, 3> flipped) {
-    // Along axis a the samples form `outer` runs of dims[a] blocks; a block is everything
-    // below axis a (one sample for x, one row for y, one slice for z) and moves whole.
+namespace {
+
+// Reverses `rows` runs of `count` samples of N bytes each, a sample at a time: N is a
+// constant, so each swap is a pair of loads and stores, not a byte loop.
+template <std::size_t N>
+void reverse_rows(unsigned char* data, std::size_t rows, std::size_t count) {
+    for (std::size_t r = 0; r < rows; ++r) {
+        unsigned char* row = data + r * count * N;
+        for (std::size_t i = 0, j = count - 1; i < j; ++i, --j) {
+            unsigned char t[N];
+            std::memcpy(t, row + i * N, N);
+            std::memcpy(row + i * N, row + j * N, N);
+            std::memcpy(row + j * N, t, N);
+        }
+    }
+}
+
+void reverse_x(Volume& volume) {
     auto* data = static_cast<unsigned char*>(volume.data);
-    for (std::size_t a = 0; a < 3; ++a) {
+    const std::size_t rows = volume.dims[1] * volume.dims[2], count = volume.dims[0];
+    if (count < 2) return;
+    switch (scalar_size(volume.type)) {
+        case 1: return reverse_rows<1>(data, rows, count);
+        case 2: return reverse_rows<2>(data, rows, count);
+        case 4: return reverse_rows<4>(data, rows, count);
+        case 8: return reverse_rows<8>(data, rows, count);
+        default: throw Error("reverse_axes: unexpected sample size");
+    }
+}
+
+}  // namespace
+
+void reverse_axes(Volume& volume, std::array<bool, 3> flipped) {
+    if (flipped[0]) reverse_x(volume);
+    // Along y or z the samples form `outer` runs of dims[a] blocks; a block is everything
+    // below that axis (a row for y, a slice for z) and moves whole.
+    auto* data = static_cast<unsigned char*>(volume.data);
+    for (std::size_t a = 1; a < 3; ++a) {
         if (!flipped[a]) continue;
         std::size_t block = scalar_size(volume.type), outer = 1;
         for (std::size_t b = 0; b < a; ++b) block *= volume.dims[b];
