@@ -317,6 +317,54 @@ TEST_CASE("voxelize: a grid larger than physical memory is refused before alloca
                           Catch::Contains("physical memory"));
 }
 
+TEST_CASE("voxelize: a flat closed model is an error, not an empty volume", "[voxelize]") {
+    // A tetrahedron squashed into z = 0: closed and manifold, every face with area, no volume.
+    voxmesh::Mesh flat;
+    flat.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0.25f, 0.25f, 0};
+    flat.indices = {0, 2, 1, 0, 1, 3, 1, 2, 3, 2, 0, 3};
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 16;
+    for (const voxmesh::VoxelField field : {voxmesh::VoxelField::Distance, voxmesh::VoxelField::Occupancy}) {
+        vo.field = field;
+        CHECK_THROWS_WITH(voxmesh::voxelize(flat, vo), Catch::Contains("no sample") && Catch::Contains("flat"));
+    }
+    // The same tetrahedron lifted to a height of one voxel has samples inside.
+    flat.positions[11] = 1.f / 8;
+    CHECK_NOTHROW(voxmesh::voxelize(flat, vo));
+}
+
+TEST_CASE("voxelize: triangle row lists larger than memory are refused before they are built",
+          "[voxelize]") {
+    // A thin prism along z, 1 tall at resolution 4096: each of its 2n side triangles spans 4096
+    // z rows, 16 KiB of row lists each; n is chosen to need a quarter more than this machine has.
+    const double physical = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGESIZE));
+    const double per_side = 2.0 * 4096 * 4;
+    if (!(physical > 0) || physical / per_side > 6e6) {
+        WARN("this machine has " << physical << " bytes of memory; the prism that fills it is too large to test");
+        return;
+    }
+    const auto n = static_cast<std::uint32_t>(1.25 * physical / per_side);
+    voxmesh::Mesh prism;
+    const double r = 0.01;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const double a = 2 * std::numbers::pi * i / n;
+        const auto x = static_cast<float>(r * std::cos(a)), y = static_cast<float>(r * std::sin(a));
+        prism.positions.insert(prism.positions.end(), {x, y, 0.f, x, y, 1.f});
+    }
+    prism.positions.insert(prism.positions.end(), {0.f, 0.f, 0.f, 0.f, 0.f, 1.f});  // the caps' centres
+    const std::uint32_t bottom = 2 * n, top = 2 * n + 1;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const std::uint32_t j = (i + 1) % n;
+        prism.indices.insert(prism.indices.end(), {2 * i, 2 * j, 2 * j + 1, 2 * i, 2 * j + 1, 2 * i + 1,
+                                                   bottom, 2 * j, 2 * i, top, 2 * i + 1, 2 * j + 1});
+    }
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 4096;
+    vo.field = voxmesh::VoxelField::Occupancy;
+    CHECK_THROWS_WITH(voxmesh::voxelize(prism, vo),
+                      Catch::Contains("row lists") && Catch::Contains("physical memory"));
+}
+
 TEST_CASE("voxelize: models near the float limit give finite samples or a clear error", "[voxelize]") {
     // A tetrahedron in the cube [-a, a]^3: the cube's corner (-a, -a, -a) is 1.15 a from it,
     // and the grid's padded corner samples farther still.

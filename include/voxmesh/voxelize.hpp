@@ -45,7 +45,10 @@ struct VoxelizeOptions {
 // mesh, non-finite positions or out-of-range indices are rejected with Error. So are, before
 // anything large is allocated, a grid whose bytes exceed the machine's physical memory
 // (sysconf(_SC_PHYS_PAGES) * page size) and a grid with samples beyond the range of float
-// (a model near +-3.4e38 plus padding), which extract() could not mesh.
+// (a model near +-3.4e38 plus padding), which extract() could not mesh, and triangle row
+// lists (each triangle once per z row it spans) that would not fit beside the grid. A model
+// with no sample inside it (flat, or thinner than a voxel everywhere) is an Error too: its
+// volume would mesh back to nothing.
 Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options);
 
 }  // namespace voxmesh

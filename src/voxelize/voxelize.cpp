@@ -161,11 +161,18 @@ Grid make_grid(const Soup& soup, const VoxelizeOptions& options) {
 
 // Refuses a grid that cannot fit in this machine's physical memory, before allocating it:
 // the volume is written in full, so overcommit would only defer the failure to the OOM killer.
-void check_grid_memory(const Grid& g, const VoxelizeOptions& options, std::size_t sample_bytes) {
-    const std::size_t bytes = g.dims[0] * g.dims[1] * g.dims[2] * sample_bytes;  // < 2^41 (kMaxDim^3 * 4)
+std::size_t physical_memory() {
     const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
-    if (pages <= 0 || page <= 0) return;  // unknown: Volume::allocate still reports a failure
-    const std::size_t physical = std::size_t(pages) * std::size_t(page);
+    if (pages <= 0 || page <= 0) return SIZE_MAX;  // unknown: allocation still reports a failure
+    return std::size_t(pages) * std::size_t(page);
+}
+
+std::size_t grid_bytes(const Grid& g, std::size_t sample_bytes) {
+    return g.dims[0] * g.dims[1] * g.dims[2] * sample_bytes;  // < 2^41 (kMaxDim^3 * 4)
+}
+
+void check_grid_memory(const Grid& g, const VoxelizeOptions& options, std::size_t sample_bytes) {
+    const std::size_t bytes = grid_bytes(g, sample_bytes), physical = physical_memory();
     if (bytes > physical)
         throw Error("voxelize: the " + std::to_string(g.dims[0]) + "x" + std::to_string(g.dims[1]) + "x" +
                     std::to_string(g.dims[2]) + " grid (resolution " + std::to_string(options.resolution) +
@@ -271,12 +278,31 @@ Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
         k0 = static_cast<std::size_t>(std::max<std::int64_t>(lo, 0));
         k1 = static_cast<std::size_t>(std::min<std::int64_t>(hi + 1, std::int64_t(nz)));
     };
-    for (const auto& t : soup.tris) {
-        std::size_t k0 = 0, k1 = 0;
-        z_rows(t, k0, k1);
-        for (std::size_t k = k0; k < k1; ++k) ++row_start[k + 1];
+    {
+        // Counted as +1 at a triangle's first row and -1 past its last, then summed twice: time
+        // in triangles + rows, so that an oversized list is refused before it is built.
+        std::vector<std::int64_t> change(nz + 1, 0);
+        for (const auto& t : soup.tris) {
+            std::size_t k0 = 0, k1 = 0;
+            z_rows(t, k0, k1);
+            if (k0 >= k1) continue;
+            ++change[k0];
+            --change[k1];
+        }
+        std::int64_t in_row = 0;
+        for (std::size_t k = 0; k < nz; ++k) {
+            in_row += change[k];
+            row_start[k + 1] = row_start[k] + static_cast<std::size_t>(in_row);
+        }
     }
-    for (std::size_t k = 0; k < nz; ++k) row_start[k + 1] += row_start[k];
+    // Each triangle is listed once per z row it spans (< 2^32 triangles x kMaxDim rows, no
+    // overflow): many tall triangles at a high resolution make that list larger than the grid.
+    const std::size_t list_bytes = row_start[nz] * sizeof(std::uint32_t);
+    if (list_bytes > physical_memory() - std::min(physical_memory(), grid_bytes(grid, scalar_size(type))))
+        throw Error("voxelize: the " + std::to_string(soup.tris.size()) + " triangles span " +
+                    std::to_string(row_start[nz]) + " z rows in all at resolution " +
+                    std::to_string(options.resolution) + "; their row lists (" + std::to_string(list_bytes) +
+                    " bytes) and the grid do not fit in physical memory; use a lower resolution");
     row_tris.resize(row_start[nz]);
     {
         std::vector<std::size_t> fill(row_start.begin(), row_start.end() - 1);
@@ -301,6 +327,7 @@ Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
     const double band = options.band, band2 = band * band;
     const unsigned workers =
         static_cast<unsigned>(std::min<std::size_t>(detail::resolve_threads(options.threads), nz));
+    std::vector<std::size_t> inside_samples(workers, 0);
     detail::run_workers(workers, [&](unsigned w) {
         const std::size_t z0 = nz * w / workers, z1 = nz * (w + 1) / workers;
         const std::size_t plane = nx * ny;
@@ -349,6 +376,7 @@ Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
 
         // Pass 2: inside test per row, then the final sample values.
         std::vector<double> hits;
+        std::size_t inside_here = 0;
         std::uint8_t* occ = distance ? nullptr : static_cast<std::uint8_t*>(volume.data);
         for (std::size_t k = z0; k < z1; ++k)
             for (std::size_t j = 0; j < ny; ++j) {
@@ -360,6 +388,7 @@ Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
                 for (std::size_t i = 0; i < nx; ++i) {
                     while (passed < hits.size() && hits[passed] < double(i)) ++passed;
                     const bool inside = passed % 2 == 1;
+                    inside_here += inside;
                     if (distance) {
                         // Clamped: band * h can pass FLT_MAX (a model spanning most of the
                         // float range, a wide band) and double -> float out of range is UB.
@@ -371,7 +400,14 @@ Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
                     }
                 }
             }
+        inside_samples[w] = inside_here;
     });
+    // Meshing back needs a sample inside: a flat model, or one thinner than a voxel everywhere,
+    // would come back as an empty mesh with no word why.
+    if (std::accumulate(inside_samples.begin(), inside_samples.end(), std::size_t{0}) == 0)
+        throw Error("voxelize: no sample of the " + std::to_string(nx) + "x" + std::to_string(ny) + "x" +
+                    std::to_string(nz) + " grid lies inside the mesh (it is flat, or thinner than a voxel of " +
+                    std::to_string(grid.h) + " everywhere); raise the resolution");
     return volume;
 }
 
