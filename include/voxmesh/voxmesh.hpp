@@ -117,6 +117,9 @@ struct Stats {
 };
 
 // The iso-surface of `volume` at options.iso, as the canonical mesh.
+// Callable from several threads at once, with any backends: the calls share the CPU thread
+// pool and the OpenCL devices (a device meshes for one call at a time, the others wait for
+// it), and each still returns the canonical mesh.
 Mesh extract(const VolumeView& volume, const Options& options);
 Mesh extract(const VolumeView& volume, const Options& options, Stats& stats);
 
