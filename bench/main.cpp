@@ -90,7 +90,11 @@ int main(int argc, char** argv) {
     app.add_option("--field", fields, "built-in fields: sphere, gyroid, blobs, ct (comma list; default sphere)")
         ->delimiter(',');
     app.add_option("--input", inputs, "volume files (NRRD, MetaImage, NIfTI); loading is not timed")->delimiter(',');
-    app.add_option("--iso", iso, "iso value (default: the field's, or voxmesh_iso in a file written by --write-volume)");
+    app.add_option("--iso", iso, "iso value (default: the field's, or voxmesh_iso in a file written by --write-volume)")
+        ->check([](const std::string& text) {  // NaN stands for "not given" below: refuse it here
+            const double value = std::strtod(text.c_str(), nullptr);
+            return std::isfinite(value) ? std::string() : "--iso must be a finite number, not '" + text + "'";
+        });
     app.add_option("--type", types, "scalar types of built-in fields: f32, u8, u16, i16, i8, u32, i32, f64")
         ->delimiter(',');
     auto* sizes_opt = app.add_option("--sizes", sizes, "cube sizes of built-in fields (default 64,128,256)")->delimiter(',');

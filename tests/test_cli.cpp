@@ -4,6 +4,8 @@
 
 #ifdef VOXMESH_CLI_PATH
 
+#include "support/run_program.hpp"
+
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -20,11 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
+std::string quote(const std::string& s) { return vmtest::shell_quote(s); }
 
 std::string slurp(const fs::path& p) {
     std::ifstream in(p, std::ios::binary);
@@ -51,22 +49,11 @@ struct Scratch {
     }
 };
 
-struct Result {
-    int code = -1;
-    std::string out, err;
-};
+using Result = vmtest::ProgramResult;
 
 // `env`: NAME=value assignments for the command's environment (the shell's prefix form).
 Result run(const Scratch& s, const std::string& args, const std::string& env = "") {
-    const std::string out = s.path("stdout.txt"), err = s.path("stderr.txt");
-    const std::string cmd = (env.empty() ? "" : env + " ") + quote(VOXMESH_CLI_PATH) + " " + args + " > " + quote(out) +
-                            " 2> " + quote(err);
-    const int status = std::system(cmd.c_str());
-    Result r;
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = slurp(out);
-    r.err = slurp(err);
-    return r;
+    return vmtest::run_program(VOXMESH_CLI_PATH, args, s.dir.string(), env);
 }
 
 std::string data_file(const std::string& name) {

@@ -1,0 +1,156 @@
+// Runs the built voxmesh-bench on tiny volumes: every row it reports is a real extract of the
+// volume named (same triangles whatever the engine), its outputs parse, a written volume
+// reads back to the same mesh, and bad arguments fail. Timings are not checked.
+#include <catch2/catch.hpp>
+
+#ifdef VOXMESH_BENCH_PATH
+
+#include "support/io_scratch.hpp"
+#include "support/run_program.hpp"
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <algorithm>
+#include <cstddef>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace {
+
+using iotest::Scratch;
+using vmtest::shell_quote;
+
+vmtest::ProgramResult bench(const Scratch& s, const std::string& args) {
+    return vmtest::run_program(VOXMESH_BENCH_PATH, args + " -q", s.dir);
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+    std::vector<std::string> lines;
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);)
+        if (!line.empty()) lines.push_back(line);
+    return lines;
+}
+
+// The value of "key": in a one-line JSON object, as text (strings without their quotes).
+std::string json_value(const std::string& line, const std::string& key) {
+    const std::string tag = "\"" + key + "\":";
+    const std::size_t at = line.find(tag);
+    if (at == std::string::npos) return "<missing " + key + ">";
+    std::size_t begin = at + tag.size();
+    if (line[begin] == '"') return line.substr(begin + 1, line.find('"', begin + 1) - begin - 1);
+    const std::size_t end = line.find_first_of(",}", begin);
+    return line.substr(begin, end - begin);
+}
+
+}  // namespace
+
+TEST_CASE("bench: every backend and thread count reports the same mesh of a volume", "[bench]") {
+    Scratch s;
+    const bool opencl = !voxmesh::list_devices().empty();
+    const std::string backends = opencl ? "cpu,opencl,hybrid,auto" : "cpu,auto";
+    const auto r = bench(s, "--field sphere,gyroid --type f32,u8 --sizes 12,21 --threads 1,2 --backends " + backends +
+                                " --repeat 2 --warmup 0 --json --no-floor");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const auto rows = lines_of(r.out);
+    // 2 fields x 2 types x 2 sizes, each backend at each thread count (OpenCL's devices take
+    // the place of threads: one row).
+    const std::size_t per_volume = opencl ? 2 + 1 + 2 + 2 : 2 + 2;
+    CHECK(rows.size() == 8 * per_volume);
+    std::map<std::string, std::string> triangles;  // per volume
+    for (const std::string& row : rows) {
+        INFO(row);
+        REQUIRE(row.front() == '{');
+        REQUIRE(row.back() == '}');
+        CHECK(json_value(row, "status") == "ok");
+        CHECK(json_value(row, "repeat") == "2");
+        const std::string volume =
+            json_value(row, "field") + " " + json_value(row, "type") + " " + json_value(row, "size");
+        const std::string count = json_value(row, "triangles");
+        CHECK(std::stoul(count) > 0);
+        const auto [it, first] = triangles.emplace(volume, count);
+        CHECK(it->second == count);
+    }
+    CHECK(triangles.size() == 8);
+}
+
+TEST_CASE("bench: CSV has one header and rows of its width; the table names its columns", "[bench]") {
+    Scratch s;
+    auto fields = [](const std::string& line) {  // commas outside quotes, plus one
+        std::size_t n = 1;
+        bool quoted = false;
+        for (char c : line) {
+            if (c == '"') quoted = !quoted;
+            n += !quoted && c == ',';
+        }
+        return n;
+    };
+    const auto csv = bench(s, "--field blobs --type i16 --sizes 10 --threads 1,2 --backends cpu,hybrid --repeat 1 "
+                              "--warmup 0 --csv --no-floor");
+    INFO(csv.err);
+    REQUIRE(csv.code == 0);
+    const auto lines = lines_of(csv.out);
+    REQUIRE(lines.size() == 1 + 4);
+    CHECK(lines[0].rfind("field,type,size,", 0) == 0);
+    for (const std::string& line : lines) CHECK(fields(line) == fields(lines[0]));
+
+    const auto table = bench(s, "--field ct --type u8 --sizes 16 --threads 1 --repeat 1 --warmup 0");
+    REQUIRE(table.code == 0);
+    CHECK(table.out.find("median_s") != std::string::npos);
+    CHECK(table.out.find("ct       u8   16") != std::string::npos);
+}
+
+TEST_CASE("bench: the paper's grid runs 1, 2, 4, 6 and 16 threads", "[bench]") {
+    Scratch s;
+    const auto r = bench(s, "--paper --sizes 64 --repeat 1 --warmup 0 --no-floor");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(r.out.find("Table 1, reproduced") != std::string::npos);
+    for (const char* threads : {"\n1 ", "\n2 ", "\n4 ", "\n6 ", "\n16 "}) CHECK(r.out.find(threads) != std::string::npos);
+    // 64^3 is the paper's first column: ours is filled in, not "-".
+    const std::size_t row = r.out.find("\n16       |");
+    REQUIRE(row != std::string::npos);
+    CHECK(r.out.substr(row, 30).find(" - ") == std::string::npos);
+}
+
+TEST_CASE("bench: a volume written for the peers reads back to the same mesh", "[bench]") {
+    Scratch s;
+    const std::string file = s.dir + "/gyroid.nrrd";
+    const auto written = bench(s, "--field gyroid --type f32 --sizes 24 --write-volume " + shell_quote(file));
+    INFO(written.err);
+    REQUIRE(written.code == 0);
+    const std::string common = " --threads 1 --backends cpu --repeat 1 --warmup 0 --json --no-floor";
+    const auto built_in = bench(s, "--field gyroid --type f32 --sizes 24" + common);
+    const auto from_file = bench(s, "--input " + shell_quote(file) + common);
+    REQUIRE(built_in.code == 0);
+    REQUIRE(from_file.code == 0);
+    CHECK(json_value(from_file.out, "iso") == json_value(built_in.out, "iso"));  // voxmesh_iso in the file
+    CHECK(json_value(from_file.out, "triangles") == json_value(built_in.out, "triangles"));
+    CHECK(json_value(from_file.out, "vertices") == json_value(built_in.out, "vertices"));
+}
+
+TEST_CASE("bench: bad arguments fail with a message", "[bench][errors]") {
+    Scratch s;
+    const std::vector<std::pair<std::string, std::string>> bad = {
+        {"--sizes 1", "at least 2 samples"},
+        {"--field nope", "unknown field 'nope'"},
+        {"--type f16", "unknown type 'f16'"},
+        {"--backends gpu", "unknown backend 'gpu'"},
+        {"--iso nan", "finite"},
+        {"--csv --json", "one of --csv and --json"},
+        {"--input " + shell_quote(s.dir + "/missing.nrrd"), "missing.nrrd"},
+        {"--field sphere,gyroid --write-volume " + shell_quote(s.dir + "/x.nrrd"), "exactly one"},
+        {"--repeat 0", "--repeat"},
+    };
+    for (const auto& [args, message] : bad) {
+        INFO(args);
+        const auto r = bench(s, args + " --sizes 8 --no-floor");
+        CHECK(r.code != 0);
+        CHECK_THAT(r.err, Catch::Contains(message));
+    }
+}
+
+#endif
