@@ -6,6 +6,7 @@ packages=(
   ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   catch2 libcli11-dev zlib1g-dev
   clang libclang-rt-14-dev
+  locales
 )
 if [[ "${VOXMESH_PEERS:-0}" == 1 ]]; then
   packages+=(python3-vtk9 python3-skimage python3-matplotlib)

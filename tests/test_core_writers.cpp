@@ -5,7 +5,9 @@
 
 #include <voxmesh/voxmesh.hpp>
 
+#include <clocale>
 #include <csignal>
+#include <cstdio>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -255,7 +257,7 @@ TEST_CASE("write_mesh: STL, PLY and OBJ re-read with the same counts and coordin
             const std::string path = dir.file("sphere.obj");
             voxmesh::write_mesh(path, mesh);
             const Parsed p = parse_obj(read_all(path));
-            CHECK(p.positions == mesh.positions);  // %.9g-style text round-trips floats exactly
+            CHECK(p.positions == mesh.positions);  // shortest round-trip text: floats exactly
             CHECK(p.normals == mesh.normals);
             CHECK(p.indices == mesh.indices);
         }
@@ -267,6 +269,41 @@ TEST_CASE("write_mesh: STL, PLY and OBJ re-read with the same counts and coordin
         }
     }
     CHECK(no_temp_files(dir));
+}
+
+// A program may set a C locale whose decimal point is a comma (GUI toolkits do, from the
+// environment): OBJ text must not follow it, or no reader could parse the file.
+TEST_CASE("write_mesh: OBJ numbers keep the decimal point under a decimal-comma locale", "[core]") {
+    vmtest::TempDir dir;
+    const std::string locales = dir.file("locales");
+    fs::create_directory(locales);
+    // glibc reads LOCPATH at each setlocale: a German locale built here, whatever is installed.
+    const std::string build = "localedef -i de_DE -f ISO-8859-1 '" + locales + "/de_DE.ISO-8859-1' > /dev/null 2>&1";
+    [[maybe_unused]] const int built = std::system(build.c_str());  // non-zero also for mere warnings
+    const char* had_path = std::getenv("LOCPATH");
+    const std::string old_path = had_path ? had_path : "";
+    ::setenv("LOCPATH", locales.c_str(), 1);
+    const std::string old_numeric = std::setlocale(LC_NUMERIC, nullptr);
+    const bool german = std::setlocale(LC_NUMERIC, "de_DE.ISO-8859-1") != nullptr;
+    if (had_path) ::setenv("LOCPATH", old_path.c_str(), 1);
+    else ::unsetenv("LOCPATH");
+    if (!german) {
+        WARN("no de_DE locale could be built (localedef, or the locales package's sources, missing): SKIPPED");
+        return;
+    }
+    char probe[16];
+    std::snprintf(probe, sizeof probe, "%.1f", 1.5);
+    const voxmesh::Mesh mesh = test_mesh(true);
+    const std::string path = dir.file("sphere.obj");
+    voxmesh::write_mesh(path, mesh);
+    std::setlocale(LC_NUMERIC, old_numeric.c_str());
+    REQUIRE(std::string(probe) == "1,5");  // the locale was in effect while writing
+    const std::string text = read_all(path);
+    CHECK(text.find(',') == std::string::npos);
+    const Parsed p = parse_obj(text);
+    CHECK(p.positions == mesh.positions);
+    CHECK(p.normals == mesh.normals);
+    CHECK(p.indices == mesh.indices);
 }
 
 TEST_CASE("write_mesh: an empty mesh writes valid empty files", "[core]") {

@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
+#include <charconv>
+#include <cstdint>
+#include <cstdio>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -95,34 +98,53 @@ void write_ply(std::FILE* f, const Mesh& mesh) {
     }
 }
 
+// Numbers as text by to_chars: the shortest form that reads back as the same float, and
+// never the C locale's decimal comma (a GUI toolkit may have set one; printf would follow it).
+template <class Number>
+void append_number(std::string& out, Number value) {
+    char text[32];
+    out.append(text, std::to_chars(text, text + sizeof text, value).ptr);
+}
+
+void append_triple(std::string& out, const char* tag, const float* v) {
+    out += tag;
+    for (int k = 0; k < 3; ++k) {
+        out += ' ';
+        append_number(out, v[k]);
+    }
+    out += '\n';
+}
+
 void write_obj(std::FILE* f, const Mesh& mesh) {
     const bool normals = !mesh.normals.empty();
     std::string out = "# written by voxmesh " + std::string(VOXMESH_VERSION_STRING) + "\n";
-    char line[128];
     auto flush = [&] {
         if (out.size() > (1u << 20)) {
             write_bytes(f, out.data(), out.size());
             out.clear();
         }
     };
-    // %.9g round-trips a float exactly.
     for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
-        const float* p = &mesh.positions[3 * v];
-        out.append(line, std::snprintf(line, sizeof line, "v %.9g %.9g %.9g\n", p[0], p[1], p[2]));
+        append_triple(out, "v", &mesh.positions[3 * v]);
         flush();
     }
     if (normals)
         for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
-            const float* n = &mesh.normals[3 * v];
-            out.append(line, std::snprintf(line, sizeof line, "vn %.9g %.9g %.9g\n", n[0], n[1], n[2]));
+            append_triple(out, "vn", &mesh.normals[3 * v]);
             flush();
         }
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-        const unsigned long long a = mesh.indices[3 * t] + 1ull, b = mesh.indices[3 * t + 1] + 1ull,
-                                 c = mesh.indices[3 * t + 2] + 1ull;
-        const int n = normals ? std::snprintf(line, sizeof line, "f %llu//%llu %llu//%llu %llu//%llu\n", a, a, b, b, c, c)
-                              : std::snprintf(line, sizeof line, "f %llu %llu %llu\n", a, b, c);
-        out.append(line, n);
+        out += 'f';
+        for (int k = 0; k < 3; ++k) {
+            const std::uint64_t one_based = mesh.indices[3 * t + k] + std::uint64_t{1};
+            out += ' ';
+            append_number(out, one_based);
+            if (normals) {
+                out += "//";
+                append_number(out, one_based);
+            }
+        }
+        out += '\n';
         flush();
     }
     write_bytes(f, out.data(), out.size());

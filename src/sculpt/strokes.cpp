@@ -9,6 +9,7 @@
 #include <ctime>
 #include <fstream>
 #include <iomanip>
+#include <locale>
 #include <memory>
 #include <numbers>
 #include <sstream>
@@ -292,6 +293,7 @@ SculptBenchResult run_sculpt_benchmark(const SculptBenchOptions& options,
 
 std::string format_sculpt_benchmark(const SculptBenchResult& r) {
     std::ostringstream o;
+    o.imbue(std::locale::classic());  // "1.50", not the program's global locale's "1,50"
     o << std::fixed << std::setprecision(2);
     const std::size_t n = r.options.resolution;
     o << "sculpt " << n << "^3, block " << r.options.block_size << ", ";
