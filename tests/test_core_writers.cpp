@@ -271,6 +271,24 @@ TEST_CASE("write_mesh: STL, PLY and OBJ re-read with the same counts and coordin
     CHECK(no_temp_files(dir));
 }
 
+TEST_CASE("write_mesh: a new file's mode follows the umask, as any new file's", "[core]") {
+    vmtest::TempDir dir;
+    const voxmesh::Mesh mesh = test_mesh(false);
+    const mode_t old_mask = ::umask(077);
+    voxmesh::write_mesh(dir.file("private.ply"), mesh);
+    ::umask(022);
+    voxmesh::write_mesh(dir.file("shared.obj"), mesh);
+    ::umask(old_mask);
+    auto mode_of = [&](const std::string& name) {
+        struct stat st {};
+        REQUIRE(::stat(dir.file(name).c_str(), &st) == 0);
+        return st.st_mode & 0777;
+    };
+    CHECK(mode_of("private.ply") == 0600);  // not readable by others under umask 077
+    CHECK(mode_of("shared.obj") == 0644);
+    CHECK(no_temp_files(dir));
+}
+
 // A program may set a C locale whose decimal point is a comma (GUI toolkits do, from the
 // environment): OBJ text must not follow it, or no reader could parse the file.
 TEST_CASE("write_mesh: OBJ numbers keep the decimal point under a decimal-comma locale", "[core]") {

@@ -2,6 +2,7 @@
 
 #include <voxmesh/voxmesh.hpp>
 
+#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -15,6 +16,27 @@ void write_bytes(std::FILE* file, const void* data, std::size_t bytes) {
     if (bytes && std::fwrite(data, 1, bytes, file) != bytes) throw Error(std::string("write failed: ") + std::strerror(errno));
 }
 
+namespace {
+
+// A new temporary next to the target, created as any new file is (0666 less the umask):
+// mkstemp makes it 0600, and a fixed chmod afterwards would ignore the umask. pid and a
+// counter make the name unique; one left by a crashed process of the same pid is skipped.
+int create_temp(const std::filesystem::path& dir, const std::string& filename, std::string& temp) {
+    static std::atomic<unsigned> counter{0};
+    for (int attempt = 0; attempt < 1000; ++attempt) {
+        // Built with append: gcc 12 gives a false -Wrestrict on operator+ chains here.
+        std::string name = ".";
+        name.append(filename).append(".tmp").append(std::to_string(::getpid())).append("-");
+        name.append(std::to_string(counter++));
+        temp = (dir / name).string();
+        const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (fd >= 0 || errno != EEXIST) return fd;
+    }
+    return -1;  // errno is EEXIST
+}
+
+}  // namespace
+
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
     namespace fs = std::filesystem;
     const fs::path target(path);
@@ -23,11 +45,8 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
     if (!fs::is_directory(dir, ec)) throw Error("cannot write '" + path + "': directory '" + dir.string() + "' does not exist");
 
-    // Built with append: gcc 12 gives a false -Wrestrict on operator+ chains here.
-    std::string name = ".";
-    name.append(target.filename().string()).append(".tmpXXXXXX");
-    std::string temp = (dir / name).string();
-    const int fd = mkstemp(temp.data());
+    std::string temp;
+    const int fd = create_temp(dir, target.filename().string(), temp);
     if (fd < 0) throw Error("cannot write '" + path + "': " + std::strerror(errno));
     std::FILE* file = fdopen(fd, "wb");
     if (!file) {
@@ -47,7 +66,6 @@ void write_file_atomically(const std::string& path, const std::function<void(std
         ::unlink(temp.c_str());
         throw Error("cannot write '" + path + "': " + std::strerror(errno));
     }
-    ::chmod(temp.c_str(), 0644);
     if (std::rename(temp.c_str(), path.c_str()) != 0) {
         const int err = errno;
         ::unlink(temp.c_str());
