@@ -7,6 +7,7 @@
 #include "support/run_program.hpp"
 
 #include <cmath>
+#include <csignal>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -314,6 +315,47 @@ TEST_CASE("cli: bad input exits 2 with a message and leaves no output", "[cli]")
     expect_rejected(s, "voxelize " + quote(junk) + " -o " + quote(vol) + " --resolution 16", "junk.stl", vol);
     expect_rejected(s, "voxelize " + quote(data_file("torus.stl")) + " -o " + quote(s.path("v.raw")) + " --resolution 16",
                     "v.raw", s.path("v.raw"));
+}
+
+TEST_CASE("cli: killed at any moment, mesh leaves the whole output or none, never a temporary", "[cli]") {
+    Scratch s;
+    // A dense gyroid: a 70 MB OBJ, so that a good part of the run is spent writing it.
+    const std::size_t n = 160;
+    std::vector<float> samples;
+    samples.reserve(n * n * n);
+    for (std::size_t z = 0; z < n; ++z)
+        for (std::size_t y = 0; y < n; ++y)
+            for (std::size_t x = 0; x < n; ++x)
+                samples.push_back(static_cast<float>(std::sin(0.3 * x) * std::cos(0.3 * y) +
+                                                     std::sin(0.3 * y) * std::cos(0.3 * z) +
+                                                     std::sin(0.3 * z) * std::cos(0.3 * x)));
+    const std::string volume = s.write("g.nrrd", "NRRD0004\ntype: float\ndimension: 3\nsizes: 160 160 160\n"
+                                                 "endian: little\nencoding: raw\n\n" + f32_bytes(samples));
+    const std::string args = "mesh " + quote(volume) + " --iso 0 -o ";
+    const Result whole = run(s, args + quote(s.path("whole.obj")));
+    REQUIRE(whole.code == 0);
+    const auto whole_size = fs::file_size(s.path("whole.obj"));
+
+    std::size_t killed = 0;
+    for (const char* delay : {"0.02", "0.08", "0.15", "0.2", "0.25", "0.3", "0.4", "0.6"}) {
+        const fs::path dir = s.dir / (std::string("run-") + delay);
+        fs::create_directories(dir);
+        const std::string out = (dir / "out.obj").string();
+        // SIGTERM: a background job of a non-interactive shell ignores SIGINT.
+        const std::string cmd = quote(VOXMESH_CLI_PATH) + " " + args + quote(out) + " > /dev/null 2>&1 & pid=$!; sleep " +
+                                delay + "; kill -TERM $pid 2> /dev/null; wait $pid";
+        const int status = std::system(("sh -c " + quote(cmd)).c_str());
+        const int code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        INFO("killed after " << delay << " s: exit " << code);
+        CHECK((code == 0 || code == 128 + SIGTERM));
+        killed += code != 0;
+        std::vector<std::string> left;
+        for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+        if (code == 0) CHECK(left == std::vector<std::string>{"out.obj"});
+        else CHECK(left.empty());
+        if (code == 0) CHECK(fs::file_size(out) == whole_size);
+    }
+    CHECK(killed > 0);  // 20 ms is too early for any machine to have finished
 }
 
 TEST_CASE("cli: voxelize refuses a grid larger than physical memory", "[cli]") {

@@ -143,6 +143,11 @@ void release_scratch_memory();
 // file renamed into place: a failure never leaves a partial file.
 void write_mesh(const std::string& path, const Mesh& mesh);
 
+// Removes the temporary files of writes in progress (write_mesh, write_nrrd), for a program's
+// SIGINT / SIGTERM handler to call before the program dies, so that an interrupted write
+// leaves nothing behind. Async-signal-safe. The voxmesh command line tool does this.
+void remove_partial_outputs() noexcept;
+
 // Topology summary: closed means every edge is in exactly two triangles.
 struct MeshTopology {
     std::size_t boundary_edges = 0;      // edges in one triangle

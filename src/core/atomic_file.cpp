@@ -18,6 +18,41 @@ void write_bytes(std::FILE* file, const void* data, std::size_t bytes) {
 
 namespace {
 
+// The temporaries being written, for remove_partial_outputs() to find from a signal handler:
+// fixed slots, lock-free flags, no allocation. More writes at once than slots go unlisted.
+struct InFlight {
+    std::atomic<bool> taken{false};  // the slot belongs to a write
+    std::atomic<bool> ready{false};  // `path` is complete and names its temporary
+    char path[4096];
+};
+InFlight g_in_flight[16];
+static_assert(std::atomic<bool>::is_always_lock_free);
+
+class Listed {
+public:
+    explicit Listed(const std::string& temp) {
+        if (temp.size() >= sizeof(InFlight::path)) return;
+        for (InFlight& slot : g_in_flight) {
+            bool expected = false;
+            if (!slot.taken.compare_exchange_strong(expected, true)) continue;
+            std::memcpy(slot.path, temp.c_str(), temp.size() + 1);
+            slot.ready.store(true, std::memory_order_release);
+            slot_ = &slot;
+            return;
+        }
+    }
+    ~Listed() {
+        if (!slot_) return;
+        slot_->ready.store(false, std::memory_order_release);
+        slot_->taken.store(false, std::memory_order_release);
+    }
+    Listed(const Listed&) = delete;
+    Listed& operator=(const Listed&) = delete;
+
+private:
+    InFlight* slot_ = nullptr;
+};
+
 // A new temporary next to the target, created as any new file is (0666 less the umask):
 // mkstemp makes it 0600, and a fixed chmod afterwards would ignore the umask. pid and a
 // counter make the name unique; one left by a crashed process of the same pid is skipped.
@@ -48,6 +83,8 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     std::string temp;
     const int fd = create_temp(dir, target.filename().string(), temp);
     if (fd < 0) throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    // Listed while it exists; a signal after the rename unlinks a name that is gone.
+    const Listed listed(temp);
     std::FILE* file = fdopen(fd, "wb");
     if (!file) {
         ::close(fd);
@@ -74,3 +111,12 @@ void write_file_atomically(const std::string& path, const std::function<void(std
 }
 
 }  // namespace voxmesh::detail
+
+namespace voxmesh {
+
+void remove_partial_outputs() noexcept {
+    for (detail::InFlight& slot : detail::g_in_flight)
+        if (slot.ready.load(std::memory_order_acquire)) ::unlink(slot.path);
+}
+
+}  // namespace voxmesh
