@@ -72,6 +72,8 @@ public:
     // A buffer of at least `bytes` for slot `id`, kept for the next chunk and call.
     cl::Buffer& buffer(unsigned id, std::size_t bytes);
     void drop_buffers();
+    // Frees the buffers and the pinned blocks, keeping the context, queue and programs.
+    void release_memory();
     // Pinned blocks for copies to and from host memory (pinned_staging.hpp), made on first use.
     PinnedStaging& staging();
 
