@@ -269,12 +269,12 @@ void split_devices(bool split) {
     // PoCL 3.1 releasing a sub-device's context soon after meshing on it crashes later, in a
     // worker thread (POclReleaseEvent), while other devices build and run; finishing its queue
     // first does not help. This test hook keeps the sub-devices it retires alive, their memory
-    // freed, for the life of the process.
-    static std::vector<std::shared_ptr<Device>> retired_sub_devices;
+    // freed, past the end of the process too (never destroyed: not at exit either).
+    static auto* retired_sub_devices = new std::vector<std::shared_ptr<Device>>;
     if (r.split)
         for (const auto& d : r.devices) {
             d->release_memory();
-            retired_sub_devices.push_back(d);
+            retired_sub_devices->push_back(d);
         }
     r.split = split;
     discover(r);
