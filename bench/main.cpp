@@ -141,6 +141,7 @@ int main(int argc, char** argv) {
     }
 
     try {
+        if (!save_path.empty()) check_save_path(save_path);
         if (list) {
             const auto devs = voxmesh::list_devices();
             if (devs.empty()) std::printf("no usable OpenCL device\n");
@@ -328,12 +329,7 @@ int main(int argc, char** argv) {
             rates.clear();
         }
         compute_speedups(results, rates);
-        if (!save_path.empty()) {
-            std::FILE* f = std::fopen(save_path.c_str(), "w");
-            if (!f) throw voxmesh::Error("cannot write '" + save_path + "'");
-            print_json(results, f);
-            std::fclose(f);
-        }
+        if (!save_path.empty()) save_json(results, save_path);
         if (json) print_json(results);
         else if (csv) print_csv(results);
         else {

@@ -3,10 +3,16 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
 #include <map>
 #include <sstream>
+#include <string>
 #include <tuple>
+
+#include <unistd.h>
 
 namespace vmbench {
 
@@ -207,6 +213,34 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
         for (std::size_t i = 0; i < r.warnings.size(); ++i) o << (i ? "," : "") << '"' << json_escape(r.warnings[i]) << '"';
         o << "]}";
         std::fprintf(out, "%s\n", o.str().c_str());
+    }
+}
+
+namespace {
+std::string save_temp(const std::string& path) { return path + ".tmp" + std::to_string(::getpid()); }
+}  // namespace
+
+void check_save_path(const std::string& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw voxmesh::Error("cannot write '" + path + "': it is a directory");
+    const std::string temp = save_temp(path);
+    std::FILE* f = std::fopen(temp.c_str(), "w");
+    if (!f) throw voxmesh::Error("cannot write '" + path + "': " + std::strerror(errno));
+    std::fclose(f);
+    std::remove(temp.c_str());
+}
+
+void save_json(const std::vector<Result>& results, const std::string& path) {
+    // Through a temporary renamed into place: a failed write leaves an earlier file as it was.
+    const std::string temp = save_temp(path);
+    std::FILE* f = std::fopen(temp.c_str(), "w");
+    if (!f) throw voxmesh::Error("cannot write '" + path + "': " + std::strerror(errno));
+    print_json(results, f);
+    const bool written = std::ferror(f) == 0;
+    if (std::fclose(f) != 0 || !written || std::rename(temp.c_str(), path.c_str()) != 0) {
+        const int error = errno;
+        std::remove(temp.c_str());
+        throw voxmesh::Error("cannot write '" + path + "': " + std::strerror(error));
     }
 }
 

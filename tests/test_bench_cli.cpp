@@ -132,6 +132,21 @@ TEST_CASE("bench: a volume written for the peers reads back to the same mesh", "
     CHECK(json_value(from_file.out, "vertices") == json_value(built_in.out, "vertices"));
 }
 
+TEST_CASE("bench: --save writes the JSON lines printed, and a bad path fails before any run", "[bench]") {
+    Scratch s;
+    const std::string saved = s.dir + "/runs.json";
+    const auto r = bench(s, "--field sphere --type u8 --sizes 10,14 --threads 1 --repeat 1 --warmup 0 --json "
+                            "--no-floor --save " + shell_quote(saved));
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    CHECK(iotest::read_file(saved) == r.out);
+    // A bad path is named at once: the runs (here 400^3, seconds) never start.
+    const auto bad = bench(s, "--sizes 400 --threads 1 --save " + shell_quote(s.dir + "/no/such/dir/x.json"));
+    CHECK(bad.code != 0);
+    CHECK_THAT(bad.err, Catch::Contains("no/such/dir/x.json"));
+    CHECK(bad.out.find("median_s") == std::string::npos);
+}
+
 TEST_CASE("bench: bad arguments fail with a message", "[bench][errors]") {
     Scratch s;
     const std::vector<std::pair<std::string, std::string>> bad = {
