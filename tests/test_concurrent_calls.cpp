@@ -4,10 +4,10 @@
 #include <catch2/catch.hpp>
 #include <voxmesh/voxmesh.hpp>
 
-#include <algorithm>
+#include "support/mesh_checks.hpp"
+
 #include <array>
 #include <atomic>
-#include <cmath>
 #include <cstdint>
 #include <string>
 #include <thread>
@@ -21,50 +21,24 @@ struct Case {
     std::string name;
     std::vector<float> f32;
     std::vector<std::uint8_t> u8;
-    std::array<std::size_t, 3> dims;
+    vmtest::Dims dims;
     double iso = 0;
     VolumeView view() const {
-        VolumeView v;
-        v.dims = dims;
-        v.type = f32.empty() ? ScalarType::U8 : ScalarType::F32;
-        v.data = f32.empty() ? static_cast<const void*>(u8.data()) : static_cast<const void*>(f32.data());
-        v.spacing = {0.5, 1, 1.5};
-        v.origin = {-3, 2, 7};
-        return v;
+        const std::array<double, 3> spacing{0.5, 1, 1.5}, origin{-3, 2, 7};
+        return f32.empty() ? vmtest::view_of(u8, dims, spacing, origin) : vmtest::view_of(f32, dims, spacing, origin);
     }
 };
 
-// Fields of [0,1]^3 coordinates, sampled on n0 x n1 x n2.
-template <class F>
-std::vector<float> field(std::array<std::size_t, 3> n, F f) {
-    std::vector<float> v;
-    for (std::size_t z = 0; z < n[2]; ++z)
-        for (std::size_t y = 0; y < n[1]; ++y)
-            for (std::size_t x = 0; x < n[0]; ++x)
-                v.push_back(static_cast<float>(
-                    f(double(x) / double(n[0] - 1), double(y) / double(n[1] - 1), double(z) / double(n[2] - 1))));
-    return v;
-}
-
 std::vector<Case> cases() {
-    std::vector<Case> out;
-    const std::array<std::size_t, 3> a{41, 37, 45}, b{64, 24, 33};
-    out.push_back({"sphere f32", field(a, [](double x, double y, double z) {
-                       return 0.4 - std::sqrt((x - .5) * (x - .5) + (y - .45) * (y - .45) + (z - .55) * (z - .55));
-                   }), {}, a, 0});
-    out.push_back({"gyroid f32", field(b, [](double x, double y, double z) {
-                       const double s = 12;
-                       return std::sin(s * x) * std::cos(s * y) + std::sin(s * y) * std::cos(s * z) +
-                              std::sin(s * z) * std::cos(s * x);
-                   }), {}, b, 0.1});
-    Case torus{"torus u8", {}, {}, a, 127.5};
-    for (const float v : field(a, [](double x, double y, double z) {
-             const double q = std::sqrt((x - .5) * (x - .5) + (y - .5) * (y - .5)) - 0.3;
-             return 0.12 - std::sqrt(q * q + (z - .5) * (z - .5));
-         }))
-        torus.u8.push_back(static_cast<std::uint8_t>(std::lround(std::clamp(127.5 + 600 * v, 0.0, 255.0))));
-    out.push_back(std::move(torus));
-    return out;
+    const vmtest::Dims a{41, 37, 45}, b{64, 24, 33};
+    const vmtest::FieldFn torus = vmtest::torus({20, 18, 22}, 12, 5);
+    return {
+        {"sphere f32", vmtest::sample_field<float>(a, vmtest::sphere({20, 16.5, 24}, 16)), {}, a, 0},
+        {"wavy f32", vmtest::sample_field<float>(b, vmtest::wavy(0.5)), {}, b, 0.1},
+        {"torus u8", {},
+         vmtest::sample_field<std::uint8_t>(a, [&](double x, double y, double z) { return 127.5 + 20 * torus(x, y, z); }),
+         a, 127.5},
+    };
 }
 
 bool same(const Mesh& a, const Mesh& b) {
