@@ -5,7 +5,6 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <new>
 #include <string>
@@ -32,8 +31,7 @@ void warn_if_too_fine(const VolumeView& volume, const Options& options, Stats& s
     const int a = detail::axis_too_fine_for_float(volume.dims, volume.spacing, volume.origin);
     if (a < 0) return;
     const auto au = static_cast<std::size_t>(a);
-    const double far = std::max(std::fabs(volume.origin[au]),
-                                std::fabs(detail::last_sample_at(volume.origin[au], volume.spacing[au], volume.dims[au])));
+    const double far = detail::farthest_from_zero(volume.origin[au], volume.spacing[au], volume.dims[au]);
     warn(options, stats,
          std::string("spacing ") + number_text(volume.spacing[au]) + " along " + "xyz"[a] +
              " is too fine for float vertex coordinates as far from 0 as " + number_text(far) +

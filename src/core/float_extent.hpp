@@ -27,6 +27,11 @@ inline int axis_beyond_float(const std::array<std::size_t, 3>& dims, const std::
     return -1;
 }
 
+// The larger magnitude of an axis's first and last sample positions.
+inline double farthest_from_zero(double origin, double spacing, std::size_t n) {
+    return std::max(std::fabs(origin), std::fabs(last_sample_at(origin, spacing, n)));
+}
+
 // Float's step near `far`: an upper bound on the gap between neighbouring floats there.
 inline double float_step_near(double far) { return std::max(std::fabs(far) * 0x1p-23, 0x1p-149); }
 
@@ -37,8 +42,7 @@ inline int axis_too_fine_for_float(const std::array<std::size_t, 3>& dims, const
                                    const std::array<double, 3>& origin) {
     for (int a = 0; a < 3; ++a) {
         if (dims[a] < 2) continue;
-        const double far = std::max(std::fabs(origin[a]), std::fabs(last_sample_at(origin[a], spacing[a], dims[a])));
-        if (spacing[a] < 256 * float_step_near(far)) return a;
+        if (spacing[a] < 256 * float_step_near(farthest_from_zero(origin[a], spacing[a], dims[a]))) return a;
     }
     return -1;
 }

@@ -170,11 +170,9 @@ VolumeHeader read_nifti_header(const std::string& path) {
         axes = sform_axes(hdr);
         // Samples lie where the sform puts them, so its column lengths are the spacing even
         // where pixdim says otherwise (as in nibabel's affine); a zero column says nothing.
-        for (std::size_t a = 0; a < 3; ++a) {
-            double norm2 = 0;
-            for (double c : axes[a]) norm2 += c * c;
-            if (norm2 > 0) info.spacing[a] = checked_spacing(path, "srow", std::sqrt(norm2));
-        }
+        for (std::size_t a = 0; a < 3; ++a)
+            if (const double length = vector_length(axes[a]); length > 0)
+                info.spacing[a] = checked_spacing(path, "srow", length);
     } else if (qform_code > 0) {
         for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "qoffset", hdr.f32(268 + 4 * a));
         axes = qform_axes(hdr);

@@ -219,9 +219,7 @@ VolumeHeader read_nrrd_header(const std::string& path) {
                 fail(path, "a 'space directions' vector has " + std::to_string(vectors[a].size()) +
                                " components but the space has " + std::to_string(space_dim));
             if (a < 3) {
-                double norm2 = 0;
-                for (double c : vectors[a]) norm2 += c * c;
-                info.spacing[a] = checked_spacing(path, "space directions", std::sqrt(norm2));
+                info.spacing[a] = checked_spacing(path, "space directions", vector_length(vectors[a]));
                 axes[a] = vectors[a];
             }
         }

@@ -31,15 +31,20 @@ double checked_origin(const std::string& path, const char* field, double value) 
     return value;
 }
 
+double vector_length(const std::vector<double>& v) {
+    double norm2 = 0;
+    for (double c : v) norm2 += c * c;
+    return std::sqrt(norm2);
+}
+
 AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes) {
     AxisDirections d;
     for (std::size_t a = 0; a < 3; ++a) {
         const std::vector<double>& v = axes[a];
-        double norm2 = 0;
-        for (double c : v) norm2 += c * c;
-        if (norm2 == 0) continue;
+        const double length = vector_length(v);
+        if (length == 0) continue;
         // Headers store directions as floats or rounded text: off-axis parts this small are noise.
-        const double noise = 1e-6 * std::sqrt(norm2);
+        const double noise = 1e-6 * length;
         bool off_axis = false;
         for (std::size_t c = 0; c < v.size(); ++c)
             if (c != a && std::fabs(v[c]) > noise) off_axis = true;
