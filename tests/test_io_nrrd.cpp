@@ -85,6 +85,15 @@ TEST_CASE("nrrd: an axis in the negative direction is reversed from the minimum 
         CHECK_FALSE(info.rotation_dropped);
         CHECK(info.spacing == v.spacing);
         CHECK(info.origin == v.origin);
+        // read_volume with an info: the same samples, and what read_volume_info says.
+        VolumeInfo read_along;
+        check_indexed<std::int16_t>(read_volume(path, read_along), {true, false, false});
+        CHECK(read_along.flipped == info.flipped);
+        CHECK(read_along.origin == info.origin);
+        CHECK(read_along.spacing == info.spacing);
+        CHECK(read_along.file_bytes == info.file_bytes);
+        CHECK(read_along.data_file == info.data_file);
+        CHECK(read_along.encoding == info.encoding);
     };
     SECTION("detached raw (memory-mapped): the file is not changed") {
         const std::string samples = indexed_samples<std::int16_t>(false);

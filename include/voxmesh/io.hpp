@@ -87,6 +87,8 @@ struct VolumeInfo {
 // (case-insensitive). A .nii that is gzip-compressed is detected by content.
 Volume read_volume(const std::string& path);
 VolumeInfo read_volume_info(const std::string& path);
+// read_volume, also filling `info` as read_volume_info would, from the one reading of the header.
+Volume read_volume(const std::string& path, VolumeInfo& info);
 // The same checks as read_raw, without loading the samples.
 VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout);
 

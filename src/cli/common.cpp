@@ -122,10 +122,11 @@ Volume load_volume(const std::string& path, const RawFlags& raw) {
     const bool is_raw = is_raw_path(path);
     if (!is_raw && raw.any_given())
         throw BadInput("'" + path + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
-    Volume v = about_file(path, [&] { return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path); });
+    VolumeInfo info;
+    Volume v = about_file(path, [&] { return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path, info); });
     // A Volume has no orientation: say so when the file's direction matrix is thrown away,
     // since the mesh then lies in index-aligned axes, not where other tools put it.
-    if (!is_raw && about_file(path, [&] { return read_volume_info(path); }).rotation_dropped)
+    if (info.rotation_dropped)
         std::cerr << "voxmesh: warning: '" << path
                   << "': the direction matrix is not axis-aligned; its rotation is dropped and the mesh is in the "
                      "volume's index axes (spacing and origin as written)\n";

@@ -131,12 +131,18 @@ VolumeHeader raw_header(const std::string& path, const RawLayout& raw) {
 
 namespace voxmesh {
 
-Volume read_volume(const std::string& path) {
+Volume read_volume(const std::string& path, VolumeInfo& info) {
     const io::VolumeHeader h = io::read_header(path);
     Volume v = io::load_samples(path, h.layout);
     v.spacing = h.info.spacing;
     v.origin = h.info.origin;
+    info = h.info;
     return v;
+}
+
+Volume read_volume(const std::string& path) {
+    VolumeInfo info;
+    return read_volume(path, info);
 }
 
 VolumeInfo read_volume_info(const std::string& path) {
