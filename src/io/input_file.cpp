@@ -72,6 +72,12 @@ std::shared_ptr<unsigned char> InputFile::map() const {
                                           [length](unsigned char* p) { ::munmap(p, length); });
 }
 
+std::size_t physical_memory() {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+    if (pages > 0 && page > 0) return static_cast<std::size_t>(pages) * static_cast<std::size_t>(page);
+    return static_cast<std::size_t>(-1);
+}
+
 std::size_t available_memory() {
     std::ifstream meminfo("/proc/meminfo");
     std::string key;
@@ -80,9 +86,7 @@ std::size_t available_memory() {
     while (meminfo >> key >> kb >> unit) {
         if (key == "MemAvailable:") return kb * 1024;
     }
-    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
-    if (pages > 0 && page > 0) return static_cast<std::size_t>(pages) * static_cast<std::size_t>(page);
-    return static_cast<std::size_t>(-1);
+    return physical_memory();
 }
 
 void check_memory(const std::string& path, std::size_t bytes) {

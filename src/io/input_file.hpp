@@ -35,6 +35,8 @@ private:
     std::size_t size_ = 0;
 };
 
+// The machine's physical memory in bytes (SIZE_MAX when the system does not say).
+std::size_t physical_memory();
 // Bytes of memory the system can give us now (MemAvailable, else physical memory).
 std::size_t available_memory();
 // Throws when `bytes` exceed available_memory(), before anything is allocated.

@@ -12,6 +12,7 @@
 
 #include "core/float_extent.hpp"
 #include "core/parallel.hpp"
+#include "io/input_file.hpp"
 
 #include <algorithm>
 #include <array>
@@ -21,8 +22,6 @@
 #include <numeric>
 #include <string>
 #include <vector>
-
-#include <unistd.h>
 
 namespace voxmesh {
 
@@ -159,18 +158,14 @@ Grid make_grid(const Soup& soup, const VoxelizeOptions& options) {
     return g;
 }
 
-// Refuses a grid that cannot fit in this machine's physical memory, before allocating it:
-// the volume is written in full, so overcommit would only defer the failure to the OOM killer.
-std::size_t physical_memory() {
-    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
-    if (pages <= 0 || page <= 0) return SIZE_MAX;  // unknown: allocation still reports a failure
-    return std::size_t(pages) * std::size_t(page);
-}
+using io::physical_memory;  // SIZE_MAX when unknown: allocation still reports a failure
 
 std::size_t grid_bytes(const Grid& g, std::size_t sample_bytes) {
     return g.dims[0] * g.dims[1] * g.dims[2] * sample_bytes;  // < 2^41 (kMaxDim^3 * 4)
 }
 
+// Refuses a grid that cannot fit in this machine's physical memory, before allocating it:
+// the volume is written in full, so overcommit would only defer the failure to the OOM killer.
 void check_grid_memory(const Grid& g, const VoxelizeOptions& options, std::size_t sample_bytes) {
     const std::size_t bytes = grid_bytes(g, sample_bytes), physical = physical_memory();
     if (bytes > physical)
