@@ -24,7 +24,30 @@ using namespace vmbench;
 
 namespace {
 
-extern "C" void on_sigint(int) { g_interrupted = 1; }
+// SIGTERM, SIGHUP, and SIGINT outside the timed runs: remove the temporary of a --save or
+// --write-volume in progress, then die of the signal.
+extern "C" void on_fatal_signal(int sig) {
+    voxmesh::remove_partial_outputs();
+    std::signal(sig, SIG_DFL);
+    std::raise(sig);
+}
+
+// SIGINT during the runs: the first asks the loops to stop and print what finished; a second
+// ends the process at once.
+extern "C" void on_sigint(int sig) {
+    if (g_interrupted) on_fatal_signal(sig);
+    g_interrupted = 1;
+}
+
+// An inherited SIG_IGN is kept: nohup and a non-interactive shell's `cmd &` stay immune.
+void handle_signal(int sig, void (*handler)(int)) {
+    struct sigaction old {};
+    if (sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) return;
+    struct sigaction sa {};
+    sa.sa_handler = handler;
+    sigemptyset(&sa.sa_mask);
+    sigaction(sig, &sa, nullptr);
+}
 
 voxmesh::ScalarType parse_type(const std::string& s) {
     using voxmesh::ScalarType;
@@ -75,6 +98,7 @@ std::vector<Combo> parse_devices(const std::string& spec) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) handle_signal(sig, on_fatal_signal);
     CLI::App app{"voxmesh-bench: marching-cubes timings on CPU threads and OpenCL devices"};
     std::vector<std::string> fields, inputs, types{"f32"}, backends{"cpu"};
     std::vector<std::size_t> sizes{64, 128, 256};
@@ -152,7 +176,7 @@ int main(int argc, char** argv) {
             return 0;
         }
         if (sculpt) {
-            std::signal(SIGINT, on_sigint);
+            handle_signal(SIGINT, on_sigint);
             return run_sculpt(sizes_opt->count() ? sizes : std::vector<std::size_t>{256, 512},
                               threads_opt->count() && !threads.empty() ? threads[0] : 0, dabs, settings.pause_ms,
                               backends, json, settings.quiet);
@@ -239,11 +263,7 @@ int main(int argc, char** argv) {
         };
         const std::size_t total = recipes.size() * combos_for().size();
 
-        struct sigaction sa {};
-        sa.sa_handler = on_sigint;
-        sa.sa_flags = SA_RESETHAND;  // a second Ctrl-C ends the process at once
-        sigemptyset(&sa.sa_mask);
-        sigaction(SIGINT, &sa, nullptr);
+        handle_signal(SIGINT, on_sigint);
 
         std::vector<Result> results;
         std::size_t done = 0;
@@ -309,8 +329,15 @@ int main(int argc, char** argv) {
                 results.push_back(std::move(r));
             }
         }
-        if (g_interrupted)
-            std::fprintf(stderr, "\ninterrupted: printing the %zu finished result(s)\n", results.size());
+        if (g_interrupted) {
+            // The run in progress keeps the runs it finished: say so where they are fewer.
+            const std::size_t last_runs = results.empty() ? 0 : results.back().times.size();
+            if (last_runs > 0 && last_runs < std::size_t(std::max(1, settings.repeat)))
+                std::fprintf(stderr, "\ninterrupted: printing %zu result(s), the last from %zu of %d runs\n",
+                             results.size(), last_runs, settings.repeat);
+            else
+                std::fprintf(stderr, "\ninterrupted: printing the %zu finished result(s)\n", results.size());
+        }
 
         // The machine's own speed-up per thread count, beside the measured ones (when there are two
         // or more counts to compare). Counts above the cores get the ceiling of all cores: the CPU

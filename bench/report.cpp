@@ -1,6 +1,8 @@
 // Printing results: a readable table, CSV, JSON lines, and the paper's Table 1 beside ours.
 #include "bench.hpp"
 
+#include "core/atomic_file.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cerrno>
@@ -231,17 +233,9 @@ void check_save_path(const std::string& path) {
 }
 
 void save_json(const std::vector<Result>& results, const std::string& path) {
-    // Through a temporary renamed into place: a failed write leaves an earlier file as it was.
-    const std::string temp = save_temp(path);
-    std::FILE* f = std::fopen(temp.c_str(), "w");
-    if (!f) throw voxmesh::Error("cannot write '" + path + "': " + std::strerror(errno));
-    print_json(results, f);
-    const bool written = std::ferror(f) == 0;
-    if (std::fclose(f) != 0 || !written || std::rename(temp.c_str(), path.c_str()) != 0) {
-        const int error = errno;
-        std::remove(temp.c_str());
-        throw voxmesh::Error("cannot write '" + path + "': " + std::strerror(error));
-    }
+    // The library's atomic write: a failed write leaves an earlier file as it was, and a
+    // signal handler's remove_partial_outputs() finds the temporary.
+    voxmesh::detail::write_file_atomically(path, [&](std::FILE* f) { print_json(results, f); });
 }
 
 // ---- the paper's Table 1 ---------------------------------------------------------------------

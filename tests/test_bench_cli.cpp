@@ -11,10 +11,15 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
 #include <cstddef>
 #include <map>
 #include <sstream>
 #include <string>
+#include <sys/wait.h>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -145,6 +150,83 @@ TEST_CASE("bench: --save writes the JSON lines printed, and a bad path fails bef
     CHECK(bad.code != 0);
     CHECK_THAT(bad.err, Catch::Contains("no/such/dir/x.json"));
     CHECK(bad.out.find("median_s") == std::string::npos);
+}
+
+TEST_CASE("bench: Ctrl-C stops the runs and prints and saves what finished, with no temporary left", "[bench]") {
+    Scratch s;
+    const std::string out_dir = s.dir + "/out";
+    std::filesystem::create_directories(out_dir);
+    const std::string saved = out_dir + "/runs.json";
+    // The second volume's 1000 runs take seconds: the signal comes while they run.
+    const vmtest::StartedProgram run = vmtest::start_program(
+        VOXMESH_BENCH_PATH, {"--field", "sphere", "--type", "u8", "--sizes", "12,256", "--threads", "1", "--repeat", "1000",
+                             "--warmup", "0", "--no-floor", "--json", "--save", saved},
+        s.dir);
+    const bool second_started = vmtest::wait_for_stderr(run, "[2/2]", 120);
+    ::kill(run.pid, SIGINT);
+    const int status = vmtest::wait_program(run);
+    const std::string err = vmtest::read_text(run.err_path);
+    INFO(err);
+    REQUIRE(second_started);
+    REQUIRE(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 130);
+    // The first volume's row, and the second's from the runs it finished, if any.
+    const std::string out = vmtest::read_text(run.out_path);
+    const auto rows = lines_of(out);
+    REQUIRE(!rows.empty());
+    REQUIRE(rows.size() <= 2);
+    CHECK(json_value(rows[0], "size") == "12");
+    if (rows.size() == 1) {
+        CHECK_THAT(err, Catch::Contains("interrupted: printing the 1 finished result(s)"));
+    } else {
+        CHECK(json_value(rows[1], "size") == "256");
+        CHECK_THAT(err, Catch::Contains("interrupted: printing 2 result(s), the last from"));
+        CHECK_THAT(err, Catch::Contains("of 1000 runs"));
+    }
+    CHECK(iotest::read_file(saved) == out);
+    std::vector<std::string> left;
+    for (const auto& e : std::filesystem::directory_iterator(out_dir)) left.push_back(e.path().filename().string());
+    CHECK(left == std::vector<std::string>{"runs.json"});
+}
+
+TEST_CASE("bench: killed while writing a volume, leaves the whole file or none, never a temporary", "[bench]") {
+    Scratch s;
+    // 131 MB: generated in about 0.1 s and written in as long here.
+    const std::vector<std::string> args{"--field", "gyroid", "--sizes", "320", "--write-volume"};
+    auto write_into = [&](const std::string& dir) {
+        std::filesystem::create_directories(dir);
+        std::vector<std::string> a = args;
+        a.push_back(dir + "/g.nrrd");
+        return vmtest::start_program(VOXMESH_BENCH_PATH, a, s.dir);
+    };
+    const vmtest::StartedProgram whole = write_into(s.dir + "/whole");
+    const int whole_status = vmtest::wait_program(whole);
+    REQUIRE(WIFEXITED(whole_status));
+    REQUIRE(WEXITSTATUS(whole_status) == 0);
+    const auto whole_size = std::filesystem::file_size(s.dir + "/whole/g.nrrd");
+
+    std::size_t killed = 0;
+    for (const int delay_ms : {2, 10, 25, 50, 75, 100, 130, 170, 220}) {
+        const std::string dir = s.dir + "/run-" + std::to_string(delay_ms);
+        const vmtest::StartedProgram run = write_into(dir);
+        std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+        ::kill(run.pid, SIGTERM);
+        const int status = vmtest::wait_program(run);
+        const bool finished = WIFEXITED(status) && WEXITSTATUS(status) == 0;
+        INFO("killed after " << delay_ms << " ms: wait status " << status);
+        CHECK((finished || (WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM)));
+        killed += !finished;
+        std::vector<std::string> left;
+        for (const auto& e : std::filesystem::directory_iterator(dir)) left.push_back(e.path().filename().string());
+        if (finished) {
+            CHECK(left == std::vector<std::string>{"g.nrrd"});
+            CHECK(std::filesystem::file_size(dir + "/g.nrrd") == whole_size);
+        } else {
+            CHECK(left.empty());
+        }
+        std::filesystem::remove_all(dir);
+    }
+    CHECK(killed > 0);  // 2 ms is too early for any machine to have written 131 MB
 }
 
 TEST_CASE("bench: bad arguments fail with a message", "[bench][errors]") {

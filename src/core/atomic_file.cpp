@@ -93,7 +93,10 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     }
     try {
         write(file);
-        if (std::fflush(file) != 0 || ::fsync(fileno(file)) != 0) throw Error(std::string("write failed: ") + std::strerror(errno));
+        // ferror: a failed write inside fprintf is remembered there, and a later fflush of an
+        // empty buffer would not report it.
+        if (std::fflush(file) != 0 || std::ferror(file) || ::fsync(fileno(file)) != 0)
+            throw Error(std::string("write failed: ") + std::strerror(errno));
     } catch (const std::exception& e) {
         std::fclose(file);
         ::unlink(temp.c_str());

@@ -3,6 +3,8 @@
 #pragma once
 
 #include <string>
+#include <sys/types.h>
+#include <vector>
 
 namespace vmtest {
 
@@ -18,5 +20,25 @@ struct ProgramResult {
 // NAME=value assignments for the command's environment (the shell's prefix form).
 ProgramResult run_program(const std::string& program, const std::string& args, const std::string& scratch_dir,
                           const std::string& env = "");
+
+// A program started in the background, to be signalled while it runs. It gets the default
+// action for SIGINT, SIGTERM and SIGHUP whatever this process has (a shell's `cmd &` would
+// start it with SIGINT ignored); stdout and stderr go to `out_path` and `err_path`.
+struct StartedProgram {
+    pid_t pid = -1;
+    std::string out_path, err_path;
+};
+StartedProgram start_program(const std::string& program, const std::vector<std::string>& args,
+                             const std::string& scratch_dir);
+
+// Polls the program's stderr until it contains `text` (true) or the program exits or
+// `timeout_s` passes (false).
+bool wait_for_stderr(const StartedProgram& program, const std::string& text, double timeout_s);
+
+// Waits for the program to end; returns the wait status (WIFEXITED, WTERMSIG, ...).
+int wait_program(const StartedProgram& program);
+
+// The whole contents of a file ("" when it cannot be read).
+std::string read_text(const std::string& path);
 
 }  // namespace vmtest
