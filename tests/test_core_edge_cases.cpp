@@ -193,6 +193,26 @@ TEST_CASE("NaN samples are an Error that says NaN", "[core]") {
     }
 }
 
+TEST_CASE("NaN samples give the same Error, naming the first z-plane with one, on any thread count", "[core]") {
+    // NaN in several planes, some in slabs after the first's: a thread that reaches a later
+    // NaN first must not decide the message. (Found by fuzz_extract: 3 planes, NaN in 1 and 2.)
+    const auto check = [](const Dims& dims, std::vector<std::size_t> nan_planes, int repeats) {
+        std::vector<double> d(dims[0] * dims[1] * dims[2], -1.0);
+        for (std::size_t i = 0; i < d.size(); i += 3) d[i] = 1.0;  // crossings in every plane
+        const std::size_t plane = dims[0] * dims[1];
+        for (const std::size_t z : nan_planes) d[z * plane + plane / 2] = std::numeric_limits<double>::quiet_NaN();
+        const std::string first = "first seen in z-plane " + std::to_string(nan_planes.front()) + ")";
+        for (unsigned threads : {1u, 2u, 3u, 5u, 8u, 16u})
+            for (int repeat = 0; repeat < repeats; ++repeat) {
+                INFO(dims[2] << " planes, " << threads << " threads");
+                CHECK_THROWS_WITH(voxmesh::extract(vmtest::view_of(d, dims), cpu_options(0.0, threads)), Contains(first));
+            }
+    };
+    check({4, 3, 3}, {1, 2}, 200);
+    check({5, 4, 9}, {2, 3, 6, 8}, 200);
+    check({64, 64, 96}, {29, 37, 50, 90}, 20);
+}
+
 TEST_CASE("iso NaN is an Error", "[core]") {
     const std::vector<float> f(27, 1.0f);
     const std::vector<std::uint8_t> u(27, 1);

@@ -46,13 +46,30 @@ unsigned resolve_threads(unsigned requested);
 // and so the output, is the caller's and does not depend on the cap.
 // f(slab, worker): worker < the number of threads used, so per-thread scratch can be kept
 // from one slab to the next.
+// Errors: the exception of the lowest slab that threw is rethrown, not the first in time, so
+// a volume gives the same Error (e.g. the first z-plane holding NaN) on any thread count.
+// Slabs after a failed one are skipped; those before it were taken already, in order.
 template <class F>
 void run_slabs(unsigned n, unsigned max_threads, F&& f) {
     const unsigned threads = std::min({n, std::max(max_threads, 1u), resolve_threads(0)});
     std::atomic<unsigned> next{0};
+    std::atomic<unsigned> stop{n};  // the lowest failed slab so far
+    std::exception_ptr failure;
+    std::mutex failure_mutex;
     run_workers(threads, [&](unsigned worker) {
-        for (unsigned slab = next++; slab < n; slab = next++) f(slab, worker);
+        for (unsigned slab = next++; slab < stop.load(std::memory_order_relaxed); slab = next++) {
+            try {
+                f(slab, worker);
+            } catch (...) {
+                std::lock_guard<std::mutex> lock(failure_mutex);
+                if (slab < stop.load(std::memory_order_relaxed)) {
+                    stop.store(slab, std::memory_order_relaxed);
+                    failure = std::current_exception();
+                }
+            }
+        }
     });
+    if (failure) std::rethrow_exception(failure);
 }
 
 }  // namespace voxmesh::detail
