@@ -684,6 +684,38 @@ TEST_CASE("Two OpenCL devices share the chunks", "[opencl]") {
     }
 }
 
+TEST_CASE("NaN samples name the volume's first plane with one on every engine, whatever chunk failed first", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{40, 44, 90}};
+    auto f = sphere(g);
+    const std::size_t plane = g.dims[0] * g.dims[1];
+    for (const std::size_t z : {std::size_t{1}, std::size_t{3}, std::size_t{40}, std::size_t{88}})
+        f[z * plane + 100] = std::numeric_limits<float>::quiet_NaN();
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const std::string first = "first seen in z-plane 1)";
+    Options o;
+    o.chunk_planes = 2;
+    // Hybrid with the CPU device named: PoCL meshes chunks from the bottom and the CPU worker
+    // from the top, where it meets plane 88 first.
+    for (const Backend b : {Backend::Cpu, Backend::OpenCL, Backend::Hybrid})
+        for (int repeat = 0; repeat < 5; ++repeat) {
+            INFO(backend_name(b));
+            o.backend = b;
+            o.devices = {0};
+            CHECK_THROWS_WITH(extract(v, o), Catch::Contains(first));
+        }
+    // Two devices, each dealt a first chunk (planes 0-2 and 2-4), fail at once.
+    const Pretend split(detail::opencl_split_devices);
+    const Pretend deal(detail::opencl_deal_first_chunks);
+    o.devices.clear();
+    for (const Backend b : {Backend::OpenCL, Backend::Hybrid})
+        for (int repeat = 0; repeat < 10; ++repeat) {
+            INFO(backend_name(b) << " on " << list_devices().size() << " devices");
+            o.backend = b;
+            CHECK_THROWS_WITH(extract(v, o), Catch::Contains(first));
+        }
+}
+
 TEST_CASE("OpenCL scan kernel matches std::exclusive_scan", "[opencl]") {
     if (!have_device()) return;
     std::mt19937 rng(7);

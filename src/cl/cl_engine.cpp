@@ -745,9 +745,7 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
         piece.all_vertices = got[kVertexTotal];
         piece.triangles = got[kTriangleTotal];
         const auto nan_plane = static_cast<cl_int>(got[kNanPlane]);
-        if (nan_plane != INT_MAX)
-            throw Error("volume has NaN or infinite samples (first seen in z-plane " + std::to_string(nan_plane) +
-                        "); replace them with finite values before meshing");
+        if (nan_plane != INT_MAX) throw_non_finite(static_cast<std::size_t>(nan_plane));
         if (piece.all_vertices > std::numeric_limits<std::uint32_t>::max() ||
             piece.triangles > std::numeric_limits<std::uint32_t>::max())
             throw TooBig{};

@@ -28,25 +28,26 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-// Infinite samples are refused with NaN: t = (iso - v0) / (v1 - v0) is undefined for them.
-[[noreturn]] void throw_nan(std::size_t z) {
-    throw Error("volume has NaN or infinite samples (first seen in z-plane " + std::to_string(z) +
-                "); replace them with finite values before meshing");
-}
-
-// The classify pass finds non-finite samples; when iso is beyond the type's range it does not
-// run, so scan for them here.
+// The first z-plane in `range` with a NaN or infinite sample; range.end when there is none.
 template <class T>
-void check_finite(const VolumeView& volume, ZRange range) {
+std::size_t first_non_finite(const VolumeView& volume, ZRange range) {
     if constexpr (std::is_floating_point_v<T>) {
         const std::size_t plane = volume.dims[0] * volume.dims[1];
         const T* data = static_cast<const T*>(volume.data);
         for (std::size_t z = range.begin; z < range.end; ++z) {
             unsigned bad = 0;
             for (std::size_t i = 0; i < plane; ++i) bad |= !(std::fabs(data[z * plane + i]) <= std::numeric_limits<T>::max());
-            if (bad) throw_nan(z);
+            if (bad) return z;
         }
     }
+    return range.end;
+}
+
+// The classify pass finds non-finite samples; when iso is beyond the type's range it does not
+// run, so scan for them here.
+template <class T>
+void check_finite(const VolumeView& volume, ZRange range) {
+    if (const std::size_t z = first_non_finite<T>(volume, range); z < range.end) throw_non_finite(z);
 }
 
 // A plane of packed inside bits: ny rows of words_per_row(nx) words. A row is where its bits
@@ -216,7 +217,7 @@ template <class T>
     BitPlane here, up;
     bits.resize(here);
     bits.resize(up);
-    if (bits.fill(here, a, nullptr, nullptr)) throw_nan(a);
+    if (bits.fill(here, a, nullptr, nullptr)) throw_non_finite(a);
     std::vector<Word> busy(ny);  // per row of plane k, its words with a crossing
     for (std::size_t k = a; k < b; ++k) {
         const bool has_up = k + 1 < nz;
@@ -235,7 +236,7 @@ template <class T>
             busy[j] = classify_row_body(here.row(j), here.row(j + 1 < ny ? j + 1 : j), next_z.row(j), words, nx, info[j]);
             if (count_cells && j > 0) count_cell_row_body(here, up, info, busy.data(), j - 1, words, nx);
         }
-        if (nan) throw_nan(k + 1);
+        if (nan) throw_non_finite(k + 1);
         if (plan.keeps_bits()) {
             Word* store = plan.kept_bits(k - plan.range.begin);
             std::uint32_t at = 0;
@@ -597,6 +598,19 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
         for (std::size_t i = 0; i < jobs.size(); ++i)
             if (owner[i] == w) jobs[i].fill();
     });
+}
+
+// Infinite samples are refused with NaN: t = (iso - v0) / (v1 - v0) is undefined for them.
+NonFiniteSamples::NonFiniteSamples(std::size_t plane)
+    : Error("volume has NaN or infinite samples (first seen in z-plane " + std::to_string(plane) +
+            "); replace them with finite values before meshing"),
+      plane(plane) {}
+
+void throw_non_finite(std::size_t plane) { throw NonFiniteSamples(plane); }
+
+std::size_t first_non_finite_plane(const VolumeView& volume) {
+    return dispatch_scalar(volume.type,
+                           [&](auto tag) { return first_non_finite<decltype(tag)>(volume, ZRange{0, volume.dims[2]}); });
 }
 
 void throw_too_many_vertices() {

@@ -104,4 +104,15 @@ inline void check_vertex_count(std::uint64_t vertices) {
     if (vertices > std::numeric_limits<std::uint32_t>::max()) throw_too_many_vertices();
 }
 
+// NaN or infinite samples, found by an engine in z-plane `plane`. Engines throw it from
+// whichever slab, chunk or device saw one; extract() names the volume's first such plane
+// instead (first_non_finite_plane), so the message does not depend on the schedule.
+struct NonFiniteSamples : Error {
+    explicit NonFiniteSamples(std::size_t plane);
+    std::size_t plane;
+};
+[[noreturn]] void throw_non_finite(std::size_t plane);
+// The first z-plane holding a NaN or infinite sample; dims[2] when there is none.
+std::size_t first_non_finite_plane(const VolumeView& volume);
+
 }  // namespace voxmesh::detail

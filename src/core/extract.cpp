@@ -83,6 +83,12 @@ Mesh run_engine(const VolumeView& volume, const Options& options, Stats& stats, 
     stats = Stats{};
     try {
         return pick_engine(volume, options, stats, std::move(storage));
+    } catch (const detail::NonFiniteSamples& e) {
+        // The slab, chunk or device that saw one first depends on the schedule; the volume's
+        // first such plane does not.
+        const std::size_t first = detail::first_non_finite_plane(volume);
+        if (first < e.plane) detail::throw_non_finite(first);
+        throw;
     } catch (const std::bad_alloc&) {
         throw Error("out of memory meshing a " + std::to_string(volume.dims[0]) + "x" + std::to_string(volume.dims[1]) +
                     "x" + std::to_string(volume.dims[2]) + " volume (the mesh and the engine's working memory)");
