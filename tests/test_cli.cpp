@@ -351,9 +351,12 @@ TEST_CASE("cli: killed at any moment, mesh leaves the whole output or none, neve
         killed += code != 0;
         std::vector<std::string> left;
         for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
-        if (code == 0) CHECK(left == std::vector<std::string>{"out.obj"});
-        else CHECK(left.empty());
-        if (code == 0) CHECK(fs::file_size(out) == whole_size);
+        // Killed after the rename, the whole file is there too.
+        INFO("left: " << (left.empty() ? std::string("nothing") : left[0]));
+        if (code == 0 || !left.empty()) {
+            CHECK(left == std::vector<std::string>{"out.obj"});
+            CHECK(fs::file_size(out) == whole_size);
+        }
     }
     CHECK(killed > 0);  // 20 ms is too early for any machine to have finished
 }

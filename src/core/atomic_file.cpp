@@ -28,35 +28,48 @@ struct InFlight {
 InFlight g_in_flight[16];
 static_assert(std::atomic<bool>::is_always_lock_free);
 
+// Lists one temporary's name in a free slot for as long as it lives.
 class Listed {
 public:
-    explicit Listed(const std::string& temp) {
-        if (temp.size() >= sizeof(InFlight::path)) return;
-        for (InFlight& slot : g_in_flight) {
-            bool expected = false;
-            if (!slot.taken.compare_exchange_strong(expected, true)) continue;
-            std::memcpy(slot.path, temp.c_str(), temp.size() + 1);
-            slot.ready.store(true, std::memory_order_release);
-            slot_ = &slot;
-            return;
-        }
-    }
-    ~Listed() {
-        if (!slot_) return;
-        slot_->ready.store(false, std::memory_order_release);
-        slot_->taken.store(false, std::memory_order_release);
-    }
+    Listed() = default;
+    ~Listed() { clear(); }
     Listed(const Listed&) = delete;
     Listed& operator=(const Listed&) = delete;
 
+    // Lists `temp` (replacing a name listed before): called before the file is created, so
+    // that no signal between its creation and its listing can leave it behind.
+    void list(const std::string& temp) {
+        if (temp.size() >= sizeof(InFlight::path)) return clear();
+        if (!slot_) {
+            for (InFlight& slot : g_in_flight) {
+                bool expected = false;
+                if (slot.taken.compare_exchange_strong(expected, true)) {
+                    slot_ = &slot;
+                    break;
+                }
+            }
+            if (!slot_) return;
+        }
+        slot_->ready.store(false, std::memory_order_release);
+        std::memcpy(slot_->path, temp.c_str(), temp.size() + 1);
+        slot_->ready.store(true, std::memory_order_release);
+    }
+
 private:
+    void clear() {
+        if (!slot_) return;
+        slot_->ready.store(false, std::memory_order_release);
+        slot_->taken.store(false, std::memory_order_release);
+        slot_ = nullptr;
+    }
     InFlight* slot_ = nullptr;
 };
 
 // A new temporary next to the target, created as any new file is (0666 less the umask):
 // mkstemp makes it 0600, and a fixed chmod afterwards would ignore the umask. pid and a
-// counter make the name unique; one left by a crashed process of the same pid is skipped.
-int create_temp(const std::filesystem::path& dir, const std::string& filename, std::string& temp) {
+// counter make the name unique; one left by a crashed process of the same pid is skipped
+// (a signal while its name is listed would remove it: it is a leftover temporary too).
+int create_temp(const std::filesystem::path& dir, const std::string& filename, std::string& temp, Listed& listed) {
     static std::atomic<unsigned> counter{0};
     for (int attempt = 0; attempt < 1000; ++attempt) {
         // Built with append: gcc 12 gives a false -Wrestrict on operator+ chains here.
@@ -64,6 +77,7 @@ int create_temp(const std::filesystem::path& dir, const std::string& filename, s
         name.append(filename).append(".tmp").append(std::to_string(::getpid())).append("-");
         name.append(std::to_string(counter++));
         temp = (dir / name).string();
+        listed.list(temp);
         const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (fd >= 0 || errno != EEXIST) return fd;
     }
@@ -81,10 +95,10 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     if (!fs::is_directory(dir, ec)) throw Error("cannot write '" + path + "': directory '" + dir.string() + "' does not exist");
 
     std::string temp;
-    const int fd = create_temp(dir, target.filename().string(), temp);
-    if (fd < 0) throw Error("cannot write '" + path + "': " + std::strerror(errno));
     // Listed while it exists; a signal after the rename unlinks a name that is gone.
-    const Listed listed(temp);
+    Listed listed;
+    const int fd = create_temp(dir, target.filename().string(), temp, listed);
+    if (fd < 0) throw Error("cannot write '" + path + "': " + std::strerror(errno));
     std::FILE* file = fdopen(fd, "wb");
     if (!file) {
         ::close(fd);
