@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fcntl.h>
 #include <map>
 #include <sstream>
 #include <string>
@@ -218,18 +219,28 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
     }
 }
 
-namespace {
-std::string save_temp(const std::string& path) { return path + ".tmp" + std::to_string(::getpid()); }
-}  // namespace
-
 void check_save_path(const std::string& path) {
+    // What save_json's atomic write needs: a writable directory to put its temporary in.
+    // Checked without creating anything, so an interrupt now cannot leave a file behind.
+    namespace fs = std::filesystem;
     std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) throw voxmesh::Error("cannot write '" + path + "': it is a directory");
-    const std::string temp = save_temp(path);
-    std::FILE* f = std::fopen(temp.c_str(), "w");
-    if (!f) throw voxmesh::Error("cannot write '" + path + "': " + std::strerror(errno));
-    std::fclose(f);
-    std::remove(temp.c_str());
+    if (fs::is_directory(path, ec)) throw voxmesh::Error("cannot write '" + path + "': it is a directory");
+    const fs::path target(path);
+    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
+    if (!fs::is_directory(dir, ec))
+        throw voxmesh::Error("cannot write '" + path + "': directory '" + dir.string() + "' does not exist");
+    // An unnamed file in the directory (O_TMPFILE): nothing to clean up, whatever happens.
+    // Filesystems without it get a named probe, removed at once.
+    int fd = ::open(dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0600);
+    if (fd < 0 && (errno == EOPNOTSUPP || errno == EISDIR || errno == EINVAL)) {
+        std::string name = ".";  // built with append: gcc 12 gives a false -Wrestrict on operator+ here
+        name.append(target.filename().string()).append(".probe").append(std::to_string(::getpid()));
+        const std::string probe = (dir / name).string();
+        fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0600);
+        if (fd >= 0) ::unlink(probe.c_str());
+    }
+    if (fd < 0) throw voxmesh::Error("cannot write '" + path + "': " + std::strerror(errno));
+    ::close(fd);
 }
 
 void save_json(const std::vector<Result>& results, const std::string& path) {
