@@ -171,6 +171,26 @@ TEST_CASE("cli: voxelize then mesh round trip on a real STL", "[cli]") {
     REQUIRE(b.code == 0);
     CHECK(b.out.find("closed (euler 2)") != std::string::npos);
     CHECK(run(s, "info " + quote(raw) + " --dims 16 16 16 --type f32").code == 0);
+
+    // The same samples piped in ("-"): the same mesh, byte for byte.
+    const std::string piped = s.path("piped.stl");
+    const std::string cat = "cat " + quote(raw) + " | " + quote(VOXMESH_CLI_PATH) + " mesh - -o " + quote(piped) +
+                            " --dims 16 16 16 --type f32 --iso 0 --spacing 0.5 0.5 0.5 > /dev/null 2>&1";
+    const int status = std::system(cat.c_str());
+    REQUIRE(WIFEXITED(status));
+    REQUIRE(WEXITSTATUS(status) == 0);
+    CHECK(slurp(piped) == slurp(s.path("ball.stl")));
+    // A pipe that ends early, or goes on too long, is refused; nothing is written.
+    for (const std::string& cut : {std::string("head -c 16000 "), std::string("cat ") + quote(raw) + " "}) {
+        const std::string bad = cut + quote(raw) + " | " + quote(VOXMESH_CLI_PATH) + " mesh - -o " +
+                                quote(s.path("cut.stl")) + " --dims 16 16 16 --type f32 > /dev/null 2> " +
+                                quote(s.path("cut.err"));
+        const int code = std::system(bad.c_str());
+        INFO(bad << ": " << slurp(s.path("cut.err")));
+        CHECK((WIFEXITED(code) && WEXITSTATUS(code) == 2));
+        CHECK_THAT(slurp(s.path("cut.err")), Catch::Contains("standard input"));
+        CHECK_FALSE(fs::exists(s.path("cut.stl")));
+    }
 }
 
 TEST_CASE("cli: info reports an axis stored in the negative direction", "[cli]") {

@@ -43,6 +43,7 @@
 
 #include <array>
 #include <cstddef>
+#include <iosfwd>
 #include <map>
 #include <string>
 
@@ -59,6 +60,10 @@ struct RawLayout {
     std::array<double, 3> origin{0, 0, 0};
 };
 Volume read_raw(const std::string& path, const RawLayout& layout);
+// The same samples from a stream (a pipe, stdin): `offset` bytes are skipped, then exactly
+// nx*ny*nz*scalar_size bytes are read into memory (checked against the memory available
+// first), and the stream must end there. Errors name `name`.
+Volume read_raw(std::istream& in, const std::string& name, const RawLayout& layout);
 
 // What a volume file holds, read from its header only.
 struct VolumeInfo {

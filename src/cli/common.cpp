@@ -103,7 +103,7 @@ void check_output_path(const std::string& path, const std::vector<std::string>& 
 
 RawLayout raw_layout(const std::string& path, const RawFlags& raw) {
     if (raw.dims.size() != 3 || raw.type.empty())
-        throw BadInput("'" + path + "': a headerless .raw volume needs --dims NX NY NZ and --type");
+        throw BadInput("'" + path + "': a headerless raw volume needs --dims NX NY NZ and --type");
     RawLayout layout;
     for (int a = 0; a < 3; ++a) {
         if (raw.dims[a] == 0) throw BadInput("'" + path + "': --dims must be positive");
@@ -118,12 +118,17 @@ RawLayout raw_layout(const std::string& path, const RawFlags& raw) {
 }
 
 Volume load_volume(const std::string& path, const RawFlags& raw) {
-    check_input_file(path);
-    const bool is_raw = is_raw_path(path);
+    const bool from_stdin = path == "-";  // raw samples piped in: the flags say what they are
+    if (!from_stdin) check_input_file(path);
+    const bool is_raw = from_stdin || is_raw_path(path);
     if (!is_raw && raw.any_given())
         throw BadInput("'" + path + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
     VolumeInfo info;
-    Volume v = about_file(path, [&] { return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path, info); });
+    const std::string name = from_stdin ? "standard input" : path;
+    Volume v = about_file(name, [&] {
+        if (from_stdin) return read_raw(std::cin, name, raw_layout(name, raw));
+        return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path, info);
+    });
     // A Volume has no orientation: say so when the file's direction matrix is thrown away,
     // since the mesh then lies in index-aligned axes, not where other tools put it.
     if (info.rotation_dropped)

@@ -160,6 +160,14 @@ Volume read_raw(const std::string& path, const RawLayout& layout) {
     return v;
 }
 
+Volume read_raw(std::istream& in, const std::string& name, const RawLayout& layout) {
+    const io::VolumeHeader h = io::raw_header(name, layout);
+    Volume v = io::load_stream_samples(in, name, h.layout);
+    v.spacing = h.info.spacing;
+    v.origin = h.info.origin;
+    return v;
+}
+
 VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout) {
     io::VolumeHeader h = io::raw_header(path, layout);
     h.info.file_bytes = io::check_samples(path, h.layout);

@@ -7,6 +7,8 @@
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <istream>
+#include <vector>
 
 namespace voxmesh::io {
 
@@ -157,6 +159,44 @@ Volume load_samples(const std::string& header_path, const SampleLayout& layout) 
                                   dims_text(layout.dims) + " " + scalar_name(layout.type) +
                                   " samples need (dims do not match the data)" + ctx);
     }
+    if (!host_order(layout)) swap_bytes(v.data, bytes / value_size, value_size);
+    reverse_axes(v, layout.flipped);
+    return v;
+}
+
+Volume load_stream_samples(std::istream& in, const std::string& name, const SampleLayout& layout) {
+    const std::size_t bytes = sample_bytes(name, layout.dims, layout.type);
+    check_memory(name, bytes);
+    // Reads up to n bytes; fewer only where the stream ends.
+    const auto read_some = [&](char* out, std::size_t n) {
+        std::size_t done = 0;
+        while (done < n && in) {
+            in.read(out + done, static_cast<std::streamsize>(std::min<std::size_t>(n - done, std::size_t{1} << 30)));
+            done += static_cast<std::size_t>(in.gcount());
+        }
+        if (in.bad()) fail(name, "read failed");
+        return done;
+    };
+    std::vector<char> skipped(std::min<std::size_t>(layout.offset, std::size_t{1} << 16));
+    for (std::size_t left = layout.offset; left > 0;) {
+        const std::size_t want = std::min(left, skipped.size());
+        const std::size_t got = read_some(skipped.data(), want);
+        if (got < want)
+            fail(name, "the stream ends after " + std::to_string(layout.offset - left + got) + " bytes, inside the " +
+                           std::to_string(layout.offset) + "-byte offset");
+        left -= got;
+    }
+    Volume v = Volume::allocate(layout.type, layout.dims);
+    const std::size_t got = read_some(static_cast<char*>(v.data), bytes);
+    if (got < bytes)
+        fail(name, "the stream holds " + std::to_string(got) + " bytes of samples but " + dims_text(layout.dims) + " " +
+                       scalar_name(layout.type) + " needs " + std::to_string(bytes) +
+                       " (truncated input, or dims and type that do not match it)");
+    if (in.peek() != std::char_traits<char>::eof())
+        fail(name, "the stream goes on past the " + std::to_string(bytes) + " bytes that " + dims_text(layout.dims) +
+                       " " + scalar_name(layout.type) + " samples need (dims, type or offset do not match it)");
+    if (in.bad()) fail(name, "read failed");
+    const std::size_t value_size = scalar_size(layout.type);
     if (!host_order(layout)) swap_bytes(v.data, bytes / value_size, value_size);
     reverse_axes(v, layout.flipped);
     return v;

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstddef>
+#include <iosfwd>
 #include <string>
 
 namespace voxmesh::io {
@@ -34,6 +35,11 @@ std::size_t check_samples(const std::string& header_path, const SampleLayout& la
 // The samples, mapped when possible (see io.hpp), otherwise copied / inflated / swapped;
 // then reversed along layout.flipped.
 Volume load_samples(const std::string& header_path, const SampleLayout& layout);
+
+// The samples from a stream (a pipe, stdin), never mapped: layout.offset bytes skipped, then
+// exactly the samples, and nothing after them; swapped and reversed as load_samples does.
+// Errors name `name`.
+Volume load_stream_samples(std::istream& in, const std::string& name, const SampleLayout& layout);
 
 // Reverses the samples' order along each axis with flipped[a], in place.
 void reverse_axes(Volume& volume, std::array<bool, 3> flipped);
