@@ -395,7 +395,7 @@ TEST_CASE("sculpt: construction errors", "[sculpt]") {
     f[100] = NAN;
     v.data = f.data();
     v.type = ScalarType::F32;
-    REQUIRE_THROWS_WITH(Sculpt(v), Catch::Contains("NaN"));
+    REQUIRE_THROWS_WITH(Sculpt(v), Catch::Contains("NaN") && Catch::Contains("z-plane 1)"));  // sample 100: z 1
     f[100] = INFINITY;
     REQUIRE_THROWS_WITH(Sculpt(v), Catch::Contains("infinite"));
     f[100] = 0;

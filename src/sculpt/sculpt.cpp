@@ -618,14 +618,12 @@ namespace {
 std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarType type, std::array<double, 3> spacing,
                                         std::array<double, 3> origin, const SculptOptions& options);
 
-// extract() refuses NaN and infinite samples; so does the sculpt, which must mesh alike.
+// extract() refuses NaN and infinite samples; so does the sculpt, which must mesh alike (with
+// the engine's own test, naming the first plane holding one).
 void check_samples_finite(const Volume& volume) {
-    if (volume.type != ScalarType::F32) return;
-    const float* p = static_cast<const float*>(volume.data);
-    const std::size_t count = volume.sample_count();
-    bool bad = false;
-    for (std::size_t i = 0; i < count; ++i) bad |= !std::isfinite(p[i]);
-    if (bad) throw Error("sculpt: the volume has NaN or infinite samples; replace them first");
+    if (const std::size_t z = detail::first_non_finite_plane(volume.view()); z < volume.dims[2])
+        throw Error("sculpt: the volume has NaN or infinite samples (first in z-plane " + std::to_string(z) +
+                    "); replace them first");
 }
 
 }  // namespace
