@@ -76,6 +76,23 @@ TEST_CASE("invalid views are Errors", "[core]") {
         v.dims = {(std::size_t{1} << 29) + 1, 2, 2};  // refused before a sample is read
         CHECK_THROWS_WITH(voxmesh::extract(v, cpu_options(0.5)), Catch::Contains("536870913 samples"));
     }
+    SECTION("samples at an address not aligned to their size") {
+        // Read as their type, they would be misaligned loads (undefined behaviour).
+        std::vector<double> aligned(64, 0.0);
+        auto* bytes = reinterpret_cast<unsigned char*>(aligned.data());
+        for (const voxmesh::ScalarType type : {voxmesh::ScalarType::I16, voxmesh::ScalarType::U32,
+                                               voxmesh::ScalarType::F32, voxmesh::ScalarType::F64}) {
+            INFO(voxmesh::scalar_name(type));
+            const voxmesh::VolumeView odd{bytes + 1, type, {3, 3, 3}};
+            CHECK_THROWS_WITH(voxmesh::extract(odd, cpu_options(0.5)),
+                              Contains("not a multiple of " + std::to_string(voxmesh::scalar_size(type))));
+            voxmesh::Options any = cpu_options(0.5);
+            any.backend = voxmesh::Backend::Auto;
+            CHECK_THROWS_WITH(voxmesh::extract(odd, any), Contains("aligned memory"));
+        }
+        // Bytes have no alignment to keep.
+        CHECK_NOTHROW(voxmesh::extract(voxmesh::VolumeView{bytes + 1, voxmesh::ScalarType::U8, {3, 3, 3}}, cpu_options(0.5)));
+    }
     SECTION("Error is a std::runtime_error") {
         v.data = nullptr;
         CHECK_THROWS_AS(voxmesh::extract(v, cpu_options(0.5)), std::runtime_error);

@@ -30,7 +30,8 @@ const char* scalar_name(ScalarType type);  // "u8", "i16", "f32", ...
 enum class Backend { Auto, Cpu, OpenCL, Hybrid };
 const char* backend_name(Backend backend);  // "auto", "cpu", "opencl", "hybrid"
 
-// A non-owning view of x-fastest samples: index = x + nx * (y + ny * z).
+// A non-owning view of x-fastest samples: index = x + nx * (y + ny * z). `data` must be
+// aligned to the sample size (an Error otherwise), as any array of the sample type is.
 struct VolumeView {
     const void* data = nullptr;
     ScalarType type = ScalarType::F32;

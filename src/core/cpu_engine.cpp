@@ -15,6 +15,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <functional>
 #include <memory>
@@ -629,6 +630,11 @@ void validate_volume(const VolumeView& volume) {
         throw Error("volume rows of " + std::to_string(volume.dims[0]) + " samples are longer than the " +
                     std::to_string(kMaxRowSamples) + " supported (mesh it in parts along x)");
     if (!volume.data) throw Error("volume has no data");
+    // The engines read samples as their type: a misaligned address is undefined behaviour.
+    if (const std::size_t size = scalar_size(volume.type); reinterpret_cast<std::uintptr_t>(volume.data) % size != 0)
+        throw Error(std::string("volume data at an address that is not a multiple of ") + std::to_string(size) +
+                    " bytes, the size of a " + scalar_name(volume.type) +
+                    " sample; copy the samples to aligned memory (a std::vector of the sample type is)");
     for (int d = 0; d < 3; ++d)
         if (!(volume.spacing[d] > 0) || !std::isfinite(volume.spacing[d]) || !std::isfinite(volume.origin[d]))
             throw Error("volume spacing must be positive and finite, origin finite");
