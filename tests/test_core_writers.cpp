@@ -367,6 +367,21 @@ TEST_CASE("write_mesh: a malformed mesh throws and writes nothing", "[core]") {
     CHECK(dir.entries().empty());
 }
 
+TEST_CASE("analyze_topology refuses a malformed mesh as write_mesh does", "[core]") {
+    const voxmesh::Mesh good = test_mesh(true);
+    CHECK_NOTHROW(voxmesh::analyze_topology(good));
+    voxmesh::Mesh index_past = good;
+    index_past.indices[5] = static_cast<std::uint32_t>(good.vertex_count());
+    CHECK_THROWS_WITH(voxmesh::analyze_topology(index_past), Catch::Contains("analyze_topology") &&
+                                                                Catch::Contains("out of range"));
+    voxmesh::Mesh ragged = good;
+    ragged.indices.pop_back();
+    CHECK_THROWS_WITH(voxmesh::analyze_topology(ragged), Catch::Contains("multiples of 3"));
+    voxmesh::Mesh short_normals = good;
+    short_normals.normals.resize(3);
+    CHECK_THROWS_WITH(voxmesh::analyze_topology(short_normals), Catch::Contains("normals"));
+}
+
 TEST_CASE("write_mesh: a missing directory throws and leaves no file", "[core]") {
     vmtest::TempDir dir;
     const voxmesh::Mesh mesh = test_mesh(true);

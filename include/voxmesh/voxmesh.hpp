@@ -156,6 +156,8 @@ struct MeshTopology {
     long long euler = 0;                 // V - E + F over referenced vertices
     bool closed() const { return boundary_edges == 0 && nonmanifold_edges == 0; }
 };
+// Throws Error, as write_mesh does, for arrays that are not whole triples, normals for a
+// different number of vertices, or an index past the last vertex.
 MeshTopology analyze_topology(const Mesh& mesh);
 
 // OpenCL devices as plain structs (empty without OpenCL or without a platform).

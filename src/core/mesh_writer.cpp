@@ -1,4 +1,5 @@
 #include "atomic_file.hpp"
+#include "mesh_arrays.hpp"
 
 #include <voxmesh/voxmesh.hpp>
 
@@ -23,15 +24,6 @@ std::string lower_extension(const std::string& path) {
     std::string ext = std::filesystem::path(path).extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     return ext;
-}
-
-void check_mesh(const Mesh& mesh) {
-    if (mesh.positions.size() % 3 || mesh.indices.size() % 3) throw Error("mesh arrays are not multiples of 3");
-    if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
-        throw Error("mesh has normals for a different number of vertices than positions");
-    const std::size_t n = mesh.vertex_count();
-    for (std::uint32_t i : mesh.indices)
-        if (i >= n) throw Error("mesh index " + std::to_string(i) + " is out of range (" + std::to_string(n) + " vertices)");
 }
 
 // Binary STL: 80-byte header, uint32 count, then per triangle a facet normal, 3 vertices and
@@ -159,7 +151,7 @@ void write_mesh(const std::string& path, const Mesh& mesh) {
     else if (ext == ".ply") writer = write_ply;
     else if (ext == ".obj") writer = write_obj;
     else throw Error("cannot write '" + path + "': unknown mesh format '" + ext + "' (use .stl, .ply or .obj)");
-    check_mesh(mesh);
+    detail::check_mesh_arrays(mesh);
     detail::write_file_atomically(path, [&](std::FILE* f) { writer(f, mesh); });
 }
 

@@ -1,12 +1,29 @@
-#include <voxmesh/voxmesh.hpp>
+// A Mesh's structure: the arrays' consistency, and edges shared by triangles.
+#include "mesh_arrays.hpp"
 
 #include <algorithm>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 namespace voxmesh {
 
+namespace detail {
+
+void check_mesh_arrays(const Mesh& mesh, const std::string& who) {
+    if (mesh.positions.size() % 3 || mesh.indices.size() % 3) throw Error(who + "mesh arrays are not multiples of 3");
+    if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
+        throw Error(who + "mesh has normals for a different number of vertices than positions");
+    const std::size_t n = mesh.vertex_count();
+    for (const std::uint32_t i : mesh.indices)
+        if (i >= n)
+            throw Error(who + "mesh index " + std::to_string(i) + " is out of range (" + std::to_string(n) + " vertices)");
+}
+
+}  // namespace detail
+
 MeshTopology analyze_topology(const Mesh& mesh) {
+    detail::check_mesh_arrays(mesh, "analyze_topology: ");
     std::vector<std::uint64_t> edges;
     edges.reserve(mesh.indices.size());
     std::vector<bool> used(mesh.vertex_count(), false);
@@ -14,7 +31,7 @@ MeshTopology analyze_topology(const Mesh& mesh) {
         for (int k = 0; k < 3; ++k) {
             const std::uint64_t a = mesh.indices[3 * t + k], b = mesh.indices[3 * t + (k + 1) % 3];
             edges.push_back(std::min(a, b) << 32 | std::max(a, b));
-            if (a < used.size()) used[a] = true;
+            used[a] = true;
         }
     }
     std::sort(edges.begin(), edges.end());

@@ -11,6 +11,7 @@
 #include <voxmesh/voxelize.hpp>
 
 #include "core/float_extent.hpp"
+#include "core/mesh_arrays.hpp"
 #include "core/parallel.hpp"
 #include "io/input_file.hpp"
 
@@ -50,17 +51,12 @@ struct Soup {
 };
 
 Soup weld_and_check(const Mesh& mesh) {
-    if (mesh.positions.size() % 3 || mesh.indices.size() % 3)
-        throw Error("voxelize: mesh arrays are not multiples of 3");
+    detail::check_mesh_arrays(mesh, "voxelize: ");
     const std::size_t nv = mesh.vertex_count();
     if (mesh.indices.empty()) throw Error("voxelize: the mesh has no triangles");
     for (std::size_t i = 0; i < mesh.positions.size(); ++i)
         if (!std::isfinite(mesh.positions[i]))
             throw Error("voxelize: vertex " + std::to_string(i / 3) + " has a non-finite coordinate");
-    for (std::uint32_t i : mesh.indices)
-        if (i >= nv)
-            throw Error("voxelize: triangle index " + std::to_string(i) + " is out of range (" +
-                        std::to_string(nv) + " vertices)");
 
     // Weld by exact position: sort vertex ids by coordinates, equal runs share one id.
     std::vector<std::uint32_t> order(nv);

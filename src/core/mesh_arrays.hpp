@@ -1,0 +1,15 @@
+// The one check of a Mesh's arrays that every function taking a user's Mesh makes first.
+#pragma once
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <string>
+
+namespace voxmesh::detail {
+
+// Throws Error (its message starting with `who`, e.g. "voxelize: ") when positions or indices
+// are not whole triples, normals are present for a different number of vertices, or an index
+// names no vertex.
+void check_mesh_arrays(const Mesh& mesh, const std::string& who = "");
+
+}  // namespace voxmesh::detail
