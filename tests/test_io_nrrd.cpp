@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -210,7 +211,50 @@ TEST_CASE("nrrd: write_nrrd refuses bad views and missing directories", "[io][nr
     CHECK_THROWS_WITH(write_nrrd(s.dir + "/x.nrrd", VolumeView{nullptr, ScalarType::F32, {1, 1, 1}}),
                       Contains("no data"));
     CHECK_THROWS_WITH(write_nrrd(s.dir + "/x.nrrd", VolumeView{&one, ScalarType::F32, {0, 1, 1}}), Contains("empty"));
+    // Samples past the float range: read_volume would refuse the file (found by
+    // fuzz_nrrd_roundtrip: the writer wrote what the reader then refused).
+    CHECK_THROWS_WITH(write_nrrd(s.dir + "/x.nrrd", VolumeView{&one, ScalarType::F32, {1, 1, 1}, {1, 1, 1}, {-1e308, 0, 0}}),
+                      Contains("along x") && Contains("float"));
+    std::vector<float> two(2, 1.0f);
+    CHECK_THROWS_WITH(write_nrrd(s.dir + "/x.nrrd", VolumeView{two.data(), ScalarType::F32, {1, 1, 2}, {1, 1, -3e38}, {0, 0, -1e38}}),
+                      Contains("along z"));
     CHECK_FALSE(std::filesystem::exists(s.dir + "/x.nrrd"));
+}
+
+TEST_CASE("nrrd: key/values read back exactly, or write_nrrd refuses them", "[io][nrrd]") {
+    Scratch s;
+    std::vector<std::uint8_t> samples(8, 1);
+    const VolumeView view{samples.data(), ScalarType::U8, {2, 2, 2}};
+    const std::string path = s.dir + "/kv.nrrd";
+    const std::map<std::string, std::string> fine{{"a:", " spaced value "}, {"voxmesh_iso", "127.5"}, {"k", ""},
+                                                  {"odd=key", "x:=y: z"}};
+    write_nrrd(path, view, fine);
+    CHECK(read_volume_info(path).key_values == fine);
+    // Each would read back as something else (found by fuzz_nrrd_roundtrip: a '#' key came
+    // back as a comment, that is, not at all).
+    for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{
+             {"#comment", "v"}, {"a: b", "v"}, {"a:=b", "v"}, {"", "v"}, {"k", "line\r"}, {"k", "two\nlines"},
+             {"k\r", "v"}, {"k", std::string(std::size_t{1} << 20, 'x')}}) {
+        INFO("key '" << key << "'");
+        CHECK_THROWS_AS(write_nrrd(s.dir + "/bad.nrrd", view, {{key, value}}), Error);
+    }
+    CHECK_FALSE(std::filesystem::exists(s.dir + "/bad.nrrd"));
+}
+
+TEST_CASE("nrrd: spacings far from 1 read back exactly, tiny and huge", "[io][nrrd]") {
+    // Their squares underflow to 0: the length of a direction vector
+    // (1e-300, 0, 0) was read as 0 and refused (found by fuzz_nrrd_roundtrip).
+    Scratch s;
+    std::vector<std::uint8_t> samples(2 * 2 * 2, 7);
+    for (const std::array<double, 3>& spacing : {std::array<double, 3>{1e-300, 1, 7}, std::array<double, 3>{1e-160, 2e-170, 3},
+                                                 std::array<double, 3>{3e38, 1e-3, 1e30}}) {
+        INFO(spacing[0] << " " << spacing[1] << " " << spacing[2]);
+        const VolumeView view{samples.data(), ScalarType::U8, {2, 2, 2}, spacing, {0, 0, 0}};
+        const std::string path = s.dir + "/far.nrrd";
+        write_nrrd(path, view);
+        const Volume v = read_volume(path);
+        CHECK(v.spacing == spacing);
+    }
 }
 
 TEST_CASE("nrrd: encodings, byte orders, detached headers", "[io][nrrd]") {

@@ -100,7 +100,11 @@ VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout);
 // NRRD with raw encoding in host byte order (spacing and origin written as `space
 // directions` / `space origin` with `space dimension: 3`), through a temporary file renamed
 // into place.
-// `key_values` become "key:=value" lines (keys without ":=" or newlines, values without newlines).
+// `key_values` become "key:=value" lines that read back exactly: a key is non-empty, does not
+// start with '#' and holds no ":=" or ": ", neither holds '\r' or '\n', and the header stays
+// within the 1 MiB the reader reads (an Error otherwise).
+// Refused (Error): an empty volume, spacing zero or not finite, an origin not finite, and
+// samples placed beyond the float range, which read_volume would refuse to read back.
 void write_nrrd(const std::string& path, const VolumeView& volume,
                 const std::map<std::string, std::string>& key_values = {});
 

@@ -9,6 +9,10 @@
 
 namespace voxmesh::io {
 
+// The most header bytes the NRRD reader reads looking for the blank line that ends it; the
+// writer refuses a header (its key/value lines) longer than that.
+constexpr std::size_t kMaxNrrdHeader = std::size_t{1} << 20;
+
 std::string_view trim(std::string_view text);
 // `token` fit for an error message: at most 40 characters, control and non-ASCII bytes as '?'.
 std::string shown(std::string_view token);

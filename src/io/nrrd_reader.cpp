@@ -14,8 +14,6 @@ namespace voxmesh::io {
 
 namespace {
 
-constexpr std::size_t kMaxHeader = 1 << 20;
-
 struct TypeName {
     const char* name;
     ScalarType type;
@@ -100,7 +98,7 @@ std::size_t skip_lines(const InputFile& file, std::size_t lines) {
 VolumeHeader read_nrrd_header(const std::string& path) {
     const InputFile file(path);
     if (file.size() == 0) fail(path, "file is empty");
-    const std::string text = file.read(0, kMaxHeader);
+    const std::string text = file.read(0, kMaxNrrdHeader);
     std::size_t pos = 0;
     std::string_view line;
     next_line(text, pos, line);
@@ -134,7 +132,7 @@ VolumeHeader read_nrrd_header(const std::string& path) {
             fail(path, "'data file: LIST' (several data files) is not supported");
     }
     if (!blank_line && text.size() < file.size())
-        fail(path, "no blank line ends the header within its first " + std::to_string(kMaxHeader) + " bytes");
+        fail(path, "no blank line ends the header within its first " + std::to_string(kMaxNrrdHeader) + " bytes");
     const std::size_t data_start = pos;
 
     auto required = [&](const char* name) -> const std::string& {

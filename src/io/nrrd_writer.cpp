@@ -1,6 +1,7 @@
 // write_nrrd: a NRRD0004 header (raw encoding, host byte order) followed by the samples,
 // written through a temporary file so a failure never leaves a partial output.
 #include "core/atomic_file.hpp"
+#include "core/float_extent.hpp"
 #include "header_text.hpp"
 
 #include <voxmesh/io.hpp>
@@ -43,6 +44,10 @@ void write_nrrd(const std::string& path, const VolumeView& volume,
         if (!std::isfinite(volume.spacing[a]) || volume.spacing[a] == 0) refuse("spacing must be finite and non-zero");
         if (!std::isfinite(volume.origin[a])) refuse("origin must be finite");
     }
+    // What read_volume would refuse to read back (extract() refuses it too).
+    if (const int a = detail::axis_beyond_float(volume.dims, volume.spacing, volume.origin); a >= 0)
+        refuse(std::string("origin and spacing put samples along ") + "xyz"[a] +
+               " beyond the range of float mesh coordinates, which voxmesh's readers refuse");
 
     std::string header = "NRRD0004\n# written by voxmesh " VOXMESH_VERSION_STRING "\n";
     header += std::string("type: ") + nrrd_type(volume.type) + "\n";
@@ -58,15 +63,22 @@ void write_nrrd(const std::string& path, const VolumeView& volume,
     header += "space origin: (" + io::shortest_text(volume.origin[0]) + "," + io::shortest_text(volume.origin[1]) + "," +
               io::shortest_text(volume.origin[2]) + ")\n";
     for (const auto& [key, value] : key_values) {
-        if (key.empty() || key.find(":=") != std::string::npos || key.find('\n') != std::string::npos ||
-            value.find('\n') != std::string::npos)
-            refuse("key/value '" + key + "' cannot be written as a NRRD 'key:=value' line");
+        // What reads back as this key and value, not as a comment ('#'), a field (": " before
+        // ":="), another line, or without a trailing '\r' (stripped as in CRLF files).
+        const auto line_break = [](const std::string& t) { return t.find_first_of("\r\n") != std::string::npos; };
+        if (key.empty() || key.front() == '#' || key.find(":=") != std::string::npos ||
+            key.find(": ") != std::string::npos || line_break(key) || line_break(value))
+            refuse("key/value '" + key + "' cannot be written as a NRRD 'key:=value' line (a key must be non-empty, "
+                   "not start with '#', and hold no ':=' or ': '; neither may hold a line break)");
         header += key + ":=" + value + "\n";
     }
     header += "\n";
 
     // Pad the comment so the samples start 8-byte aligned: readers can then map them.
     header.insert(header.find('\n', 9), (8 - header.size() % 8) % 8, ' ');
+    if (header.size() > io::kMaxNrrdHeader)
+        refuse("the key/value lines make a header of " + std::to_string(header.size()) +
+               " bytes, more than the " + std::to_string(io::kMaxNrrdHeader) + " NRRD readers here read");
 
     detail::write_file_atomically(path, [&](std::FILE* file) {
         detail::write_bytes(file, header.data(), header.size());

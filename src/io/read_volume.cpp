@@ -32,9 +32,17 @@ double checked_origin(const std::string& path, const char* field, double value) 
 }
 
 double vector_length(const std::vector<double>& v) {
+    // Scaled by the largest component, as hypot does: squares of 1e-300 or 1e200 would
+    // underflow to 0 or overflow to inf.
+    double largest = 0;
+    for (const double c : v) {
+        if (std::isnan(c)) return c;
+        largest = std::max(largest, std::fabs(c));
+    }
+    if (largest == 0 || !std::isfinite(largest)) return largest;
     double norm2 = 0;
-    for (double c : v) norm2 += c * c;
-    return std::sqrt(norm2);
+    for (const double c : v) norm2 += (c / largest) * (c / largest);
+    return largest * std::sqrt(norm2);
 }
 
 AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes) {
