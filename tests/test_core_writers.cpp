@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <limits>
 #include <string>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -364,6 +365,22 @@ TEST_CASE("write_mesh: a malformed mesh throws and writes nothing", "[core]") {
     voxmesh::Mesh mesh = test_mesh(true);
     mesh.indices[5] = static_cast<std::uint32_t>(mesh.vertex_count());
     CHECK_THROWS_AS(voxmesh::write_mesh(dir.file("bad.stl"), mesh), voxmesh::Error);
+    CHECK(dir.entries().empty());
+}
+
+TEST_CASE("write_mesh: non-finite coordinates or normals throw and write nothing", "[core]") {
+    vmtest::TempDir dir;
+    for (const char* ext : {".stl", ".ply", ".obj"}) {
+        INFO(ext);
+        voxmesh::Mesh nan_position = test_mesh(true);
+        nan_position.positions[4] = std::numeric_limits<float>::quiet_NaN();
+        CHECK_THROWS_WITH(voxmesh::write_mesh(dir.file(std::string("p") + ext), nan_position),
+                          Catch::Contains("vertex 1 has a non-finite coordinate"));
+        voxmesh::Mesh inf_normal = test_mesh(true);
+        inf_normal.normals[0] = std::numeric_limits<float>::infinity();
+        CHECK_THROWS_WITH(voxmesh::write_mesh(dir.file(std::string("n") + ext), inf_normal),
+                          Catch::Contains("vertex 0 has a non-finite normal"));
+    }
     CHECK(dir.entries().empty());
 }
 

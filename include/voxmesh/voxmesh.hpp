@@ -141,7 +141,8 @@ void extract_into(const VolumeView& volume, const Options& options, Mesh& mesh, 
 void release_scratch_memory();
 
 // Writes .stl (binary), .ply (binary) or .obj, chosen by extension, through a temporary
-// file renamed into place: a failure never leaves a partial file.
+// file renamed into place: a failure never leaves a partial file. A malformed mesh (see
+// analyze_topology) or a NaN or infinite coordinate or normal is an Error; nothing is written.
 void write_mesh(const std::string& path, const Mesh& mesh);
 
 // Removes the temporary files of writes in progress (write_mesh, write_nrrd), for a program's

@@ -152,6 +152,12 @@ void write_mesh(const std::string& path, const Mesh& mesh) {
     else if (ext == ".obj") writer = write_obj;
     else throw Error("cannot write '" + path + "': unknown mesh format '" + ext + "' (use .stl, .ply or .obj)");
     detail::check_mesh_arrays(mesh);
+    // "nan" and "inf" in a mesh file: most readers (ours included) refuse them.
+    for (const std::vector<float>* array : {&mesh.positions, &mesh.normals})
+        for (std::size_t i = 0; i < array->size(); ++i)
+            if (!std::isfinite((*array)[i]))
+                throw Error("cannot write '" + path + "': vertex " + std::to_string(i / 3) + " has a non-finite " +
+                            (array == &mesh.positions ? "coordinate" : "normal"));
     detail::write_file_atomically(path, [&](std::FILE* f) { writer(f, mesh); });
 }
 
