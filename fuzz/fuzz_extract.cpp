@@ -5,14 +5,19 @@
 //     bit, or the same Error;
 //   * the mesh's index buffer must be the naive oracle's (tests/support/reference_mc), and
 //     every vertex must lie on its own grid edge, finite;
-//   * an Error only for what the API documents (NaN or infinite samples, a NaN iso).
+//   * an Error only for what the API documents (NaN or infinite samples, a NaN iso, samples
+//     placed beyond the float range by origin and spacing).
+// Some inputs pick an origin and spacing far from 0 and 1, where float vertices round.
+#include "core/float_extent.hpp"
 #include "support/reference_mc.hpp"
 
 #include <voxmesh/voxmesh.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -87,6 +92,23 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::memcpy(bytes.data(), data + kHeader, std::min(bytes.size(), size - kHeader));
 
     voxmesh::VolumeView view{bytes.data(), type, dims};
+    // Geometry presets (flags bits 3-5): tiny and huge spacings, origins far from 0, and
+    // grids that end past FLT_MAX on their larger sizes.
+    struct Geometry {
+        std::array<double, 3> spacing, origin;
+    };
+    constexpr Geometry kGeometries[] = {{{0.5, 2, 1e-3}, {-10, 5, 1e3}},
+                                        {{1e-30, 1e30, 1}, {0, 0, 0}},
+                                        {{1, 1, 1}, {1e7, -1e7, 3e38}},
+                                        {{4e37, 1, 1}, {0, 0, -1}},
+                                        {{1, 0.25, 1}, {-3.4e38, 0, 0}}};
+    const unsigned preset = (flags >> 3) & 7u;
+    const bool unit_grid = preset >= std::size(kGeometries);
+    if (!unit_grid) {
+        view.spacing = kGeometries[preset].spacing;
+        view.origin = kGeometries[preset].origin;
+    }
+    const bool beyond_float = voxmesh::detail::axis_beyond_float(dims, view.spacing, view.origin) >= 0;
     voxmesh::Options options;
     options.iso = iso;
     options.backend = voxmesh::Backend::Cpu;
@@ -106,10 +128,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     bool finite = true;
     for (const double v : values) finite = finite && std::isfinite(v);
     if (one.error) {
-        if (finite && !std::isnan(iso)) std::abort();  // refused a volume the API takes
+        if (finite && !std::isnan(iso) && !beyond_float) std::abort();  // refused a volume the API takes
         return 0;
     }
-    if (!finite || std::isnan(iso)) std::abort();  // took what the API refuses
+    if (!finite || std::isnan(iso) || beyond_float) std::abort();  // took what the API refuses
 
     vmtest::RefOptions ro;
     ro.iso = iso;
@@ -125,7 +147,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         for (unsigned d = 0; d < 3; ++d) {
             const double p = one.mesh.positions[3 * v + d];
             if (!std::isfinite(p)) std::abort();
-            if (d == axis ? (p < at[d] || p > at[d] + 1) : p != at[d]) std::abort();
+            if (unit_grid) {
+                if (d == axis ? (p < at[d] || p > at[d] + 1) : p != at[d]) std::abort();
+                continue;
+            }
+            // On its edge (or at its sample, across it), within float rounding of the ends.
+            const double a = view.origin[d] + at[d] * view.spacing[d];
+            const double b = d == axis ? view.origin[d] + (at[d] + 1) * view.spacing[d] : a;
+            const double slack = 2 * voxmesh::detail::float_step_near(std::max(std::fabs(a), std::fabs(b)));
+            if (p < std::min(a, b) - slack || p > std::max(a, b) + slack) std::abort();
         }
     }
     for (const float n : one.mesh.normals)
