@@ -15,6 +15,7 @@
 #include <fstream>
 #include <sstream>
 #include <limits>
+#include <iterator>
 #include <string>
 #include <sys/resource.h>
 #include <sys/stat.h>
@@ -382,6 +383,28 @@ TEST_CASE("write_mesh: non-finite coordinates or normals throw and write nothing
                           Catch::Contains("vertex 0 has a non-finite normal"));
     }
     CHECK(dir.entries().empty());
+}
+
+TEST_CASE("write_mesh: STL facet normals are unit for models near the float limits", "[core]") {
+    // Edges of 6e38 overflow float, and cross products of 1e-30 edges underflow it: the
+    // normal was written as 0 in both.
+    vmtest::TempDir dir;
+    for (const float scale : {3e38f, 1e-30f, 1.0f}) {
+        INFO("scale " << scale);
+        voxmesh::Mesh m;
+        m.positions = {-scale, 0, 0, scale, 0, 0, 0, scale, 0};
+        m.indices = {0, 1, 2};
+        const std::string path = dir.file("t.stl");
+        voxmesh::write_mesh(path, m);
+        std::ifstream in(path, std::ios::binary);
+        std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        REQUIRE(bytes.size() == 84 + 50);
+        float normal[3];
+        std::memcpy(normal, bytes.data() + 84, 12);
+        CHECK(normal[0] == 0.0f);
+        CHECK(normal[1] == 0.0f);
+        CHECK(normal[2] == 1.0f);  // counter-clockwise seen from +z
+    }
 }
 
 TEST_CASE("analyze_topology refuses a malformed mesh as write_mesh does", "[core]") {

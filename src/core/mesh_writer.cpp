@@ -40,11 +40,14 @@ void write_stl(std::FILE* f, const Mesh& mesh) {
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
         const float* p[3];
         for (int k = 0; k < 3; ++k) p[k] = &mesh.positions[3 * static_cast<std::size_t>(mesh.indices[3 * t + k])];
-        const float u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
-        const float v[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
-        float n[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-        const float len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        for (float& c : n) c = len > 0 ? c / len : 0.f;
+        // In double: float edges of a model near ±FLT_MAX overflow, and the cross product of
+        // tiny ones underflows; either way the facet normal came out zero.
+        const double u[3] = {double(p[1][0]) - p[0][0], double(p[1][1]) - p[0][1], double(p[1][2]) - p[0][2]};
+        const double v[3] = {double(p[2][0]) - p[0][0], double(p[2][1]) - p[0][1], double(p[2][2]) - p[0][2]};
+        const double c[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        const double len = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        float n[3];
+        for (int k = 0; k < 3; ++k) n[k] = len > 0 ? static_cast<float>(c[k] / len) : 0.f;
         unsigned char record[50] = {};
         std::memcpy(record, n, 12);
         for (int k = 0; k < 3; ++k) std::memcpy(record + 12 + 12 * k, p[k], 12);
