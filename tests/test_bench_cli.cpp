@@ -6,6 +6,7 @@
 #ifdef VOXMESH_BENCH_PATH
 
 #include "support/io_scratch.hpp"
+#include "support/mesh_checks.hpp"
 #include "support/run_program.hpp"
 
 #include <voxmesh/voxmesh.hpp>
@@ -165,13 +166,13 @@ TEST_CASE("bench: Ctrl-C stops the runs and prints and saves what finished, with
     const bool second_started = vmtest::wait_for_stderr(run, "[2/2]", 120);
     ::kill(run.pid, SIGINT);
     const int status = vmtest::wait_program(run);
-    const std::string err = vmtest::read_text(run.err_path);
+    const std::string err = iotest::read_file(run.err_path);
     INFO(err);
     REQUIRE(second_started);
     REQUIRE(WIFEXITED(status));
     CHECK(WEXITSTATUS(status) == 130);
     // The first volume's row, and the second's from the runs it finished, if any.
-    const std::string out = vmtest::read_text(run.out_path);
+    const std::string out = iotest::read_file(run.out_path);
     const auto rows = lines_of(out);
     REQUIRE(!rows.empty());
     REQUIRE(rows.size() <= 2);
@@ -184,9 +185,7 @@ TEST_CASE("bench: Ctrl-C stops the runs and prints and saves what finished, with
         CHECK_THAT(err, Catch::Contains("of 1000 runs"));
     }
     CHECK(iotest::read_file(saved) == out);
-    std::vector<std::string> left;
-    for (const auto& e : std::filesystem::directory_iterator(out_dir)) left.push_back(e.path().filename().string());
-    CHECK(left == std::vector<std::string>{"runs.json"});
+    CHECK(vmtest::directory_entries(out_dir) == std::vector<std::string>{"runs.json"});
 }
 
 TEST_CASE("bench: killed while writing a volume, leaves the whole file or none, never a temporary", "[bench]") {
@@ -216,8 +215,7 @@ TEST_CASE("bench: killed while writing a volume, leaves the whole file or none, 
         INFO("killed after " << delay_ms << " ms: wait status " << status);
         CHECK((finished || (WIFSIGNALED(status) && WTERMSIG(status) == SIGTERM)));
         killed += !finished;
-        std::vector<std::string> left;
-        for (const auto& e : std::filesystem::directory_iterator(dir)) left.push_back(e.path().filename().string());
+        const std::vector<std::string> left = vmtest::directory_entries(dir);
         // Killed after the rename, the whole file is there too.
         INFO("left: " << (left.empty() ? std::string("nothing") : left[0]));
         if (finished || !left.empty()) {

@@ -4,6 +4,8 @@
 
 #ifdef VOXMESH_CLI_PATH
 
+#include "support/io_scratch.hpp"
+#include "support/mesh_checks.hpp"
 #include "support/run_program.hpp"
 
 #include <cmath>
@@ -13,7 +15,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <string>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -24,11 +25,6 @@ namespace fs = std::filesystem;
 namespace {
 
 std::string quote(const std::string& s) { return vmtest::shell_quote(s); }
-
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 
 // A scratch directory per test case, removed afterwards.
 struct Scratch {
@@ -75,8 +71,8 @@ void expect_rejected(const Scratch& s, const std::string& args, const std::strin
     if (!output.empty()) CHECK_FALSE(fs::exists(output));
     // Nor a temporary next to it.
     if (!output.empty() && fs::exists(fs::path(output).parent_path()))
-        for (const auto& e : fs::directory_iterator(fs::path(output).parent_path()))
-            CHECK(e.path().filename().string().find(fs::path(output).filename().string()) == std::string::npos);
+        for (const std::string& name : vmtest::directory_entries(fs::path(output).parent_path().string()))
+            CHECK(name.find(fs::path(output).filename().string()) == std::string::npos);
 }
 
 std::string f32_bytes(const std::vector<float>& v) {
@@ -86,7 +82,7 @@ std::string f32_bytes(const std::vector<float>& v) {
 }
 
 std::uint32_t stl_triangles(const std::string& path) {
-    const std::string b = slurp(path);
+    const std::string b = iotest::read_file(path);
     std::uint32_t n = 0;
     if (b.size() >= 84) std::memcpy(&n, b.data() + 80, 4);
     return n;
@@ -179,16 +175,16 @@ TEST_CASE("cli: voxelize then mesh round trip on a real STL", "[cli]") {
     const int status = std::system(cat.c_str());
     REQUIRE(WIFEXITED(status));
     REQUIRE(WEXITSTATUS(status) == 0);
-    CHECK(slurp(piped) == slurp(s.path("ball.stl")));
+    CHECK(iotest::read_file(piped) == iotest::read_file(s.path("ball.stl")));
     // A pipe that ends early, or goes on too long, is refused; nothing is written.
     for (const std::string& cut : {std::string("head -c 16000 "), std::string("cat ") + quote(raw) + " "}) {
         const std::string bad = cut + quote(raw) + " | " + quote(VOXMESH_CLI_PATH) + " mesh - -o " +
                                 quote(s.path("cut.stl")) + " --dims 16 16 16 --type f32 > /dev/null 2> " +
                                 quote(s.path("cut.err"));
         const int code = std::system(bad.c_str());
-        INFO(bad << ": " << slurp(s.path("cut.err")));
+        INFO(bad << ": " << iotest::read_file(s.path("cut.err")));
         CHECK((WIFEXITED(code) && WEXITSTATUS(code) == 2));
-        CHECK_THAT(slurp(s.path("cut.err")), Catch::Contains("standard input"));
+        CHECK_THAT(iotest::read_file(s.path("cut.err")), Catch::Contains("standard input"));
         CHECK_FALSE(fs::exists(s.path("cut.stl")));
     }
 }
@@ -258,7 +254,7 @@ TEST_CASE("cli: the AVX2 and portable code paths write identical files", "[cli]"
             REQUIRE(b.code == 0);
             CHECK(a.out.find("triangles") != std::string::npos);
             // Positions and normals bit for bit, and the indices.
-            const std::string x = slurp(native), y = slurp(portable);
+            const std::string x = iotest::read_file(native), y = iotest::read_file(portable);
             CHECK(x.size() > 1000);
             CHECK(x.size() == y.size());
             const auto diff = std::mismatch(x.begin(), x.end(), y.begin(), y.end());
@@ -369,8 +365,7 @@ TEST_CASE("cli: killed at any moment, mesh leaves the whole output or none, neve
         INFO("killed after " << delay << " s: exit " << code);
         CHECK((code == 0 || code == 128 + SIGTERM));
         killed += code != 0;
-        std::vector<std::string> left;
-        for (const auto& e : fs::directory_iterator(dir)) left.push_back(e.path().filename().string());
+        const std::vector<std::string> left = vmtest::directory_entries(dir.string());
         // Killed after the rename, the whole file is there too.
         INFO("left: " << (left.empty() ? std::string("nothing") : left[0]));
         if (code == 0 || !left.empty()) {
@@ -441,7 +436,7 @@ TEST_CASE("cli: sculpt a real STL model with a stroke script", "[cli]") {
     INFO(cpu.out << cpu.err << cl.out << cl.err);
     REQUIRE(cpu.code == 0);
     REQUIRE(cl.code == 0);
-    CHECK(slurp(cpu_out) == slurp(cl_out));
+    CHECK(iotest::read_file(cpu_out) == iotest::read_file(cl_out));
 }
 
 #else

@@ -162,6 +162,9 @@ std::vector<double> to_doubles(const std::vector<T>& v) {
 
 // ------------------------------------------------------------------ files
 
+// The names in a directory, sorted.
+std::vector<std::string> directory_entries(const std::string& dir);
+
 // A fresh empty directory under the system temp dir, removed (recursively) on destruction.
 class TempDir {
 public:
@@ -171,7 +174,7 @@ public:
     TempDir& operator=(const TempDir&) = delete;
     const std::string& path() const { return path_; }
     std::string file(const std::string& name) const { return path_ + "/" + name; }
-    std::vector<std::string> entries() const;  // names in the directory, sorted
+    std::vector<std::string> entries() const;  // directory_entries(path())
 
 private:
     std::string path_;

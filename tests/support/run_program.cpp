@@ -1,12 +1,12 @@
 #include "run_program.hpp"
 
+#include "support/io_scratch.hpp"
+
 #include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <fcntl.h>
-#include <fstream>
-#include <iterator>
 #include <spawn.h>
 #include <stdexcept>
 #include <sys/wait.h>
@@ -14,11 +14,6 @@
 #include <unistd.h>
 
 namespace vmtest {
-
-std::string read_text(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-}
 
 std::string shell_quote(const std::string& s) {
     std::string q = "'";
@@ -34,8 +29,8 @@ ProgramResult run_program(const std::string& program, const std::string& args, c
     const int status = std::system(cmd.c_str());
     ProgramResult r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    r.out = read_text(out);
-    r.err = read_text(err);
+    r.out = iotest::read_file(out);
+    r.err = iotest::read_file(err);
     return r;
 }
 
@@ -73,7 +68,7 @@ StartedProgram start_program(const std::string& program, const std::vector<std::
 bool wait_for_stderr(const StartedProgram& program, const std::string& text, double timeout_s) {
     const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
     while (std::chrono::steady_clock::now() < end) {
-        if (read_text(program.err_path).find(text) != std::string::npos) return true;
+        if (iotest::read_file(program.err_path).find(text) != std::string::npos) return true;
         siginfo_t info{};
         if (waitid(P_PID, static_cast<id_t>(program.pid), &info, WEXITED | WNOHANG | WNOWAIT) == 0 && info.si_pid != 0)
             return false;  // it ended (left for wait_program to reap)

@@ -38,7 +38,4 @@ bool wait_for_stderr(const StartedProgram& program, const std::string& text, dou
 // Waits for the program to end; returns the wait status (WIFEXITED, WTERMSIG, ...).
 int wait_program(const StartedProgram& program);
 
-// The whole contents of a file ("" when it cannot be read).
-std::string read_text(const std::string& path);
-
 }  // namespace vmtest
