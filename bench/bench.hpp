@@ -143,7 +143,8 @@ void print_table(const std::vector<Result>& results);
 void print_csv(const std::vector<Result>& results);
 void print_json(const std::vector<Result>& results, std::FILE* out = stdout);
 // print_json into `path` (--save), through a temporary renamed into place; check_save_path
-// tries that temporary before any run, so that a bad path fails at once, not after them.
+// checks before any run that the temporary could be made there (an unnamed file in the
+// directory), so that a bad path fails at once, not after them.
 void check_save_path(const std::string& path);
 void save_json(const std::vector<Result>& results, const std::string& path);
 // Table 1 of the paper beside ours: threads down, resolution across.

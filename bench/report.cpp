@@ -222,13 +222,8 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
 void check_save_path(const std::string& path) {
     // What save_json's atomic write needs: a writable directory to put its temporary in.
     // Checked without creating anything, so an interrupt now cannot leave a file behind.
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) throw voxmesh::Error("cannot write '" + path + "': it is a directory");
-    const fs::path target(path);
-    const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
-    if (!fs::is_directory(dir, ec))
-        throw voxmesh::Error("cannot write '" + path + "': directory '" + dir.string() + "' does not exist");
+    const std::filesystem::path target(path);
+    const std::filesystem::path dir = voxmesh::detail::target_directory(path);
     // An unnamed file in the directory (O_TMPFILE): nothing to clean up, whatever happens.
     // Filesystems without it get a named probe, removed at once.
     int fd = ::open(dir.c_str(), O_TMPFILE | O_WRONLY | O_CLOEXEC, 0600);

@@ -86,13 +86,19 @@ int create_temp(const std::filesystem::path& dir, const std::string& filename, s
 
 }  // namespace
 
-void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
+std::filesystem::path target_directory(const std::string& path) {
     namespace fs = std::filesystem;
     const fs::path target(path);
     std::error_code ec;
     if (fs::is_directory(target, ec)) throw Error("cannot write '" + path + "': it is a directory");
     const fs::path dir = target.has_parent_path() ? target.parent_path() : fs::path(".");
     if (!fs::is_directory(dir, ec)) throw Error("cannot write '" + path + "': directory '" + dir.string() + "' does not exist");
+    return dir;
+}
+
+void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
+    const std::filesystem::path target(path);
+    const std::filesystem::path dir = target_directory(path);
 
     std::string temp;
     // Listed while it exists; a signal after the rename unlinks a name that is gone.

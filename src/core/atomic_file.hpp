@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <string>
 
@@ -11,6 +12,10 @@ namespace voxmesh::detail {
 // Calls write(FILE*) on a temporary next to `path`; throws Error (naming the path) on any
 // failure, removing the temporary.
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write);
+
+// The directory a write of `path` puts its temporary in: `path`'s own, or "."; throws Error
+// (naming `path`) when `path` is a directory or that directory does not exist.
+std::filesystem::path target_directory(const std::string& path);
 
 // fwrite that throws Error on a short write.
 void write_bytes(std::FILE* file, const void* data, std::size_t bytes);
