@@ -4,6 +4,7 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include <string>
+#include <vector>
 
 namespace voxmesh::detail {
 
@@ -11,5 +12,9 @@ namespace voxmesh::detail {
 // are not whole triples, normals are present for a different number of vertices, or an index
 // names no vertex.
 void check_mesh_arrays(const Mesh& mesh, const std::string& who = "");
+
+// Throws Error(who + "vertex N has a non-finite " + what) for the first xyz triple of `values`
+// (positions or normals) holding a NaN or an infinity.
+void check_finite_vertices(const std::vector<float>& values, const std::string& who, const char* what);
 
 }  // namespace voxmesh::detail

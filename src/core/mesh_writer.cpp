@@ -156,11 +156,8 @@ void write_mesh(const std::string& path, const Mesh& mesh) {
     else throw Error("cannot write '" + path + "': unknown mesh format '" + ext + "' (use .stl, .ply or .obj)");
     detail::check_mesh_arrays(mesh);
     // "nan" and "inf" in a mesh file: most readers (ours included) refuse them.
-    for (const std::vector<float>* array : {&mesh.positions, &mesh.normals})
-        for (std::size_t i = 0; i < array->size(); ++i)
-            if (!std::isfinite((*array)[i]))
-                throw Error("cannot write '" + path + "': vertex " + std::to_string(i / 3) + " has a non-finite " +
-                            (array == &mesh.positions ? "coordinate" : "normal"));
+    detail::check_finite_vertices(mesh.positions, "cannot write '" + path + "': ", "coordinate");
+    detail::check_finite_vertices(mesh.normals, "cannot write '" + path + "': ", "normal");
     detail::write_file_atomically(path, [&](std::FILE* f) { writer(f, mesh); });
 }
 

@@ -2,6 +2,7 @@
 #include "mesh_arrays.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -18,6 +19,12 @@ void check_mesh_arrays(const Mesh& mesh, const std::string& who) {
     for (const std::uint32_t i : mesh.indices)
         if (i >= n)
             throw Error(who + "mesh index " + std::to_string(i) + " is out of range (" + std::to_string(n) + " vertices)");
+}
+
+void check_finite_vertices(const std::vector<float>& values, const std::string& who, const char* what) {
+    for (std::size_t i = 0; i < values.size(); ++i)
+        if (!std::isfinite(values[i]))
+            throw Error(who + "vertex " + std::to_string(i / 3) + " has a non-finite " + what);
 }
 
 }  // namespace detail

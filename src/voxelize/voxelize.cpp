@@ -54,9 +54,7 @@ Soup weld_and_check(const Mesh& mesh) {
     detail::check_mesh_arrays(mesh, "voxelize: ");
     const std::size_t nv = mesh.vertex_count();
     if (mesh.indices.empty()) throw Error("voxelize: the mesh has no triangles");
-    for (std::size_t i = 0; i < mesh.positions.size(); ++i)
-        if (!std::isfinite(mesh.positions[i]))
-            throw Error("voxelize: vertex " + std::to_string(i / 3) + " has a non-finite coordinate");
+    detail::check_finite_vertices(mesh.positions, "voxelize: ", "coordinate");
 
     // Weld by exact position: sort vertex ids by coordinates, equal runs share one id.
     std::vector<std::uint32_t> order(nv);
