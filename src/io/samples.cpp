@@ -94,6 +94,14 @@ bool host_order(const SampleLayout& layout) {
     return scalar_size(layout.type) == 1 || layout.big_endian == (std::endian::native == std::endian::big);
 }
 
+// Samples read into memory (copied, inflated or streamed) in the layout's byte order and
+// axis directions, made host-order and reversed along the flipped axes.
+void to_host_layout(Volume& v, const SampleLayout& layout) {
+    const std::size_t value_size = scalar_size(layout.type);
+    if (!host_order(layout)) swap_bytes(v.data, v.byte_size() / value_size, value_size);
+    reverse_axes(v, layout.flipped);
+}
+
 }  // namespace
 
 std::size_t sample_bytes(const std::string& path, std::array<std::size_t, 3> dims, ScalarType type) {
@@ -159,8 +167,7 @@ Volume load_samples(const std::string& header_path, const SampleLayout& layout) 
                                   dims_text(layout.dims) + " " + scalar_name(layout.type) +
                                   " samples need (dims do not match the data)" + ctx);
     }
-    if (!host_order(layout)) swap_bytes(v.data, bytes / value_size, value_size);
-    reverse_axes(v, layout.flipped);
+    to_host_layout(v, layout);
     return v;
 }
 
@@ -196,9 +203,7 @@ Volume load_stream_samples(std::istream& in, const std::string& name, const Samp
         fail(name, "the stream goes on past the " + std::to_string(bytes) + " bytes that " + dims_text(layout.dims) +
                        " " + scalar_name(layout.type) + " samples need (dims, type or offset do not match it)");
     if (in.bad()) fail(name, "read failed");
-    const std::size_t value_size = scalar_size(layout.type);
-    if (!host_order(layout)) swap_bytes(v.data, bytes / value_size, value_size);
-    reverse_axes(v, layout.flipped);
+    to_host_layout(v, layout);
     return v;
 }
 
