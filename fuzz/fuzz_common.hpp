@@ -66,4 +66,18 @@ inline void read_volume_file(const std::string& path) {
     }
 }
 
+// extract() of a volume the library made (a sculpt's, voxelize's), on the CPU engine and one
+// thread: it must mesh it, so an Error is a finding.
+inline voxmesh::Mesh extract_or_abort(const voxmesh::VolumeView& volume, double iso) {
+    voxmesh::Options options;
+    options.iso = iso;
+    options.backend = voxmesh::Backend::Cpu;
+    options.threads = 1;
+    try {
+        return voxmesh::extract(volume, options);
+    } catch (const voxmesh::Error&) {
+        std::abort();
+    }
+}
+
 }  // namespace fuzz

@@ -2,6 +2,8 @@
 // each type in both units, re-meshed block by block; the welded mesh must be exactly what
 // extract() makes of the edited volume. Fuzzed numbers reach the brushes' clipping and
 // rounding (huge, tiny and negative coordinates and radii, strengths beyond the type).
+#include "fuzz_common.hpp"
+
 #include <voxmesh/sculpt.hpp>
 
 #include <cmath>
@@ -32,16 +34,8 @@ void check_sculpt(voxmesh::ScalarType type, const std::vector<voxmesh::ScriptDab
         }
         if (applied % 3 == 0) sculpt.update();
     }
-    voxmesh::Options o;
-    o.iso = options.iso;
-    o.backend = voxmesh::Backend::Cpu;
-    o.threads = 1;
-    voxmesh::Mesh expected;
-    try {
-        expected = voxmesh::extract(sculpt.view(), o);
-    } catch (const voxmesh::Error&) {
-        std::abort();  // a sculpt's samples stay finite: extract must take them
-    }
+    // A sculpt's samples stay finite: extract must take them.
+    const voxmesh::Mesh expected = fuzz::extract_or_abort(sculpt.view(), options.iso);
     const voxmesh::Mesh mesh = sculpt.mesh();
     if (mesh.indices != expected.indices || mesh.positions != expected.positions || mesh.normals != expected.normals)
         std::abort();

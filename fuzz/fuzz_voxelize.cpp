@@ -35,16 +35,9 @@ void check_voxelized(const voxmesh::Mesh& model, voxmesh::VoxelField field, std:
         for (std::size_t i = 0; i < n; ++i)
             if (!std::isfinite(p[i])) std::abort();
     }
-    voxmesh::Options o;
-    o.iso = field == voxmesh::VoxelField::Occupancy ? 127.5 : 0.0;
-    o.backend = voxmesh::Backend::Cpu;
-    o.threads = 1;
-    voxmesh::Mesh back;
-    try {
-        back = voxmesh::extract(volume.view(), o);
-    } catch (const voxmesh::Error&) {
-        std::abort();  // voxelize promises a volume extract can mesh
-    }
+    // voxelize promises a volume extract can mesh.
+    const voxmesh::Mesh back =
+        fuzz::extract_or_abort(volume.view(), field == voxmesh::VoxelField::Occupancy ? 127.5 : 0.0);
     if (back.triangle_count() == 0 || !voxmesh::analyze_topology(back).closed()) std::abort();
 }
 
