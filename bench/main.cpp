@@ -7,6 +7,8 @@
 //   voxmesh-bench --sculpt                    # stroke latency p50/p95/p99 at 256^3 and 512^3
 #include "bench.hpp"
 
+#include "core/exit_signals.hpp"
+
 #include <voxmesh/fields.hpp>
 #include <voxmesh/io.hpp>
 
@@ -24,29 +26,15 @@ using namespace vmbench;
 
 namespace {
 
-// SIGTERM, SIGHUP, and SIGINT outside the timed runs: remove the temporary of a --save or
-// --write-volume in progress, then die of the signal.
-extern "C" void on_fatal_signal(int sig) {
-    voxmesh::remove_partial_outputs();
-    std::signal(sig, SIG_DFL);
-    std::raise(sig);
-}
+using voxmesh::detail::handle_signal_unless_ignored;
+using voxmesh::detail::remove_partial_outputs_and_die;
 
 // SIGINT during the runs: the first asks the loops to stop and print what finished; a second
-// ends the process at once.
-extern "C" void on_sigint(int sig) {
-    if (g_interrupted) on_fatal_signal(sig);
+// ends the process at once. (SIGTERM, SIGHUP, and SIGINT outside the timed runs remove the
+// temporary of a --save or --write-volume in progress and die.)
+void on_sigint(int sig) {
+    if (g_interrupted) remove_partial_outputs_and_die(sig);
     g_interrupted = 1;
-}
-
-// An inherited SIG_IGN is kept: nohup and a non-interactive shell's `cmd &` stay immune.
-void handle_signal(int sig, void (*handler)(int)) {
-    struct sigaction old {};
-    if (sigaction(sig, nullptr, &old) != 0 || old.sa_handler == SIG_IGN) return;
-    struct sigaction sa {};
-    sa.sa_handler = handler;
-    sigemptyset(&sa.sa_mask);
-    sigaction(sig, &sa, nullptr);
 }
 
 voxmesh::ScalarType parse_type(const std::string& s) {
@@ -98,7 +86,7 @@ std::vector<Combo> parse_devices(const std::string& spec) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) handle_signal(sig, on_fatal_signal);
+    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) handle_signal_unless_ignored(sig, remove_partial_outputs_and_die);
     CLI::App app{"voxmesh-bench: marching-cubes timings on CPU threads and OpenCL devices"};
     std::vector<std::string> fields, inputs, types{"f32"}, backends{"cpu"};
     std::vector<std::size_t> sizes{64, 128, 256};
@@ -176,7 +164,7 @@ int main(int argc, char** argv) {
             return 0;
         }
         if (sculpt) {
-            handle_signal(SIGINT, on_sigint);
+            handle_signal_unless_ignored(SIGINT, on_sigint);
             return run_sculpt(sizes_opt->count() ? sizes : std::vector<std::size_t>{256, 512},
                               threads_opt->count() && !threads.empty() ? threads[0] : 0, dabs, settings.pause_ms,
                               backends, json, settings.quiet);
@@ -263,7 +251,7 @@ int main(int argc, char** argv) {
         };
         const std::size_t total = recipes.size() * combos_for().size();
 
-        handle_signal(SIGINT, on_sigint);
+        handle_signal_unless_ignored(SIGINT, on_sigint);
 
         std::vector<Result> results;
         std::size_t done = 0;

@@ -1,6 +1,7 @@
 // voxmesh: mesh volumes, voxelize and sculpt STL models, inspect files and devices, run the demo.
 // Exit codes: 0 success, 2 bad input or usage (message on stderr), 1 internal failure.
 #include "common.hpp"
+#include "core/exit_signals.hpp"
 
 #include <csignal>
 #include <exception>
@@ -8,22 +9,11 @@
 #include <new>
 #include <vector>
 
-namespace {
-
-// Interrupted while writing an output: remove the temporary, then die of the signal as
-// usual (exit status 128 + signal), so that nothing half-written is left behind.
-extern "C" void on_fatal_signal(int sig) {
-    voxmesh::remove_partial_outputs();
-    std::signal(sig, SIG_DFL);
-    std::raise(sig);
-}
-
-}  // namespace
-
 int main(int argc, char** argv) {
     using namespace voxmesh::cli;
+    // Interrupted while writing an output: nothing half-written is left behind.
     for (const int sig : {SIGINT, SIGTERM, SIGHUP})
-        if (std::signal(sig, on_fatal_signal) == SIG_IGN) std::signal(sig, SIG_IGN);  // nohup, `cmd &` stay immune
+        voxmesh::detail::handle_signal_unless_ignored(sig, voxmesh::detail::remove_partial_outputs_and_die);
     pin_pocl_workers();
     CLI::App app{"voxmesh " VOXMESH_VERSION_STRING
                  ": marching cubes on every compute device (CPU threads, OpenCL), STL voxelization"};
