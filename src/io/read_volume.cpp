@@ -139,11 +139,18 @@ VolumeHeader raw_header(const std::string& path, const RawLayout& raw) {
 
 namespace voxmesh {
 
+namespace {
+// Loaded samples, placed where their header puts them.
+Volume placed(Volume v, const VolumeInfo& info) {
+    v.spacing = info.spacing;
+    v.origin = info.origin;
+    return v;
+}
+}  // namespace
+
 Volume read_volume(const std::string& path, VolumeInfo& info) {
     const io::VolumeHeader h = io::read_header(path);
-    Volume v = io::load_samples(path, h.layout);
-    v.spacing = h.info.spacing;
-    v.origin = h.info.origin;
+    Volume v = placed(io::load_samples(path, h.layout), h.info);
     info = h.info;
     return v;
 }
@@ -162,18 +169,12 @@ VolumeInfo read_volume_info(const std::string& path) {
 
 Volume read_raw(const std::string& path, const RawLayout& layout) {
     const io::VolumeHeader h = io::raw_header(path, layout);
-    Volume v = io::load_samples(path, h.layout);
-    v.spacing = h.info.spacing;
-    v.origin = h.info.origin;
-    return v;
+    return placed(io::load_samples(path, h.layout), h.info);
 }
 
 Volume read_raw(std::istream& in, const std::string& name, const RawLayout& layout) {
     const io::VolumeHeader h = io::raw_header(name, layout);
-    Volume v = io::load_stream_samples(in, name, h.layout);
-    v.spacing = h.info.spacing;
-    v.origin = h.info.origin;
-    return v;
+    return placed(io::load_stream_samples(in, name, h.layout), h.info);
 }
 
 VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout) {
