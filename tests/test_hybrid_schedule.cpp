@@ -58,3 +58,26 @@ TEST_CASE("Hybrid: a planned split minimises count + generate over both sides", 
     CHECK(hybrid_device_chunks(1, 1, r) == 0);
     CHECK(hybrid_device_chunks(0, 1, r) == 0);
 }
+
+TEST_CASE("Hybrid: a side planned out grows more hopeful until it is given a chunk again", "[hybrid]") {
+    // A CPU worker measured at 200 per sample once (busy), a device at 1 + 1.
+    HybridRates r{200, 1, 1, 1};
+    REQUIRE(hybrid_device_chunks(8, 1, r) == 8);
+    int calls = 0;
+    for (; hybrid_device_chunks(8, 1, r) == 8 && calls < 100; ++calls) hybrid_hope_for_idle(r, false, true);
+    // One chunk on the CPU costs max(7, c) + 7 against 16 for all eight on the device: the
+    // CPU gets it back once c < 9, after 14 calls (200 x 0.8^14 = 8.8).
+    CHECK(calls == 14);
+    CHECK(r.cpu_count < 9);
+    CHECK(r.device_count == 1);  // the side that worked keeps its measured rates
+    // The same for a device, and for neither side where both worked.
+    HybridRates d{1, 1, 200, 200};
+    hybrid_hope_for_idle(d, true, false);
+    CHECK(d.device_count == Approx(160));
+    CHECK(d.device_generate == Approx(160));
+    CHECK(d.cpu_count == 1);
+    const HybridRates before = d;
+    hybrid_hope_for_idle(d, true, true);
+    CHECK(d.device_count == before.device_count);
+    CHECK(d.cpu_generate == before.cpu_generate);
+}

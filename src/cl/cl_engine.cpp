@@ -580,7 +580,7 @@ void Engine::plan_hybrid(const std::vector<DeviceJob>& jobs) {
 }
 
 // This call's rates, for the next call's plan; a side that did no work in a pass keeps the
-// earlier call's rate for it (a device's decaying).
+// earlier call's rate for it, made more hopeful (hybrid_hope_for_idle).
 void Engine::remember_rates(const std::vector<DeviceJob>& jobs) {
     if (!hybrid_ || jobs.size() != 1 || options_.chunk_planes > 0) return;
     const DeviceJob& job = jobs.front();
@@ -591,13 +591,7 @@ void Engine::remember_rates(const std::vector<DeviceJob>& jobs) {
     r.cpu_generate = cpu_generated_.per_sample(r.cpu_generate);
     r.device_count = job.counted.per_sample(r.device_count);
     r.device_generate = job.generated.per_sample(r.device_generate);
-    if (job.counted.samples == 0) {
-        // Planned out: its rates grow more hopeful call by call until it gets a chunk to be
-        // measured by again, so that a device slow once (busy, a cold start) is not left out
-        // for good, while one that stays slow costs a call now and then.
-        r.device_count *= 0.8;
-        r.device_generate *= 0.8;
-    }
+    hybrid_hope_for_idle(r, cpu_counted_.samples > 0, job.counted.samples > 0);
     if (g_rates.size() > kMaxRates) {
         const HybridRates keep = r;
         g_rates.clear();

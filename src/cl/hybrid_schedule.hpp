@@ -57,6 +57,22 @@ struct HybridRates {
     bool known() const { return cpu_count > 0 && cpu_generate > 0 && device_count > 0 && device_generate > 0; }
 };
 
+// A side that the plan left without work measured nothing in a call: its rates from earlier
+// calls grow more hopeful call by call until it gets a chunk to be measured by again, so that
+// a side slow once (busy, a cold start) is not planned out for good, while one that stays
+// slow costs a call now and then.
+inline void hybrid_hope_for_idle(HybridRates& r, bool cpu_worked, bool device_worked) {
+    constexpr double kHope = 0.8;
+    if (!cpu_worked) {
+        r.cpu_count *= kHope;
+        r.cpu_generate *= kHope;
+    }
+    if (!device_worked) {
+        r.device_count *= kHope;
+        r.device_generate *= kHope;
+    }
+}
+
 // How many of `chunks` equal chunks (of `samples` samples each) the device should mesh so that
 // the call ends soonest. Every worker counts before anyone generates (the mesh is allocated in
 // between), so a call takes max(device count, CPU count) + max(device generate, CPU generate):
