@@ -201,3 +201,17 @@ TEST_CASE("raw from a stream: too short, too long and bad sizes are errors namin
     flat.spacing = {1, 0, 1};
     fails(joined("header!!", samples), flat, "spacing");
 }
+
+TEST_CASE("raw from a stream that throws on failure: still our errors, and its mask kept", "[io][raw][errors]") {
+    const RawLayout layout{{5, 4, 3}, ScalarType::F32, false, 0, {1, 1, 1}, {0, 0, 0}};
+    const std::string samples = f32_samples(60, false);
+    const auto mask = std::ios::failbit | std::ios::badbit;
+    std::istringstream short_in(samples.substr(0, 100));
+    short_in.exceptions(mask);
+    CHECK_THROWS_WITH(read_raw(short_in, "piped", layout), Contains("holds 100 bytes of samples"));
+    CHECK(short_in.exceptions() == mask);
+    std::istringstream whole(samples);
+    whole.exceptions(mask);
+    CHECK(read_raw(whole, "piped", layout).dims == layout.dims);  // its end is peeked at, not an error
+    CHECK(whole.exceptions() == mask);
+}

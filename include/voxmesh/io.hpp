@@ -62,7 +62,8 @@ struct RawLayout {
 Volume read_raw(const std::string& path, const RawLayout& layout);
 // The same samples from a stream (a pipe, stdin): `offset` bytes are skipped, then exactly
 // nx*ny*nz*scalar_size bytes are read into memory (checked against the memory available
-// first), and the stream must end there. Errors name `name`.
+// first), and the stream must end there. Errors name `name`; they are voxmesh::Error whatever
+// the stream's exception mask, which is kept.
 Volume read_raw(std::istream& in, const std::string& name, const RawLayout& layout);
 
 // What a volume file holds, read from its header only.

@@ -171,9 +171,34 @@ Volume load_samples(const std::string& header_path, const SampleLayout& layout) 
     return v;
 }
 
+namespace {
+
+// The caller's exception mask off while reading, so that the end of the stream is one of our
+// Errors (naming what is missing) and not a std::ios_base::failure; put back afterwards,
+// without throwing for the eof and fail bits the read leaves.
+class NoStreamExceptions {
+public:
+    explicit NoStreamExceptions(std::istream& in) : in_(in), mask_(in.exceptions()) { in_.exceptions(std::ios::goodbit); }
+    ~NoStreamExceptions() {
+        try {
+            in_.exceptions(mask_);  // sets the mask, then throws if the state has a bit of it
+        } catch (const std::ios_base::failure&) {
+        }
+    }
+    NoStreamExceptions(const NoStreamExceptions&) = delete;
+    NoStreamExceptions& operator=(const NoStreamExceptions&) = delete;
+
+private:
+    std::istream& in_;
+    std::ios::iostate mask_;
+};
+
+}  // namespace
+
 Volume load_stream_samples(std::istream& in, const std::string& name, const SampleLayout& layout) {
     const std::size_t bytes = sample_bytes(name, layout.dims, layout.type);
     check_memory(name, bytes);
+    const NoStreamExceptions quiet(in);
     // Reads up to n bytes; fewer only where the stream ends.
     const auto read_some = [&](char* out, std::size_t n) {
         std::size_t done = 0;
