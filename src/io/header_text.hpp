@@ -1,5 +1,5 @@
-// Small strict parsers shared by the text headers (NRRD, MetaImage): a number must be the
-// whole token, or it is an error naming the file and the field.
+// Small strict parsers shared by the text headers (NRRD, MetaImage) and the text mesh formats:
+// a number must be the whole token, or it is an error naming the file and the field.
 #pragma once
 
 #include <cstddef>
@@ -28,6 +28,10 @@ bool next_line(std::string_view text, std::size_t& pos, std::string_view& line);
 std::size_t parse_size(const std::string& path, std::string_view field, std::string_view token);
 long long parse_integer(const std::string& path, std::string_view field, std::string_view token);
 double parse_double(const std::string& path, std::string_view field, std::string_view token);
+// A decimal number word of a text mesh format (ASCII STL, ASCII PLY, OBJ) as float: the whole
+// word, an optional '+'; a value too small for a float reads as a signed zero, one beyond its
+// range is an error. Errors read "'path': <where>'word' is ...".
+float parse_float_word(const std::string& path, const std::string& where, std::string_view word);
 // Whitespace-separated numbers; the count must be `expected` (when non-zero).
 std::vector<double> parse_doubles(const std::string& path, std::string_view field, std::string_view value,
                                   std::size_t expected);

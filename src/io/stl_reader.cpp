@@ -7,10 +7,8 @@
 
 #include <voxmesh/io.hpp>
 
-#include <algorithm>
 #include <array>
 #include <bit>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -97,29 +95,6 @@ private:
     std::size_t pos_ = 0, line_ = 1;
 };
 
-// The power of ten of the leading significant digit of a decimal that from_chars accepted
-// ("1e39" -> 39, "-0.05e-48" -> -50). For a float out of range it tells overflow (>= 0)
-// from underflow (< 0) exactly, even where a double would be out of range too.
-long long decimal_magnitude(std::string_view word) {
-    std::size_t i = word.front() == '-' ? 1 : 0;
-    long long digits = 0, before_point = -1, first = -1;  // counts and index of mantissa digits
-    for (; i < word.size() && word[i] != 'e' && word[i] != 'E'; ++i) {
-        if (word[i] == '.') {
-            before_point = digits;
-            continue;
-        }
-        if (first < 0 && word[i] != '0') first = digits;
-        ++digits;
-    }
-    if (first < 0) return 0;  // zero is never out of range
-    if (before_point < 0) before_point = digits;
-    long long exponent = 0;
-    for (std::size_t k = i + 1; k < word.size(); ++k)  // saturates: the sign is all that matters
-        if (word[k] >= '0' && word[k] <= '9') exponent = std::min(exponent * 10 + (word[k] - '0'), 1000000000LL);
-    if (i + 1 < word.size() && word[i + 1] == '-') exponent = -exponent;
-    return before_point - 1 - first + exponent;
-}
-
 void read_ascii(const std::string& path, std::string_view text, Mesh& mesh) {
     Tokens tokens(text);
     auto where = [&] { return "ASCII STL line " + std::to_string(tokens.line()) + ": "; };
@@ -131,23 +106,7 @@ void read_ascii(const std::string& path, std::string_view text, Mesh& mesh) {
         found.append(io::shown(got)).append("'");
         fail(path, where() + "expected '" + word + "', found " + (got.empty() ? std::string("end of file") : found));
     };
-    auto number = [&] {
-        std::string_view word = tokens.next();
-        if (!word.empty() && word.front() == '+') word.remove_prefix(1);
-        float value = 0;
-        const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), value);
-        if (end != word.data() + word.size() || word.empty() ||
-            (ec != std::errc() && ec != std::errc::result_out_of_range))
-            fail(path, where() + "'" + io::shown(word) + "' is not a number");
-        if (ec == std::errc::result_out_of_range) {
-            // Underflow reads as a signed zero (as strtof and most STL readers do); overflow
-            // has no float to stand for it.
-            if (decimal_magnitude(word) >= 0)
-                fail(path, where() + "'" + io::shown(word) + "' is beyond the range of float (about 3.4e38)");
-            value = word.front() == '-' ? -0.0f : 0.0f;
-        }
-        return value;
-    };
+    auto number = [&] { return io::parse_float_word(path, where(), tokens.next()); };
 
     Welder welder(path, mesh);
     std::size_t triangle = 0;
