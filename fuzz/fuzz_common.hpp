@@ -5,6 +5,7 @@
 
 #include <voxmesh/io.hpp>
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
@@ -64,6 +65,19 @@ inline void read_volume_file(const std::string& path) {
         touch(v);
     } catch (const voxmesh::Error&) {
     }
+}
+
+// What a mesh reader returns must be a well-formed mesh: whole triples, normals for every
+// vertex or none, every index in range, every coordinate and normal finite.
+inline void check_mesh(const voxmesh::Mesh& mesh) {
+    if (mesh.indices.size() % 3 != 0 || mesh.positions.size() % 3 != 0) std::abort();
+    if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size()) std::abort();
+    for (std::uint32_t i : mesh.indices)
+        if (i >= mesh.vertex_count()) std::abort();
+    for (float v : mesh.positions)
+        if (!std::isfinite(v)) std::abort();
+    for (float v : mesh.normals)
+        if (!std::isfinite(v)) std::abort();
 }
 
 // extract() of a volume the library made (a sculpt's, voxelize's), on the CPU engine and one

@@ -115,5 +115,25 @@ void write_nrrd(const std::string& path, const VolumeView& volume,
 // coordinates are an error, and so is an ASCII number beyond the float range (one too small
 // for a float reads as 0).
 Mesh read_stl(const std::string& path);
+// PLY: ascii, binary_little_endian or binary_big_endian 1.0. The "vertex" element's x, y, z
+// (any PLY scalar type, read as float) become positions, and its nx, ny, nz normals where all
+// three are present; other properties and elements are skipped. The "face" element's list
+// "vertex_indices" (or "vertex_index") becomes triangles: polygons are fanned from their
+// first corner, keeping the file's order and winding. Vertices are kept as the file indexes
+// them (not welded). Element counts are checked against the file's size before anything is
+// allocated; a face with fewer than three corners, an index outside the vertices, and a
+// non-finite or beyond-float coordinate are errors.
+Mesh read_ply(const std::string& path);
+// Wavefront OBJ: "v x y z" positions and "f" faces (v, v/vt, v/vt/vn, v//vn; negative
+// indices count back from the latest vertex), polygons fanned from their first corner in the
+// file's order and winding; vertices kept as the file indexes them (not welded). Normals are
+// filled only where the file has one "vn" per "v" and every corner names the normal of its
+// own vertex (as write_mesh writes them); otherwise they are left empty. Other statements
+// (vt, o, g, s, usemtl, mtllib, l, p) are skipped. A face with fewer than three corners, an
+// index outside the vertices read so far, and a non-finite or beyond-float coordinate are
+// errors.
+Mesh read_obj(const std::string& path);
+// read_stl, read_ply or read_obj, chosen by the extension (.stl, .ply, .obj; any case).
+Mesh read_mesh(const std::string& path);
 
 }  // namespace voxmesh

@@ -72,6 +72,14 @@ std::shared_ptr<unsigned char> InputFile::map() const {
                                           [length](unsigned char* p) { ::munmap(p, length); });
 }
 
+MappedFile map_whole_file(const std::string& path) {
+    const InputFile file(path);
+    MappedFile mapped;
+    mapped.mapping = file.map();  // the mapping outlives the descriptor
+    mapped.text = std::string_view(reinterpret_cast<const char*>(mapped.mapping.get()), file.size());
+    return mapped;
+}
+
 std::size_t physical_memory() {
     const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
     if (pages > 0 && page > 0) return static_cast<std::size_t>(pages) * static_cast<std::size_t>(page);

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <memory>
 #include <string>
+#include <string_view>
 
 namespace voxmesh::io {
 
@@ -34,6 +35,15 @@ private:
     int fd_ = -1;
     std::size_t size_ = 0;
 };
+
+// A whole file mapped for a parser that reads it as bytes or as text (the mesh readers);
+// an empty file is an Error naming it.
+struct MappedFile {
+    std::shared_ptr<unsigned char> mapping;
+    std::string_view text;  // all of it
+    const unsigned char* bytes() const { return mapping.get(); }
+};
+MappedFile map_whole_file(const std::string& path);
 
 // The machine's physical memory in bytes (SIZE_MAX when the system does not say).
 std::size_t physical_memory();

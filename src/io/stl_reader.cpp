@@ -153,11 +153,9 @@ bool starts_with_solid(std::string_view text) {
 }  // namespace
 
 Mesh read_stl(const std::string& path) {
-    const io::InputFile file(path);
-    const std::size_t size = file.size();
-    if (size == 0) fail(path, "file is empty");
-    const std::shared_ptr<unsigned char> mapping = file.map();
-    const unsigned char* data = mapping.get();
+    const io::MappedFile file = io::map_whole_file(path);
+    const std::size_t size = file.text.size();
+    const unsigned char* data = file.bytes();
 
     Mesh mesh;
     std::string binary_problem;
@@ -176,7 +174,7 @@ Mesh read_stl(const std::string& path) {
     } else {
         binary_problem = "at " + std::to_string(size) + " bytes it is too short for binary STL (84-byte header)";
     }
-    const std::string_view text(reinterpret_cast<const char*>(data), size);
+    const std::string_view text = file.text;
     if (!starts_with_solid(text)) fail(path, "not an STL file: " + binary_problem + ", and it does not start with 'solid'");
     try {
         read_ascii(path, text, mesh);

@@ -1,6 +1,7 @@
 #include "support/mesh_checks.hpp"
 
 #include <algorithm>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -224,5 +225,18 @@ std::vector<std::string> directory_entries(const std::string& dir) {
 }
 
 std::vector<std::string> TempDir::entries() const { return directory_entries(path_); }
+
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
+}
+
+voxmesh::Mesh small_sphere_mesh(bool normals) {
+    const Dims dims{17, 15, 13};
+    const std::vector<float> values = sample_field<float>(dims, sphere({8.2, 7.1, 6.3}, 5.1));
+    voxmesh::Options o;
+    o.backend = voxmesh::Backend::Cpu;
+    o.normals = normals;
+    return voxmesh::extract(view_of(values, dims, {0.5, 0.75, 1.0}, {-2.5, 1.0, 100.0}), o);
+}
 
 }  // namespace vmtest

@@ -43,6 +43,9 @@ double max_normal_length_error(const voxmesh::Mesh& mesh);
 // Index buffer out of range, array sizes not multiples of 3, normals size mismatch.
 std::string structural_problem(const voxmesh::Mesh& mesh);
 
+// Bit-for-bit equality of float arrays (-0 is not +0), for round trips through a file.
+bool same_bits(const std::vector<float>& a, const std::vector<float>& b);
+
 // ------------------------------------------------------------------ triangle sets
 
 using TriKey = std::array<std::uint64_t, 3>;
@@ -179,5 +182,9 @@ public:
 private:
     std::string path_;
 };
+
+// A small sphere (a few hundred triangles) meshed on the CPU engine, placed with spacing and
+// origin that are not 1 and 0: what the mesh readers' round-trip tests write and read back.
+voxmesh::Mesh small_sphere_mesh(bool normals);
 
 }  // namespace vmtest

@@ -1,0 +1,70 @@
+// The mesh readers against the mesh writer: what write_mesh writes, read_mesh (choosing the
+// reader by extension) gives back. PLY and OBJ keep the mesh bit for bit; STL keeps every
+// triangle's corners (it is welded on reading and stores no vertex normals).
+#include <catch2/catch.hpp>
+#include <voxmesh/io.hpp>
+
+#include <array>
+#include <cfloat>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "support/io_scratch.hpp"
+#include "support/mesh_checks.hpp"
+
+using Catch::Matchers::Contains;
+using namespace voxmesh;
+
+namespace {
+
+// Each triangle as its three corner positions, in the mesh's order and winding: what a mesh
+// is whatever the vertex numbering.
+std::vector<std::array<float, 9>> corners(const Mesh& m) {
+    std::vector<std::array<float, 9>> out(m.triangle_count());
+    for (std::size_t t = 0; t < m.triangle_count(); ++t)
+        for (std::size_t k = 0; k < 3; ++k)
+            for (std::size_t c = 0; c < 3; ++c) out[t][3 * k + c] = m.positions[3 * m.indices[3 * t + k] + c];
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("read_mesh reads back what write_mesh wrote, in each format, by extension", "[io][mesh]") {
+    // Extreme floats, a degenerate triangle and a vertex in no face, besides a real mesh.
+    Mesh extreme;
+    const float denormal = std::numeric_limits<float>::denorm_min();
+    extreme.positions = {-0.0f, FLT_MAX, -FLT_MAX, FLT_MIN, denormal, -denormal, 0.1f,       1e-7f,
+                         3,     1,       2,        3,       123456.789f, -0.0f, 1.0f / 3.0f};
+    extreme.normals = {-0.0f, 0, 1, 0.6f, 0.8f, -0.0f, 1e-30f, -1, 0, 0, 0, 0, 1, 0, 0};
+    extreme.indices = {0, 1, 2, 2, 2, 0, 1, 3, 2};
+    Mesh extreme_bare = extreme;
+    extreme_bare.normals.clear();
+    const Mesh meshes[] = {vmtest::small_sphere_mesh(false), vmtest::small_sphere_mesh(true), extreme, extreme_bare};
+    REQUIRE(meshes[0].triangle_count() > 100);
+    REQUIRE(meshes[1].normals.size() == meshes[1].positions.size());
+    iotest::Scratch s;
+    for (const Mesh& mesh : meshes) {
+        for (const char* name : {"m.ply", "m.obj", "M.PLY", "M.Obj", "m.stl"}) {
+            INFO(name << ": " << mesh.vertex_count() << " vertices, normals " << !mesh.normals.empty());
+            const std::string path = s.dir + "/" + name;
+            write_mesh(path, mesh);
+            const Mesh back = read_mesh(path);
+            if (std::string(name) == "m.stl") {
+                CHECK(corners(back) == corners(mesh));  // as floats: -0 == +0
+                CHECK(back.normals.empty());
+                continue;
+            }
+            CHECK(vmtest::same_bits(back.positions, mesh.positions));
+            CHECK(vmtest::same_bits(back.normals, mesh.normals));
+            CHECK(back.indices == mesh.indices);
+        }
+    }
+}
+
+TEST_CASE("read_mesh refuses an extension it has no reader for, naming it", "[io][mesh][errors]") {
+    iotest::Scratch s;
+    CHECK_THROWS_WITH(read_mesh(s.file("model.off", "OFF\n3 1 0\n")), Contains("model.off") && Contains("'.off'"));
+    CHECK_THROWS_WITH(read_mesh(s.file("model", "solid x\nendsolid x\n")), Contains("unknown mesh format"));
+    CHECK_THROWS_WITH(read_mesh(s.dir + "/missing.ply"), Contains("missing.ply"));
+}
