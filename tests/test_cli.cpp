@@ -8,6 +8,8 @@
 #include "support/mesh_checks.hpp"
 #include "support/run_program.hpp"
 
+#include <voxmesh/io.hpp>
+
 #include <cmath>
 #include <csignal>
 #include <cstdint>
@@ -400,6 +402,85 @@ TEST_CASE("cli: devices and demo", "[cli]") {
     CHECK(demo.code == 0);
     CHECK(demo.out.find("index buffer identical") != std::string::npos);
     CHECK(demo.out.find("opencl") != std::string::npos);
+}
+
+TEST_CASE("cli: info on a model gives its size, topology, area and volume", "[cli]") {
+    Scratch s;
+    const Result t = run(s, "info " + quote(data_file("torus.stl")));
+    INFO(t.err);
+    REQUIRE(t.code == 0);
+    CHECK(t.out.find("triangles: 8700") != std::string::npos);
+    CHECK(t.out.find("closed 2-manifold, euler 0") != std::string::npos);  // genus 1
+    // A torus of radii 1 and 0.5: area 4 pi^2 R r = 19.74, volume 2 pi^2 R r^2 = 4.93, less
+    // for the inscribed polygons.
+    const auto value_after = [](const std::string& out, const std::string& label) {
+        const std::size_t at = out.find(label);
+        return at == std::string::npos ? 0.0 : std::stod(out.substr(at + label.size()));
+    };
+    CHECK(value_after(t.out, "area:") == Approx(19.74).epsilon(0.01));
+    CHECK(value_after(t.out, "volume:") == Approx(4.93).epsilon(0.01));
+
+    // The same sphere wound inward, as OBJ: the volume says so; one face less: open.
+    voxmesh::Mesh sphere = voxmesh::read_stl(data_file("unit_sphere.stl"));
+    for (std::size_t i = 0; i < sphere.indices.size(); i += 3) std::swap(sphere.indices[i + 1], sphere.indices[i + 2]);
+    const std::string inward = s.path("inward.obj");
+    voxmesh::write_mesh(inward, sphere);
+    const Result in = run(s, "info " + quote(inward));
+    REQUIRE(in.code == 0);
+    CHECK(in.out.find("closed 2-manifold, euler 2") != std::string::npos);
+    CHECK(value_after(in.out, "volume:") == Approx(-4.15).epsilon(0.01));
+    CHECK(in.out.find("face inward") != std::string::npos);
+    sphere.indices.resize(sphere.indices.size() - 3);
+    const std::string open = s.path("open.ply");
+    voxmesh::write_mesh(open, sphere);
+    const Result o = run(s, "info " + quote(open));
+    REQUIRE(o.code == 0);
+    CHECK(o.out.find("open: 3 boundary edges") != std::string::npos);
+    CHECK(o.out.find("volume:") == std::string::npos);
+
+    expect_rejected(s, "info " + quote(open) + " --dims 2 2 2", "open.ply", "", "apply only to .raw");
+    const std::string junk = s.write("junk.ply", "ply\nformat ascii 1.0\n");
+    expect_rejected(s, "info " + quote(junk), "junk.ply", "");
+}
+
+// The same model as STL, PLY and OBJ (the PLY and OBJ written by the library from what
+// read_stl read) voxelizes to the same volume, and sculpts to the same mesh.
+TEST_CASE("cli: voxelize and sculpt read PLY and OBJ models as they read STL", "[cli]") {
+    Scratch s;
+    const voxmesh::Mesh torus = voxmesh::read_stl(data_file("torus.stl"));
+    const std::string ply = s.path("torus.ply"), obj = s.path("torus.obj");
+    voxmesh::write_mesh(ply, torus);
+    voxmesh::write_mesh(obj, torus);
+    const std::string strokes = s.write("strokes.txt", "units world\nsubtract 0 0 0.2 0.3 2\n");
+    std::vector<std::vector<float>> volumes;
+    std::vector<std::string> sculpted;
+    for (const std::string& model : {data_file("torus.stl"), ply, obj}) {
+        INFO(model);
+        const std::string vol = s.path("v.nrrd"), out = s.path("sculpted.ply");
+        const Result v = run(s, "voxelize " + quote(model) + " -o " + quote(vol) + " --resolution 32");
+        INFO(v.err);
+        REQUIRE(v.code == 0);
+        CHECK(v.out.find(std::to_string(torus.triangle_count()) + " triangles") != std::string::npos);
+        const voxmesh::Volume volume = voxmesh::read_volume(vol);
+        REQUIRE(volume.type == voxmesh::ScalarType::F32);
+        const auto* f = static_cast<const float*>(volume.data);
+        volumes.emplace_back(f, f + volume.dims[0] * volume.dims[1] * volume.dims[2]);
+        const Result r = run(s, "sculpt " + quote(model) + " --resolution 32 --strokes " + quote(strokes) + " -o " + quote(out));
+        INFO(r.err);
+        REQUIRE(r.code == 0);
+        sculpted.push_back(iotest::read_file(out));
+    }
+    CHECK(volumes[1] == volumes[0]);
+    CHECK(volumes[2] == volumes[0]);
+    CHECK(sculpted[1] == sculpted[0]);
+    CHECK(sculpted[2] == sculpted[0]);
+
+    const std::string other = s.write("model.off", "OFF\n");
+    expect_rejected(s, "voxelize " + quote(other) + " -o " + quote(s.path("n.nrrd")) + " --resolution 16", "model.off",
+                    s.path("n.nrrd"), "not a mesh file");
+    const std::string broken = s.write("broken.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\n");
+    expect_rejected(s, "voxelize " + quote(broken) + " -o " + quote(s.path("n.nrrd")) + " --resolution 16",
+                    "broken.obj", s.path("n.nrrd"), "line 3");
 }
 
 TEST_CASE("cli: sculpt a real STL model with a stroke script", "[cli]") {

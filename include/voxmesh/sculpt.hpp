@@ -114,8 +114,11 @@ public:
     static Sculpt from_function(std::array<std::size_t, 3> dims, ScalarType type,
                                 const std::function<double(double, double, double)>& f,
                                 const SculptOptions& options = {});
-    // read_stl + voxelize(Distance): f32, positive inside, iso 0, in the model's units;
-    // strength_scale defaults to the voxel spacing (strength = samples of displacement).
+    // A closed model voxelized (voxelize, Distance field) at `resolution`: f32, positive inside,
+    // iso 0, in the model's units; strength_scale defaults to the voxel spacing (strength =
+    // samples of displacement).
+    static Sculpt from_mesh(const Mesh& model, std::size_t resolution, const SculptOptions& options = {});
+    // from_mesh(read_stl(path)); read_mesh (io.hpp) also reads .ply and .obj models.
     static Sculpt from_stl(const std::string& path, std::size_t resolution, const SculptOptions& options = {});
 
     Sculpt(Sculpt&&) noexcept;

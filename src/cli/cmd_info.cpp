@@ -1,7 +1,9 @@
-// voxmesh info FILE [raw flags]: the header first (no samples loaded), then the value range.
+// voxmesh info FILE [raw flags]: for a volume, the header first (no samples loaded), then the
+// value range; for a model (.stl, .ply, .obj), its size, bounds, topology, area and volume.
 #include "common.hpp"
 
 #include <array>
+#include <cmath>
 #include <iostream>
 #include <memory>
 
@@ -22,8 +24,63 @@ std::string flipped_axes(const std::array<bool, 3>& flipped) {
     return out;
 }
 
+bool is_model_path(const std::string& path) {
+    const std::string ext = lower_extension(path);
+    return ext == ".stl" || ext == ".ply" || ext == ".obj";
+}
+
+// What voxelize needs to know before it is run on a model: whether it is closed (every edge
+// in two triangles), how large it is, and whether its triangles face outward (a positive
+// enclosed volume).
+int run_model_info(const std::string& path) {
+    const Mesh m = about_file(path, [&] { return read_mesh(path); });
+    const MeshTopology t = analyze_topology(m);
+    std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
+    for (std::size_t v = 0; v < m.vertex_count(); ++v)
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double x = m.positions[3 * v + c];
+            lo[c] = v == 0 ? x : std::min(lo[c], x);
+            hi[c] = v == 0 ? x : std::max(hi[c], x);
+        }
+    double area = 0, volume = 0;  // volume: the divergence theorem, exact for a closed mesh
+    for (std::size_t i = 0; i < m.indices.size(); i += 3) {
+        std::array<std::array<double, 3>, 3> p{};
+        for (std::size_t k = 0; k < 3; ++k)
+            for (std::size_t c = 0; c < 3; ++c) p[k][c] = m.positions[3 * std::size_t{m.indices[i + k]} + c];
+        const std::array<double, 3> u{p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+        const std::array<double, 3> w{p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+        const std::array<double, 3> n{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+        area += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        volume += (p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) - p[0][1] * (p[1][0] * p[2][2] - p[1][2] * p[2][0]) +
+                   p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0])) / 6;
+    }
+    const std::string ext = lower_extension(path);
+    std::cout << "file:      " << path << "\n"
+              << "format:    " << ext.substr(1) << " mesh" << (ext == ".stl" ? " (vertices welded by position)" : "")
+              << "\n"
+              << "triangles: " << m.triangle_count() << "\n"
+              << "vertices:  " << m.vertex_count() << (m.normals.empty() ? "" : " (with normals)") << "\n";
+    if (m.vertex_count() > 0)
+        std::cout << "bounds:    " << triple_text(lo) << " .. " << triple_text(hi) << "\n";
+    if (t.closed())
+        std::cout << "topology:  closed 2-manifold, euler " << t.euler << "\n"
+                  << "area:      " << format_double(area) << "\n"
+                  << "volume:    " << format_double(volume)
+                  << (volume < 0 ? " (negative: the triangles face inward)" : "") << "\n";
+    else
+        std::cout << "topology:  open: " << t.boundary_edges << " boundary edges, " << t.nonmanifold_edges
+                  << " edges in three or more triangles, euler " << t.euler << " (voxelize needs a closed model)\n"
+                  << "area:      " << format_double(area) << "\n";
+    return kExitOk;
+}
+
 int run_info(const InfoArgs& a) {
     check_input_file(a.input);
+    if (is_model_path(a.input)) {
+        if (a.raw.any_given())
+            throw BadInput("'" + a.input + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
+        return run_model_info(a.input);
+    }
     const bool is_raw = is_raw_path(a.input);
     if (!is_raw && a.raw.any_given())
         throw BadInput("'" + a.input + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
@@ -65,8 +122,10 @@ int run_info(const InfoArgs& a) {
 
 Command add_info(CLI::App& app) {
     auto a = std::make_shared<InfoArgs>();
-    CLI::App* sub = app.add_subcommand("info", "Print a volume file's dims, type, spacing, origin, value range, size");
-    sub->add_option("FILE", a->input, "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, or .raw with --dims --type")
+    CLI::App* sub = app.add_subcommand(
+        "info", "Print a volume file's dims, type, spacing, origin, value range, size; or a model's size and topology");
+    sub->add_option("FILE", a->input,
+                    "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, or .raw with --dims --type; model: .stl, .ply, .obj")
         ->required();
     add_raw_flags(sub, a->raw);
     return {sub, [a] { return run_info(*a); }};

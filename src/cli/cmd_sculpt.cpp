@@ -1,4 +1,4 @@
-// voxmesh sculpt MODEL.stl --resolution N --strokes FILE -o OUT.ply [--backend cpu|opencl|auto] [--device I]
+// voxmesh sculpt MODEL.stl|.ply|.obj --resolution N --strokes FILE -o OUT.ply [--backend cpu|opencl|auto] [--device I]
 //                [--threads T] [--frames]
 // The paper's loop: voxelize a model, apply brush dabs, re-mesh only what each dab touched.
 #include "common.hpp"
@@ -27,7 +27,7 @@ int run_sculpt(const SculptArgs& a) {
     check_output_path(a.output, {".stl", ".ply", ".obj"});
     check_input_file(a.input);
     check_input_file(a.strokes);
-    if (lower_extension(a.input) != ".stl") throw BadInput("'" + a.input + "': not an STL file (sculpt reads .stl models)");
+    check_model_extension(a.input, "sculpt");
     const auto dabs = about_file(a.strokes, [&] { return read_stroke_script(a.strokes); });
 
     SculptOptions options;
@@ -36,7 +36,8 @@ int run_sculpt(const SculptArgs& a) {
     options.device = a.device;
     options.log = [](const std::string& message) { std::cerr << "voxmesh: warning: " << message << "\n"; };
     const auto t0 = std::chrono::steady_clock::now();
-    Sculpt sculpt = about_file(a.input, [&] { return Sculpt::from_stl(a.input, a.resolution, options); });
+    const Mesh model = about_file(a.input, [&] { return read_mesh(a.input); });
+    Sculpt sculpt = about_file(a.input, [&] { return Sculpt::from_mesh(model, a.resolution, options); });
     const UpdateResult first = sculpt.update();
     const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -67,8 +68,8 @@ int run_sculpt(const SculptArgs& a) {
 Command add_sculpt(CLI::App& app) {
     auto a = std::make_shared<SculptArgs>();
     CLI::App* sub = app.add_subcommand(
-        "sculpt", "Voxelize an STL model, apply a stroke script (re-meshing only what each dab changed), write the mesh");
-    sub->add_option("MODEL", a->input, "closed triangle mesh (.stl)")->required();
+        "sculpt", "Voxelize a closed model (STL, PLY, OBJ), apply a stroke script (re-meshing only what each dab changed), write the mesh");
+    sub->add_option("MODEL", a->input, "closed triangle mesh (.stl, .ply or .obj)")->required();
     sub->add_option("--strokes", a->strokes,
                     "stroke script: one dab per line 'op x y z radius strength', op add|subtract|smooth|set, "
                     "'#' comments; coordinates in samples, or model units after a line 'units world'")

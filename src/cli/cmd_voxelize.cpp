@@ -1,4 +1,4 @@
-// voxmesh voxelize MODEL.stl -o VOLUME.nrrd --resolution N [--padding P] [--field occupancy|distance]
+// voxmesh voxelize MODEL.stl|.ply|.obj -o VOLUME.nrrd --resolution N [--padding P] [--field occupancy|distance]
 #include "common.hpp"
 
 #include <voxmesh/voxelize.hpp>
@@ -21,9 +21,8 @@ struct VoxelizeArgs {
 int run_voxelize(const VoxelizeArgs& a) {
     check_output_path(a.output, {".nrrd"});
     check_input_file(a.input);
-    if (lower_extension(a.input) != ".stl")
-        throw BadInput("'" + a.input + "': not an STL file (voxelize reads .stl models)");
-    const Mesh model = about_file(a.input, [&] { return read_stl(a.input); });
+    check_model_extension(a.input, "voxelize");
+    const Mesh model = about_file(a.input, [&] { return read_mesh(a.input); });
 
     VoxelizeOptions options;
     options.resolution = a.resolution;
@@ -48,8 +47,8 @@ int run_voxelize(const VoxelizeArgs& a) {
 
 Command add_voxelize(CLI::App& app) {
     auto a = std::make_shared<VoxelizeArgs>();
-    CLI::App* sub = app.add_subcommand("voxelize", "Turn a closed STL model into a volume (surface and interior)");
-    sub->add_option("MODEL", a->input, "closed triangle mesh (.stl, binary or ASCII)")->required();
+    CLI::App* sub = app.add_subcommand("voxelize", "Turn a closed model (STL, PLY, OBJ) into a volume (surface and interior)");
+    sub->add_option("MODEL", a->input, "closed triangle mesh (.stl binary or ASCII, .ply, .obj)")->required();
     sub->add_option("-o,--output", a->output, "volume file to write (.nrrd)")->required();
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (2..4096)")
         ->required()

@@ -86,6 +86,12 @@ void check_input_file(const std::string& path) {
     std::fclose(f);
 }
 
+void check_model_extension(const std::string& path, const std::string& command) {
+    const std::string ext = lower_extension(path);
+    if (ext != ".stl" && ext != ".ply" && ext != ".obj")
+        throw BadInput("'" + path + "': not a mesh file (" + command + " reads .stl, .ply and .obj models)");
+}
+
 void check_output_path(const std::string& path, const std::vector<std::string>& extensions) {
     const std::string ext = lower_extension(path);
     if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end()) {

@@ -1,13 +1,13 @@
-// Sculpt::from_stl: an STL model voxelized into a signed distance field (its own translation
-// unit, so programs that never load STL models do not pull in the reader and voxelizer).
+// Sculpt::from_mesh and from_stl: a model voxelized into a signed distance field (their own
+// translation unit, so programs that never load models do not pull in the reader and
+// voxelizer).
 #include <voxmesh/io.hpp>
 #include <voxmesh/sculpt.hpp>
 #include <voxmesh/voxelize.hpp>
 
 namespace voxmesh {
 
-Sculpt Sculpt::from_stl(const std::string& path, std::size_t resolution, const SculptOptions& options) {
-    const Mesh model = read_stl(path);
+Sculpt Sculpt::from_mesh(const Mesh& model, std::size_t resolution, const SculptOptions& options) {
     VoxelizeOptions vo;
     vo.resolution = resolution;
     vo.field = VoxelField::Distance;
@@ -17,6 +17,10 @@ Sculpt Sculpt::from_stl(const std::string& path, std::size_t resolution, const S
     SculptOptions so = options;
     if (so.strength_scale == 0) so.strength_scale = volume.spacing[0];
     return Sculpt(volume.view(), so);
+}
+
+Sculpt Sculpt::from_stl(const std::string& path, std::size_t resolution, const SculptOptions& options) {
+    return from_mesh(read_stl(path), resolution, options);
 }
 
 }  // namespace voxmesh
