@@ -438,6 +438,14 @@ TEST_CASE("cli: info on a model gives its size, topology, area and volume", "[cl
     CHECK(o.out.find("open: 3 boundary edges") != std::string::npos);
     CHECK(o.out.find("volume:") == std::string::npos);
 
+    const std::string cloud = s.write("cloud.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
+                                                   "property float y\nproperty float z\nend_header\n0 0 0\n1 2 3\n");
+    const Result c = run(s, "info " + quote(cloud));
+    REQUIRE(c.code == 0);
+    CHECK(c.out.find("vertices:  2") != std::string::npos);
+    CHECK(c.out.find("no triangles") != std::string::npos);
+    CHECK(c.out.find("closed 2-manifold") == std::string::npos);
+
     expect_rejected(s, "info " + quote(open) + " --dims 2 2 2", "open.ply", "", "apply only to .raw");
     const std::string junk = s.write("junk.ply", "ply\nformat ascii 1.0\n");
     expect_rejected(s, "info " + quote(junk), "junk.ply", "");

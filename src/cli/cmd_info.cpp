@@ -62,7 +62,9 @@ int run_model_info(const std::string& path) {
               << "vertices:  " << m.vertex_count() << (m.normals.empty() ? "" : " (with normals)") << "\n";
     if (m.vertex_count() > 0)
         std::cout << "bounds:    " << triple_text(lo) << " .. " << triple_text(hi) << "\n";
-    if (t.closed())
+    if (m.triangle_count() == 0)
+        std::cout << "topology:  no triangles (a point cloud; voxelize needs a closed model)\n";
+    else if (t.closed())
         std::cout << "topology:  closed 2-manifold, euler " << t.euler << "\n"
                   << "area:      " << format_double(area) << "\n"
                   << "volume:    " << format_double(volume)
