@@ -211,6 +211,26 @@ TEST_CASE("voxelize: grid geometry", "[voxelize]") {
     CHECK(v.origin[0] == Approx(0.625 - 3 * 1.25));  // first voxel centre, less the padding
 }
 
+// A PLY or OBJ may hold vertices no face uses (a mesh through the API too): the grid is the
+// triangles' box, whatever lies outside it, and the samples are the same as without them.
+TEST_CASE("voxelize: vertices in no triangle do not move the grid", "[voxelize]") {
+    const voxmesh::Mesh box = subdivided_box({0, 0, 0}, {20, 10, 5}, 1);
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 16;
+    const voxmesh::Volume plain = voxmesh::voxelize(box, vo);
+    for (const std::array<float, 3> stray : {std::array<float, 3>{-1e6f, -1e6f, -1e6f}, {1e6f, 1e6f, 1e6f}}) {
+        INFO("stray vertex at " << stray[0]);
+        voxmesh::Mesh with_stray = box;
+        with_stray.positions.insert(with_stray.positions.end(), stray.begin(), stray.end());
+        const voxmesh::Volume v = voxmesh::voxelize(with_stray, vo);
+        CHECK(v.dims == plain.dims);
+        CHECK(v.origin == plain.origin);
+        CHECK(v.spacing == plain.spacing);
+        REQUIRE(v.byte_size() == plain.byte_size());
+        CHECK(std::memcmp(v.data, plain.data, v.byte_size()) == 0);
+    }
+}
+
 TEST_CASE("voxelize: rays through vertices and along edges leave no streaks", "[voxelize]") {
     SECTION("box whose face vertices lie on sample rows") {
         // Box [0, 1]^3 at resolution 8: samples at odd multiples of 1/16; faces cut at every

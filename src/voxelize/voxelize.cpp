@@ -125,7 +125,8 @@ struct Grid {
 };
 
 Grid make_grid(const Soup& soup, const VoxelizeOptions& options) {
-    Vec3 lo = soup.points[0], hi = soup.points[0];
+    // The triangles' box: points[0] may be a vertex no triangle uses (a stray PLY vertex).
+    Vec3 lo = soup.points[soup.tris[0][0]], hi = lo;
     for (const auto& tri : soup.tris)
         for (std::uint32_t v : tri)
             for (int d = 0; d < 3; ++d) {
