@@ -1,15 +1,58 @@
-// libFuzzer target: read_stl, then voxelize what it reads on a small grid, both fields. A
-// model voxelize accepts must give a volume that meshes back (extract) to a closed
-// 2-manifold: occupancy in {0, 255}, distances finite, and the padding keeps the surface
-// off the border.
+// libFuzzer target: read_mesh (PLY for input starting "ply", STL for "solid" or a binary STL
+// size, OBJ otherwise), then voxelize what it reads on a small grid, both fields. A model
+// voxelize accepts must give a volume that meshes back (extract) to a closed 2-manifold:
+// occupancy in {0, 255}, distances finite, and the padding keeps the surface off the border.
+// Vertices no triangle uses (PLY and OBJ keep them) must change nothing: the volume equals
+// that of the model without them.
 #include "fuzz_common.hpp"
 
 #include <voxmesh/voxelize.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdlib>
+#include <cstring>
+#include <string>
+#include <string_view>
+#include <vector>
 
 namespace {
+
+// The model without the vertices no triangle uses, renumbered in order.
+voxmesh::Mesh without_unused_vertices(const voxmesh::Mesh& model) {
+    std::vector<std::uint32_t> renumber(model.vertex_count(), UINT32_MAX);
+    for (std::uint32_t i : model.indices) renumber[i] = 0;
+    voxmesh::Mesh out;
+    for (std::size_t v = 0; v < renumber.size(); ++v) {
+        if (renumber[v] == UINT32_MAX) continue;
+        renumber[v] = static_cast<std::uint32_t>(out.vertex_count());
+        out.positions.insert(out.positions.end(), &model.positions[3 * v], &model.positions[3 * v] + 3);
+    }
+    for (std::uint32_t i : model.indices) out.indices.push_back(renumber[i]);
+    return out;
+}
+
+// The volume, or the Error's message where voxelize refuses the model.
+struct Outcome {
+    voxmesh::Volume volume;
+    std::string error;
+};
+Outcome voxelized(const voxmesh::Mesh& model, const voxmesh::VoxelizeOptions& options) {
+    Outcome out;
+    try {
+        out.volume = voxmesh::voxelize(model, options);
+    } catch (const voxmesh::Error& e) {
+        out.error = e.what();
+    }
+    return out;
+}
+
+bool same(const Outcome& a, const Outcome& b) {
+    if (!a.error.empty() || !b.error.empty()) return a.error == b.error;
+    return a.volume.dims == b.volume.dims && a.volume.origin == b.volume.origin &&
+           a.volume.spacing == b.volume.spacing &&
+           std::memcmp(a.volume.data, b.volume.data, a.volume.byte_size()) == 0;
+}
 
 void check_voxelized(const voxmesh::Mesh& model, voxmesh::VoxelField field, std::size_t resolution) {
     voxmesh::VoxelizeOptions options;
@@ -17,12 +60,11 @@ void check_voxelized(const voxmesh::Mesh& model, voxmesh::VoxelField field, std:
     options.padding = 2;
     options.field = field;
     options.threads = 1;
-    voxmesh::Volume volume;
-    try {
-        volume = voxmesh::voxelize(model, options);
-    } catch (const voxmesh::Error&) {
-        return;  // open, non-manifold, flat, beyond float, ...: refused with a message
-    }
+    const Outcome outcome = voxelized(model, options);
+    const voxmesh::Mesh used = without_unused_vertices(model);
+    if (used.vertex_count() != model.vertex_count() && !same(outcome, voxelized(used, options))) std::abort();
+    if (!outcome.error.empty()) return;  // open, non-manifold, flat, beyond float, ...: refused with a message
+    const voxmesh::Volume& volume = outcome.volume;
     const std::size_t n = volume.sample_count();
     if (field == voxmesh::VoxelField::Occupancy) {
         if (volume.type != voxmesh::ScalarType::U8) std::abort();
@@ -44,10 +86,13 @@ void check_voxelized(const voxmesh::Mesh& model, voxmesh::VoxelField field, std:
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    const std::string path = fuzz::input_file("input.stl", data, size);
+    const std::string_view text(reinterpret_cast<const char*>(data), size);
+    const bool stl = text.substr(0, 5) == "solid" || (size >= 84 && (size - 84) % 50 == 0);
+    const char* name = text.substr(0, 3) == "ply" ? "input.ply" : stl ? "input.stl" : "input.obj";
+    const std::string path = fuzz::input_file(name, data, size);
     voxmesh::Mesh model;
     try {
-        model = voxmesh::read_stl(path);
+        model = voxmesh::read_mesh(path);
     } catch (const voxmesh::Error&) {
         return 0;
     }
