@@ -120,18 +120,21 @@ Mesh read_stl(const std::string& path);
 // three are present; other properties and elements are skipped. The "face" element's list
 // "vertex_indices" (or "vertex_index") becomes triangles: polygons are fanned from their
 // first corner, keeping the file's order and winding. Vertices are kept as the file indexes
-// them (not welded). Element counts are checked against the file's size before anything is
+// them (not welded). A file with vertices and no faces (a point cloud) reads as vertices with
+// no triangles. Element counts are checked against the file's size before anything is
 // allocated; a face with fewer than three corners, an index outside the vertices, and a
 // non-finite or beyond-float coordinate are errors.
 Mesh read_ply(const std::string& path);
-// Wavefront OBJ: "v x y z" positions and "f" faces (v, v/vt, v/vt/vn, v//vn; negative
-// indices count back from the latest vertex), polygons fanned from their first corner in the
-// file's order and winding; vertices kept as the file indexes them (not welded). Normals are
-// filled only where the file has one "vn" per "v" and every corner names the normal of its
-// own vertex (as write_mesh writes them); otherwise they are left empty. Other statements
-// (vt, o, g, s, usemtl, mtllib, l, p) are skipped. A face with fewer than three corners, an
-// index outside the vertices read so far, and a non-finite or beyond-float coordinate are
-// errors.
+// Wavefront OBJ: "v x y z" positions (a w or r g b [a] after them is ignored) and "f" faces
+// (v, v/vt, v/vt/vn, v//vn; negative indices count back from the latest item), polygons
+// fanned from their first corner in the file's order and winding; vertices kept as the file
+// indexes them (not welded). Normals are filled only where the file has one finite "vn" per
+// "v" and every corner names the normal of its own vertex (as write_mesh writes them);
+// otherwise they are left empty. Other statements (vt, vp, o, g, s, usemtl, mtllib, l, p and
+// unknown ones) are skipped; '#' comments end with their line, and a '\' ending a line
+// continues the statement. Errors name the line: a face with fewer than three corners, an
+// index 0 or beyond the items read so far (no forward references), a malformed corner, a
+// non-finite or beyond-float coordinate, and a file without faces.
 Mesh read_obj(const std::string& path);
 // read_stl, read_ply or read_obj, chosen by the extension (.stl, .ply, .obj; any case).
 Mesh read_mesh(const std::string& path);
