@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cfloat>
+#include <cstdint>
 #include <limits>
 #include <string>
 #include <vector>
@@ -67,4 +68,32 @@ TEST_CASE("read_mesh refuses an extension it has no reader for, naming it", "[io
     CHECK_THROWS_WITH(read_mesh(s.file("model.off", "OFF\n3 1 0\n")), Contains("model.off") && Contains("'.off'"));
     CHECK_THROWS_WITH(read_mesh(s.file("model", "solid x\nendsolid x\n")), Contains("unknown mesh format"));
     CHECK_THROWS_WITH(read_mesh(s.dir + "/missing.ply"), Contains("missing.ply"));
+}
+
+// The readers reserve triangles from the face count; a polygon of many corners makes more,
+// grown (with the memory checked) as it is read.
+TEST_CASE("PLY and OBJ polygons of a thousand corners are fanned whole", "[io][mesh]") {
+    constexpr std::uint32_t n = 1000;
+    // Built with append: gcc 12 gives a false -Wrestrict on some operator+ chains.
+    std::string ply = "ply\nformat ascii 1.0\nelement vertex 1000\nproperty float x\nproperty float y\n"
+                      "property float z\nelement face 1\nproperty list ushort uint vertex_indices\nend_header\n";
+    std::string obj;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const std::string xyz = std::to_string(i % 37) + " " + std::to_string(i / 37) + " 0\n";
+        ply.append(xyz);
+        obj.append("v ").append(xyz);
+    }
+    ply.append("1000");
+    obj.append("f");
+    for (std::uint32_t i = 0; i < n; ++i) {
+        ply.append(" ").append(std::to_string(i));
+        obj.append(" ").append(std::to_string(i + 1));
+    }
+    std::vector<std::uint32_t> fan;  // 0 1 2, 0 2 3, ...
+    for (std::uint32_t t = 0; t < n - 2; ++t) fan.insert(fan.end(), {0, t + 1, t + 2});
+    iotest::Scratch s;
+    for (const std::string& path : {s.file("big.ply", ply + "\n"), s.file("big.obj", obj + "\n")}) {
+        INFO(path);
+        CHECK(read_mesh(path).indices == fan);
+    }
 }

@@ -2,10 +2,12 @@
 // before anything blocks on it), with errors that name the path.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace voxmesh::io {
 
@@ -51,6 +53,17 @@ std::size_t physical_memory();
 std::size_t available_memory();
 // Throws when `bytes` exceed available_memory(), before anything is allocated.
 void check_memory(const std::string& path, std::size_t bytes);
+
+// Makes room for `total` items in `v` (at least doubling, as push_back would), checking the
+// memory available first: for arrays that a file's content, not a checked header count,
+// makes larger (a mesh reader's indices from polygons of many corners).
+template <class T>
+void reserve_checked(const std::string& path, std::vector<T>& v, std::size_t total) {
+    if (total <= v.capacity()) return;
+    const std::size_t grown = std::max(total, 2 * v.capacity());
+    check_memory(path, grown * sizeof(T));
+    v.reserve(grown);
+}
 
 // True when `path` ends with `suffix`, ignoring ASCII case.
 bool ends_with_nocase(const std::string& path, const std::string& suffix);

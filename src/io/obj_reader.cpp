@@ -114,6 +114,7 @@ private:
             if (extra == 4) error("'v' has more than seven numbers (x y z, then w or r g b [a])");
             number(word);
         }
+        io::reserve_checked(path_, mesh_.positions, mesh_.positions.size() + 3);
         mesh_.positions.insert(mesh_.positions.end(), xyz, xyz + 3);
     }
 
@@ -123,6 +124,7 @@ private:
             if (word.empty()) error("'vn' needs three numbers, found " + std::to_string(i));
             const float value = number(word);
             normals_finite_ = normals_finite_ && std::isfinite(value);
+            io::reserve_checked(path_, normals_, normals_.size() + 1);
             normals_.push_back(value);
         }
         if (!words.next().empty()) error("'vn' has more than three numbers");
@@ -181,7 +183,10 @@ private:
         for (std::string_view word = words.next(); !word.empty(); word = words.next(), ++corners) {
             const std::uint32_t v = corner(word);
             if (corners == 0) first = v;
-            if (corners >= 2) mesh_.indices.insert(mesh_.indices.end(), {first, previous, v});
+            if (corners >= 2) {  // growing with the file's content: checked against the memory available
+                io::reserve_checked(path_, mesh_.indices, mesh_.indices.size() + 3);
+                mesh_.indices.insert(mesh_.indices.end(), {first, previous, v});
+            }
             previous = v;
         }
         if (corners < 3) error("face has " + std::to_string(corners) + " corners; at least three are needed");

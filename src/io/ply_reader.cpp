@@ -326,6 +326,7 @@ public:
     [[noreturn]] void error(const std::string& what) const {
         fail(path_, record_text(element_, index_) + what + " (byte " + std::to_string(p_ - begin_) + ")");
     }
+    const std::string& path() const { return path_; }
     void finish() const {
         if (p_ != end_)
             fail(path_, std::to_string(end_ - p_) + " bytes of unexpected data after the last element");
@@ -400,6 +401,7 @@ public:
         for (std::uint64_t i = 0; i < n; ++i) skip_value(p.type);
     }
     [[noreturn]] void error(const std::string& what) const { fail(path_, where() + what); }
+    const std::string& path() const { return path_; }
     void finish() {
         skip_blanks();
         word_ = pos_;
@@ -484,6 +486,8 @@ template <class Body>
 void read_polygon(Body& body, const Property& p, long long n, std::uint64_t vertices, std::vector<std::uint32_t>& out) {
     if (n < 3) body.error("a face has " + std::to_string(n) + " corners (at least 3 are needed)");
     body.expect_items(p, static_cast<std::uint64_t>(n));
+    // Reserved for triangles from the face count; a polygon of many corners makes more.
+    io::reserve_checked(body.path(), out, out.size() + 3 * static_cast<std::size_t>(n - 2));
     auto corner = [&]() -> std::uint32_t {
         const long long i = body.item(p);
         if (i < 0) body.error("negative vertex index " + std::to_string(i));
