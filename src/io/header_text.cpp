@@ -88,11 +88,11 @@ double parse_double(const std::string& path, std::string_view field, std::string
     return value;
 }
 
+namespace {
+
 // The power of ten of the leading significant digit of a decimal that from_chars accepted
 // ("1e39" -> 39, "-0.05e-48" -> -50). For a float out of range it tells overflow (>= 0)
 // from underflow (< 0) exactly, even where a double would be out of range too.
-namespace {
-
 long long decimal_magnitude(std::string_view word) {
     std::size_t i = word.front() == '-' ? 1 : 0;
     long long digits = 0, before_point = -1, first = -1;  // counts and index of mantissa digits
@@ -115,20 +115,19 @@ long long decimal_magnitude(std::string_view word) {
 
 }  // namespace
 
-float parse_float_word(const std::string& path, const std::string& where, std::string_view word) {
+const char* float_word(std::string_view& word, float& value) {
     if (!word.empty() && word.front() == '+') word.remove_prefix(1);  // from_chars rejects '+'
-    float value = 0;
+    value = 0;
     const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), value);
     if (end != word.data() + word.size() || word.empty() || (ec != std::errc() && ec != std::errc::result_out_of_range))
-        fail(path, where + "'" + shown(word) + "' is not a number");
+        return "is not a number";
     if (ec == std::errc::result_out_of_range) {
         // Underflow reads as a signed zero (as strtof and most readers do); overflow has no
         // float to stand for it.
-        if (decimal_magnitude(word) >= 0)
-            fail(path, where + "'" + shown(word) + "' is beyond the range of float (about 3.4e38)");
+        if (decimal_magnitude(word) >= 0) return "is beyond the range of float (about 3.4e38)";
         value = word.front() == '-' ? -0.0f : 0.0f;
     }
-    return value;
+    return nullptr;
 }
 
 std::vector<double> parse_doubles(const std::string& path, std::string_view field, std::string_view value,

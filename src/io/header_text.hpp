@@ -2,6 +2,8 @@
 // a number must be the whole token, or it is an error naming the file and the field.
 #pragma once
 
+#include "input_file.hpp"
+
 #include <cstddef>
 #include <string>
 #include <string_view>
@@ -30,8 +32,21 @@ long long parse_integer(const std::string& path, std::string_view field, std::st
 double parse_double(const std::string& path, std::string_view field, std::string_view token);
 // A decimal number word of a text mesh format (ASCII STL, ASCII PLY, OBJ) as float: the whole
 // word, an optional '+'; a value too small for a float reads as a signed zero, one beyond its
-// range is an error. Errors read "'path': <where>'word' is ...".
-float parse_float_word(const std::string& path, const std::string& where, std::string_view word);
+// range is refused. Returns nullptr, or what is wrong with the word ("is not a number", ...);
+// `word` loses its '+', as it is then shown.
+const char* float_word(std::string_view& word, float& value);
+// float_word, refusing with Error("'path': " + where() + "'word' is ..."). `where` (the line,
+// the record) is called only for that, not for every number read.
+template <class Where>
+float parse_float_word(const std::string& path, const Where& where, std::string_view word) {
+    float value = 0;
+    if (const char* problem = float_word(word, value)) {
+        std::string what = where();  // built with append: gcc 12's false -Wrestrict on + chains
+        what.append("'").append(shown(word)).append("' ").append(problem);
+        fail(path, what);
+    }
+    return value;
+}
 // Whitespace-separated numbers; the count must be `expected` (when non-zero).
 std::vector<double> parse_doubles(const std::string& path, std::string_view field, std::string_view value,
                                   std::size_t expected);

@@ -87,18 +87,12 @@ public:
     }
 
 private:
-    // "line N: ", rebuilt only when the line changed (parse_float_word takes it for every
-    // number; reusing the string's capacity avoids an allocation per number).
-    const std::string& where() {
-        if (where_line_ != line_) {
-            where_line_ = line_;
-            where_.assign("line ").append(std::to_string(line_)).append(": ");
-        }
-        return where_;
-    }
-    [[noreturn]] void error(const std::string& what) { fail(path_, where() + what); }
+    std::string where() const { return "line " + std::to_string(line_) + ": "; }
+    [[noreturn]] void error(const std::string& what) const { fail(path_, where() + what); }
 
-    float number(std::string_view word) { return io::parse_float_word(path_, where(), word); }
+    float number(std::string_view word) const {
+        return io::parse_float_word(path_, [this] { return where(); }, word);
+    }
 
     void vertex(Words& words) {
         if (mesh_.vertex_count() >= UINT32_MAX) error("more than 4294967295 vertices (indices are 32-bit)");
@@ -198,8 +192,7 @@ private:
     std::uint64_t texcoords_ = 0;
     bool normals_paired_ = true;  // every corner so far named its own vertex's normal
     bool normals_finite_ = true;
-    std::size_t line_ = 0, where_line_ = 0;
-    std::string where_;
+    std::size_t line_ = 0;
 };
 
 }  // namespace

@@ -384,13 +384,8 @@ public:
     bool skip_element(const Element&) { return false; }  // words must be read to be skipped
     double number(const Property& p) {
         const std::string_view w = word();
-        if (!is_integer(p.type)) {
-            float value = 0;
-            const auto [end, ec] = std::from_chars(w.data(), w.data() + w.size(), value);
-            if (ec == std::errc() && end == w.data() + w.size()) return value;
-            // A '+', an error, or underflow to zero: the shared parser decides.
-            return io::parse_float_word(path_, where() + "property '" + io::shown(p.name) + "': ", w);
-        }
+        if (!is_integer(p.type))
+            return io::parse_float_word(path_, [&] { return where() + "property '" + io::shown(p.name) + "': "; }, w);
         return static_cast<double>(whole(w, p.type));
     }
     void skip(const Property& p) { skip_value(p.type); }

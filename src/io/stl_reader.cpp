@@ -106,7 +106,7 @@ void read_ascii(const std::string& path, std::string_view text, Mesh& mesh) {
         found.append(io::shown(got)).append("'");
         fail(path, where() + "expected '" + word + "', found " + (got.empty() ? std::string("end of file") : found));
     };
-    auto number = [&] { return io::parse_float_word(path, where(), tokens.next()); };
+    auto number = [&] { return io::parse_float_word(path, where, tokens.next()); };
 
     Welder welder(path, mesh);
     std::size_t triangle = 0;
