@@ -24,11 +24,6 @@ std::string flipped_axes(const std::array<bool, 3>& flipped) {
     return out;
 }
 
-bool is_model_path(const std::string& path) {
-    const std::string ext = lower_extension(path);
-    return ext == ".stl" || ext == ".ply" || ext == ".obj";
-}
-
 // What voxelize needs to know before it is run on a model: whether it is closed (every edge
 // in two triangles), how large it is, and whether its triangles face outward (a positive
 // enclosed volume).
@@ -78,14 +73,10 @@ int run_model_info(const std::string& path) {
 
 int run_info(const InfoArgs& a) {
     check_input_file(a.input);
-    if (is_model_path(a.input)) {
-        if (a.raw.any_given())
-            throw BadInput("'" + a.input + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
-        return run_model_info(a.input);
-    }
     const bool is_raw = is_raw_path(a.input);
     if (!is_raw && a.raw.any_given())
         throw BadInput("'" + a.input + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
+    if (is_model_path(a.input)) return run_model_info(a.input);
     const RawLayout layout = is_raw ? raw_layout(a.input, a.raw) : RawLayout{};
     const VolumeInfo info =
         about_file(a.input, [&] { return is_raw ? read_raw_info(a.input, layout) : read_volume_info(a.input); });

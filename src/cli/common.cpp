@@ -86,9 +86,13 @@ void check_input_file(const std::string& path) {
     std::fclose(f);
 }
 
-void check_model_extension(const std::string& path, const std::string& command) {
+bool is_model_path(const std::string& path) {
     const std::string ext = lower_extension(path);
-    if (ext != ".stl" && ext != ".ply" && ext != ".obj")
+    return ext == ".stl" || ext == ".ply" || ext == ".obj";
+}
+
+void check_model_extension(const std::string& path, const std::string& command) {
+    if (!is_model_path(path))
         throw BadInput("'" + path + "': not a mesh file (" + command + " reads .stl, .ply and .obj models)");
 }
 

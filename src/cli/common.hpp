@@ -71,7 +71,9 @@ std::string lower_extension(const std::string& path);
 
 // A readable, non-empty regular file, or BadInput naming it.
 void check_input_file(const std::string& path);
-// A model file voxelize and sculpt read (read_mesh's .stl, .ply, .obj), or BadInput naming it.
+// A model file (read_mesh's .stl, .ply, .obj), by its extension; check_model_extension throws
+// BadInput naming it otherwise.
+bool is_model_path(const std::string& path);
 void check_model_extension(const std::string& path, const std::string& command);
 // The output's extension is one of `extensions` and its directory exists; else BadInput.
 void check_output_path(const std::string& path, const std::vector<std::string>& extensions);
