@@ -1,28 +1,14 @@
 // libFuzzer target: write_mesh in each format, then read_mesh of what it wrote. Whatever mesh
 // the writer accepts, PLY and OBJ must give back its positions, normals and indices bit for
 // bit, and STL (welded on reading, normals not stored) every triangle's corner positions in
-// order (-0 read as +0). The input is a flags byte, a vertex count, then floats for the
-// positions (and normals), then one byte per index (taken modulo the vertex count).
+// order (-0 read as +0, which compares equal). The input is a flags byte, a vertex count, then
+// floats for the positions (and normals), then one byte per index (modulo the vertex count).
 #include "fuzz_common.hpp"
+#include "support/mesh_checks.hpp"
 
-#include <array>
 #include <cstring>
-#include <vector>
 
 namespace {
-
-bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
-    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
-}
-
-// Each triangle's nine corner coordinates, -0 as +0 (the STL reader welds the two).
-std::vector<std::array<float, 9>> corners(const voxmesh::Mesh& m) {
-    std::vector<std::array<float, 9>> out(m.triangle_count());
-    for (std::size_t t = 0; t < m.triangle_count(); ++t)
-        for (std::size_t k = 0; k < 3; ++k)
-            for (std::size_t c = 0; c < 3; ++c) out[t][3 * k + c] = m.positions[3 * m.indices[3 * t + k] + c] + 0.0f;
-    return out;
-}
 
 voxmesh::Mesh read_back(const std::string& path) {
     try {
@@ -61,8 +47,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         }
         const voxmesh::Mesh back = read_back(path);
         if (std::strstr(name, ".stl")) {
-            if (!back.normals.empty() || corners(back) != corners(mesh)) std::abort();
-        } else if (!same_bits(back.positions, mesh.positions) || !same_bits(back.normals, mesh.normals) ||
+            if (!back.normals.empty() || vmtest::triangle_corners(back) != vmtest::triangle_corners(mesh)) std::abort();
+        } else if (!vmtest::same_bits(back.positions, mesh.positions) || !vmtest::same_bits(back.normals, mesh.normals) ||
                    back.indices != mesh.indices) {
             std::abort();
         }

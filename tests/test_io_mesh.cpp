@@ -17,20 +17,6 @@
 using Catch::Matchers::Contains;
 using namespace voxmesh;
 
-namespace {
-
-// Each triangle as its three corner positions, in the mesh's order and winding: what a mesh
-// is whatever the vertex numbering.
-std::vector<std::array<float, 9>> corners(const Mesh& m) {
-    std::vector<std::array<float, 9>> out(m.triangle_count());
-    for (std::size_t t = 0; t < m.triangle_count(); ++t)
-        for (std::size_t k = 0; k < 3; ++k)
-            for (std::size_t c = 0; c < 3; ++c) out[t][3 * k + c] = m.positions[3 * m.indices[3 * t + k] + c];
-    return out;
-}
-
-}  // namespace
-
 TEST_CASE("read_mesh reads back what write_mesh wrote, in each format, by extension", "[io][mesh]") {
     // Extreme floats, a degenerate triangle and a vertex in no face, besides a real mesh.
     Mesh extreme;
@@ -52,7 +38,7 @@ TEST_CASE("read_mesh reads back what write_mesh wrote, in each format, by extens
             write_mesh(path, mesh);
             const Mesh back = read_mesh(path);
             if (std::string(name) == "m.stl") {
-                CHECK(corners(back) == corners(mesh));  // as floats: -0 == +0
+                CHECK(vmtest::triangle_corners(back) == vmtest::triangle_corners(mesh));  // as floats: -0 == +0
                 CHECK(back.normals.empty());
                 continue;
             }

@@ -230,6 +230,14 @@ bool same_bits(const std::vector<float>& a, const std::vector<float>& b) {
     return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0);
 }
 
+std::vector<std::array<float, 9>> triangle_corners(const voxmesh::Mesh& mesh) {
+    std::vector<std::array<float, 9>> out(mesh.triangle_count());
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t)
+        for (std::size_t k = 0; k < 3; ++k)
+            for (std::size_t c = 0; c < 3; ++c) out[t][3 * k + c] = mesh.positions[3 * mesh.indices[3 * t + k] + c];
+    return out;
+}
+
 voxmesh::Mesh small_sphere_mesh(bool normals) {
     const Dims dims{17, 15, 13};
     const std::vector<float> values = sample_field<float>(dims, sphere({8.2, 7.1, 6.3}, 5.1));

@@ -45,6 +45,10 @@ std::string structural_problem(const voxmesh::Mesh& mesh);
 
 // Bit-for-bit equality of float arrays (-0 is not +0), for round trips through a file.
 bool same_bits(const std::vector<float>& a, const std::vector<float>& b);
+// Each triangle as its three corner positions, in the mesh's order and winding: what a mesh
+// is whatever its vertex numbering (an STL round trip welds, and so renumbers). Compared as
+// floats, -0 equals +0.
+std::vector<std::array<float, 9>> triangle_corners(const voxmesh::Mesh& mesh);
 
 // ------------------------------------------------------------------ triangle sets
 
