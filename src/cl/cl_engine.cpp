@@ -63,7 +63,7 @@ constexpr unsigned kPieceSamples = kPieceRows + 3 * kKeptPieceRows;
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
 std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
 // Test hook: a slower device (per chunk counted, per piece generated), a slower CPU worker
-// (per chunk counted), a CPU worker that starts late (before its first run).
+// (per chunk counted, its own or taken over), a CPU worker that starts late (before its first run).
 std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{0}, g_slow_cpu_start_s{0};
 // Test hook: every device takes its first chunk before any takes a second, and in Hybrid the
 // CPU worker its first run too (the chunks are otherwise pulled, so which worker counts how
@@ -1048,6 +1048,9 @@ void Engine::cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, 
         }
         const auto t = Clock::now();
         generate_counted_on_cpu(*p, worker, threads_, mesh);
+        if (g_slow_cpu_count_s > 0)  // it counts the piece again: as slow as its own chunks
+            std::this_thread::sleep_for(
+                std::chrono::duration<double>(g_slow_cpu_count_s * static_cast<double>(chunks_in(p->range))));
         p->vbase = p->tbase = p->cell_groups = p->data = p->bits = cl::Buffer();
         const std::size_t voxels = (p->range.end - p->range.begin) * plane_;
         std::lock_guard<std::mutex> lock(queue_mutex_);
