@@ -445,6 +445,18 @@ TEST_CASE("cli: info on a model gives its size, topology, area and volume", "[cl
     CHECK(c.out.find("vertices:  2") != std::string::npos);
     CHECK(c.out.find("no triangles") != std::string::npos);
     CHECK(c.out.find("closed 2-manifold") == std::string::npos);
+    CHECK(c.out.find("bounds:    0 0 0 .. 1 2 3") != std::string::npos);  // a cloud's bounds: every point
+
+    // A vertex no face uses, far off: counted, and left out of the bounds, as voxelize leaves
+    // it out of its grid.
+    const std::string stray = s.write("stray.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 100 100 100\n"
+                                                   "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    const Result st = run(s, "info " + quote(stray));
+    REQUIRE(st.code == 0);
+    CHECK(st.out.find("vertices:  5, 1 not used by any triangle") != std::string::npos);
+    CHECK(st.out.find("bounds:    0 0 0 .. 1 1 1") != std::string::npos);
+    CHECK(st.out.find("closed 2-manifold, euler 2") != std::string::npos);
+    CHECK(value_after(st.out, "volume:") == Approx(1.0 / 6));
 
     expect_rejected(s, "info " + quote(open) + " --dims 2 2 2", "open.ply", "", "apply only to .raw");
     const std::string junk = s.write("junk.ply", "ply\nformat ascii 1.0\n");

@@ -2,10 +2,14 @@
 // value range; for a model (.stl, .ply, .obj), its size, bounds, topology, area and volume.
 #include "common.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cstdint>
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace voxmesh::cli {
 
@@ -30,13 +34,22 @@ std::string flipped_axes(const std::array<bool, 3>& flipped) {
 int run_model_info(const std::string& path) {
     const Mesh m = about_file(path, [&] { return read_mesh(path); });
     const MeshTopology t = analyze_topology(m);
+    // Bounds of the surface, as voxelize grids it: vertices no triangle uses are left out
+    // (and counted), except in a point cloud, where every vertex is all there is.
+    std::vector<bool> used(m.vertex_count(), m.triangle_count() == 0);
+    for (const std::uint32_t i : m.indices) used[i] = true;
+    const auto unused = static_cast<std::size_t>(std::count(used.begin(), used.end(), false));
     std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
-    for (std::size_t v = 0; v < m.vertex_count(); ++v)
+    bool first = true;
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+        if (!used[v]) continue;
         for (std::size_t c = 0; c < 3; ++c) {
             const double x = m.positions[3 * v + c];
-            lo[c] = v == 0 ? x : std::min(lo[c], x);
-            hi[c] = v == 0 ? x : std::max(hi[c], x);
+            lo[c] = first ? x : std::min(lo[c], x);
+            hi[c] = first ? x : std::max(hi[c], x);
         }
+        first = false;
+    }
     double area = 0, volume = 0;  // volume: the divergence theorem, exact for a closed mesh
     for (std::size_t i = 0; i < m.indices.size(); i += 3) {
         std::array<std::array<double, 3>, 3> p{};
@@ -54,7 +67,9 @@ int run_model_info(const std::string& path) {
               << "format:    " << ext.substr(1) << " mesh" << (ext == ".stl" ? " (vertices welded by position)" : "")
               << "\n"
               << "triangles: " << m.triangle_count() << "\n"
-              << "vertices:  " << m.vertex_count() << (m.normals.empty() ? "" : " (with normals)") << "\n";
+              << "vertices:  " << m.vertex_count() << (m.normals.empty() ? "" : " (with normals)")
+              << (unused > 0 ? ", " + std::to_string(unused) + " not used by any triangle (left out of the bounds)" : "")
+              << "\n";
     if (m.vertex_count() > 0)
         std::cout << "bounds:    " << triple_text(lo) << " .. " << triple_text(hi) << "\n";
     if (m.triangle_count() == 0)
