@@ -670,8 +670,7 @@ TEST_CASE("OpenCL programs are built once per device: a second extract builds no
     REQUIRE(first.devices.size() == 1);
     REQUIRE(second.devices.size() == 1);
     CHECK(first.devices[0].programs_built <= 2);  // marching_cubes.cl for u16, scan.cl if not yet built
-    CHECK(second.devices[0].programs_built == 0);
-    CHECK(second.devices[0].setup_s < first.devices[0].setup_s + 0.05);
+    CHECK(second.devices[0].programs_built == 0);  // what set-up costs is for bench/, not a timed test
 }
 
 #ifdef VOXMESH_HAS_OPENCL  // uses a test hook of the OpenCL build
