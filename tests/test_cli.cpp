@@ -289,6 +289,8 @@ TEST_CASE("cli: bad input exits 2 with a message and leaves no output", "[cli]")
     const std::string empty = s.write("empty.nrrd", "");
     expect_rejected(s, "mesh " + quote(empty) + " -o " + quote(out), "empty.nrrd", out, "empty");
     expect_rejected(s, "mesh " + quote(s.path("nonexistent.nrrd")) + " -o " + quote(out), "nonexistent.nrrd", out);
+    expect_rejected(s, "mesh " + quote(data_file("torus.stl")) + " -o " + quote(out), "torus.stl", out,
+                    "voxelize it first");  // a model: the message names the two ways
 
     std::vector<float> samples(27, 1.0f);
     samples[13] = std::nanf("");
@@ -538,6 +540,24 @@ TEST_CASE("cli: sculpt a real STL model with a stroke script", "[cli]") {
     REQUIRE(cpu.code == 0);
     REQUIRE(cl.code == 0);
     CHECK(iotest::read_file(cpu_out) == iotest::read_file(cl_out));
+}
+
+// Without strokes, sculpt is the paper's pipeline in one step: the file it writes is the one
+// voxelize and mesh write in two (the same distance field near the surface, meshed at iso 0).
+TEST_CASE("cli: sculpt without strokes voxelizes and meshes the model again", "[cli]") {
+    Scratch s;
+    const std::string model = data_file("torus.stl"), one = s.path("one.ply"), vol = s.path("torus.nrrd"),
+                      two = s.path("two.ply");
+    const Result r = run(s, "sculpt " + quote(model) + " --resolution 40 -o " + quote(one));
+    INFO(r.out << r.err);
+    REQUIRE(r.code == 0);
+    CHECK(r.out.find("no strokes") != std::string::npos);
+    CHECK(r.out.find("closed (euler 0)") != std::string::npos);  // the torus's genus survives
+    REQUIRE(run(s, "voxelize " + quote(model) + " --resolution 40 -o " + quote(vol)).code == 0);
+    REQUIRE(run(s, "mesh " + quote(vol) + " -o " + quote(two)).code == 0);
+    const std::string a = iotest::read_file(one);
+    CHECK(a.size() > 10000);
+    CHECK(a == iotest::read_file(two));
 }
 
 #else

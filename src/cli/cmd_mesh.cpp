@@ -60,6 +60,11 @@ void print_json(const MeshArgs& a, double iso, const std::string& iso_source, co
 
 int run_mesh(const MeshArgs& a) {
     check_output_path(a.output, {".stl", ".ply", ".obj"});
+    if (is_model_path(a.input)) {  // the paper's pipeline in two steps: say which
+        check_input_file(a.input);
+        throw BadInput("'" + a.input + "': a model, not a volume: voxelize it first (voxmesh voxelize " + a.input +
+                       " -o model.nrrd), then mesh that; or voxelize and re-mesh it in one step with voxmesh sculpt");
+    }
     const Volume volume = load_volume(a.input, a.raw);
 
     double iso = a.iso;

@@ -1,6 +1,7 @@
-// voxmesh sculpt MODEL.stl|.ply|.obj --resolution N --strokes FILE -o OUT.ply [--backend cpu|opencl|auto] [--device I]
-//                [--threads T] [--frames]
+// voxmesh sculpt MODEL.stl|.ply|.obj --resolution N [--strokes FILE] -o OUT.ply [--backend cpu|opencl|auto]
+//                [--device I] [--threads T] [--frames]
 // The paper's loop: voxelize a model, apply brush dabs, re-mesh only what each dab touched.
+// Without strokes, the paper's pipeline in one step: the model voxelized and meshed again.
 #include "common.hpp"
 
 #include <voxmesh/sculpt.hpp>
@@ -9,6 +10,8 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <string>
+#include <vector>
 
 namespace voxmesh::cli {
 
@@ -26,9 +29,10 @@ struct SculptArgs {
 int run_sculpt(const SculptArgs& a) {
     check_output_path(a.output, {".stl", ".ply", ".obj"});
     check_input_file(a.input);
-    check_input_file(a.strokes);
+    if (!a.strokes.empty()) check_input_file(a.strokes);
     check_model_extension(a.input, "sculpt");
-    const auto dabs = about_file(a.strokes, [&] { return read_stroke_script(a.strokes); });
+    std::vector<ScriptDab> dabs;
+    if (!a.strokes.empty()) dabs = about_file(a.strokes, [&] { return read_stroke_script(a.strokes); });
 
     SculptOptions options;
     options.threads = a.threads;
@@ -55,11 +59,15 @@ int run_sculpt(const SculptArgs& a) {
     const LatencySummary s = summarize_latencies(update_ms);
     const MeshTopology topo = analyze_topology(mesh);
     const auto dims = sculpt.view().dims;
-    std::printf("%s -> %s: %s volume, voxelized and meshed in %s (%zu blocks); %zu dabs re-meshed on %s, update p50 %.2f ms, "
-                "p95 %.2f ms, p99 %.2f ms, max %.2f ms; %zu vertices, %zu triangles, %s\n",
-                a.input.c_str(), a.output.c_str(), dims_text(dims).c_str(), format_ms(load_s).c_str(), first.remeshed,
-                dabs.size(), sculpt.device_name().c_str(), s.p50, s.p95, s.p99, s.max, mesh.vertex_count(), mesh.triangle_count(),
-                topo.closed() ? "closed" : "open");
+    std::printf("%s -> %s: %s volume, voxelized and meshed in %s (%zu blocks); ", a.input.c_str(), a.output.c_str(),
+                dims_text(dims).c_str(), format_ms(load_s).c_str(), first.remeshed);
+    if (dabs.empty())
+        std::printf("no strokes; ");
+    else
+        std::printf("%zu dabs re-meshed on %s, update p50 %.2f ms, p95 %.2f ms, p99 %.2f ms, max %.2f ms; ", dabs.size(),
+                    sculpt.device_name().c_str(), s.p50, s.p95, s.p99, s.max);
+    const std::string shape = topo.closed() ? "closed (euler " + std::to_string(topo.euler) + ")" : "open";
+    std::printf("%zu vertices, %zu triangles, %s\n", mesh.vertex_count(), mesh.triangle_count(), shape.c_str());
     return kExitOk;
 }
 
@@ -68,12 +76,12 @@ int run_sculpt(const SculptArgs& a) {
 Command add_sculpt(CLI::App& app) {
     auto a = std::make_shared<SculptArgs>();
     CLI::App* sub = app.add_subcommand(
-        "sculpt", "Voxelize a closed model (STL, PLY, OBJ), apply a stroke script (re-meshing only what each dab changed), write the mesh");
+        "sculpt", "Voxelize a closed model (STL, PLY, OBJ), apply a stroke script if given (re-meshing only what each dab changed), write the mesh");
     sub->add_option("MODEL", a->input, "closed triangle mesh (.stl, .ply or .obj)")->required();
     sub->add_option("--strokes", a->strokes,
                     "stroke script: one dab per line 'op x y z radius strength', op add|subtract|smooth|set, "
-                    "'#' comments; coordinates in samples, or model units after a line 'units world'")
-        ->required();
+                    "'#' comments; coordinates in samples, or model units after a line 'units world'. Without it, "
+                    "the model is voxelized and meshed again as it is");
     sub->add_option("-o,--output", a->output, "mesh file to write (.stl, .ply or .obj)")->required();
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (8..2048)")
         ->required()
