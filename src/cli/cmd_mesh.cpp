@@ -63,7 +63,7 @@ int run_mesh(const MeshArgs& a) {
     if (is_model_path(a.input)) {  // the paper's pipeline in two steps: say which
         check_input_file(a.input);
         throw BadInput("'" + a.input + "': a model, not a volume: voxelize it first (voxmesh voxelize " + a.input +
-                       " -o model.nrrd), then mesh that; or voxelize and re-mesh it in one step with voxmesh sculpt");
+                       " --resolution N -o model.nrrd), then mesh that; or voxelize and re-mesh it in one step with voxmesh sculpt");
     }
     const Volume volume = load_volume(a.input, a.raw);
 
