@@ -119,6 +119,25 @@ TEST_CASE("cli: mesh a real CT volume", "[cli]") {
     CHECK(r.out.find("open") != std::string::npos);
     CHECK(stl_triangles(out) == 57698);
 
+    // --largest keeps the pieces with the most triangles: what keep_largest_components keeps.
+    const voxmesh::Volume head = voxmesh::read_volume(in);
+    voxmesh::Options o;
+    o.iso = 499.5;
+    const voxmesh::Mesh full = voxmesh::extract(head.view(), o);
+    for (int count : {1, 3}) {
+        const std::string kept = s.path("kept.stl");
+        const Result k = run(s, "mesh " + quote(in) + " -o " + quote(kept) + " --iso 499.5 --json --largest " +
+                                    std::to_string(count));
+        INFO(k.err);
+        REQUIRE(k.code == 0);
+        CHECK(k.out.find("\"components\": " + std::to_string(count) + ",") != std::string::npos);
+        CHECK(k.out.find("\"extracted_triangles\": 57698") != std::string::npos);
+        const std::size_t expected = voxmesh::keep_largest_components(full, static_cast<std::size_t>(count)).triangle_count();
+        CHECK(expected < 57698);
+        CHECK(stl_triangles(kept) == expected);
+    }
+    CHECK(run(s, "mesh " + quote(in) + " -o " + quote(out) + " --largest 0").code == 2);
+
     const std::string ply = s.path("head.ply");
     const Result j = run(s, "mesh " + quote(in) + " -o " + quote(ply) + " --json --threads 2 --no-normals");
     REQUIRE(j.code == 0);
@@ -412,7 +431,7 @@ TEST_CASE("cli: info on a model gives its size, topology, area and volume", "[cl
     INFO(t.err);
     REQUIRE(t.code == 0);
     CHECK(t.out.find("triangles: 8700") != std::string::npos);
-    CHECK(t.out.find("closed 2-manifold, euler 0") != std::string::npos);  // genus 1
+    CHECK(t.out.find("closed 2-manifold, euler 0, 1 piece") != std::string::npos);  // genus 1
     // A torus of radii 1 and 0.5: area 4 pi^2 R r = 19.74, volume 2 pi^2 R r^2 = 4.93, less
     // for the inscribed polygons.
     const auto value_after = [](const std::string& out, const std::string& label) {

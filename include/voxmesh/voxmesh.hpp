@@ -154,12 +154,22 @@ void remove_partial_outputs() noexcept;
 struct MeshTopology {
     std::size_t boundary_edges = 0;      // edges in one triangle
     std::size_t nonmanifold_edges = 0;   // edges in three or more
-    long long euler = 0;                 // V - E + F over referenced vertices
+    long long euler = 0;                 // V - E + F over referenced vertices (summed over components)
+    std::size_t components = 0;          // connected pieces: triangles sharing a vertex are in one
     bool closed() const { return boundary_edges == 0 && nonmanifold_edges == 0; }
 };
 // Throws Error, as write_mesh does, for arrays that are not whole triples, normals for a
 // different number of vertices, or an index past the last vertex.
 MeshTopology analyze_topology(const Mesh& mesh);
+
+// The `count` connected pieces with the most triangles (triangles sharing a vertex are in one
+// piece, as in VTK's vtkPolyDataConnectivityFilter; of pieces with equal triangle counts, the
+// one whose first triangle comes first), e.g. a CT's surface without the specks of noise
+// around it. Kept triangles and vertices stay in their order, so a piece of a canonical mesh
+// is exactly what extract gives for a volume holding that piece alone (the same samples
+// around it, nothing else crossing iso). Normals are kept.
+// Throws Error for count 0 and for the malformed arrays analyze_topology rejects.
+Mesh keep_largest_components(const Mesh& mesh, std::size_t count = 1);
 
 // OpenCL devices as plain structs (empty without OpenCL or without a platform).
 struct DeviceInfo {

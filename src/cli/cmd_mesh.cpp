@@ -1,5 +1,5 @@
 // voxmesh mesh INPUT -o OUTPUT [--iso V] [--backend ...] [--threads N] [--device I]
-//   [--no-normals] [--inside-below] [--json] [raw flags]
+//   [--no-normals] [--inside-below] [--largest N] [--json] [raw flags]
 #include "common.hpp"
 
 #include <iostream>
@@ -16,6 +16,7 @@ struct MeshArgs {
     std::string backend = "auto";
     unsigned threads = 0;
     int device = -1;  // -1: every device of the backend
+    std::size_t largest = 0;  // keep that many pieces with the most triangles; 0: all
     bool no_normals = false, inside_below = false, json = false;
     RawFlags raw;
     CLI::Option* iso_option = nullptr;
@@ -33,13 +34,14 @@ std::string devices_text(const Stats& stats) {
 }
 
 void print_json(const MeshArgs& a, double iso, const std::string& iso_source, const Mesh& mesh,
-                const MeshTopology& topo, const Stats& stats) {
+                const MeshTopology& topo, std::size_t extracted_triangles, const Stats& stats) {
     std::ostringstream o;
     o << "{\"input\": " << json_string(a.input) << ", \"output\": " << json_string(a.output)
       << ", \"iso\": " << format_double(iso) << ", \"iso_source\": " << json_string(iso_source)
       << ", \"vertices\": " << mesh.vertex_count() << ", \"triangles\": " << mesh.triangle_count()
       << ", \"closed\": " << (topo.closed() ? "true" : "false") << ", \"boundary_edges\": " << topo.boundary_edges
       << ", \"nonmanifold_edges\": " << topo.nonmanifold_edges << ", \"euler\": " << topo.euler
+      << ", \"components\": " << topo.components << ", \"extracted_triangles\": " << extracted_triangles
       << ", \"normals\": " << (mesh.normals.empty() ? "false" : "true") << ", \"times_s\": {\"classify\": "
       << format_double(stats.times.classify) << ", \"scan\": " << format_double(stats.times.scan)
       << ", \"generate\": " << format_double(stats.times.generate) << ", \"total\": "
@@ -85,7 +87,9 @@ int run_mesh(const MeshArgs& a) {
     options.log = [](const std::string& message) { std::cerr << "voxmesh: warning: " << message << "\n"; };
 
     Stats stats;
-    const Mesh mesh = extract(volume.view(), options, stats);  // errors here are not about the file
+    Mesh mesh = extract(volume.view(), options, stats);  // errors here are not about the file
+    const std::size_t extracted_triangles = mesh.triangle_count();
+    if (a.largest > 0) mesh = keep_largest_components(mesh, a.largest);
     const MeshTopology topo = analyze_topology(mesh);
     if (mesh.triangle_count() == 0)
         std::cerr << "voxmesh: warning: no surface at iso " << format_double(iso) << " in '" << a.input
@@ -93,12 +97,16 @@ int run_mesh(const MeshArgs& a) {
     about_file(a.output, [&] { write_mesh(a.output, mesh); });
 
     if (a.json) {
-        print_json(a, iso, iso_source, mesh, topo, stats);
+        print_json(a, iso, iso_source, mesh, topo, extracted_triangles, stats);
         return kExitOk;
     }
     std::ostringstream o;
     o << a.input << " -> " << a.output << ": " << mesh.vertex_count() << " vertices, " << mesh.triangle_count()
-      << " triangles, ";
+      << " triangles in " << topo.components << (topo.components == 1 ? " piece" : " pieces");
+    if (a.largest > 0)
+        o << " (the " << (a.largest == 1 ? "largest" : std::to_string(a.largest) + " largest") << "; "
+          << extracted_triangles << " triangles extracted)";
+    o << ", ";
     if (topo.closed()) o << "closed (euler " << topo.euler << ")";
     else o << "open (" << topo.boundary_edges << " boundary, " << topo.nonmanifold_edges << " non-manifold edges)";
     o << "; iso " << format_double(iso);
@@ -127,6 +135,10 @@ Command add_mesh(CLI::App& app) {
     sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(CLI::NonNegativeNumber);
     sub->add_flag("--no-normals", a->no_normals, "do not compute vertex normals");
     sub->add_flag("--inside-below", a->inside_below, "values below iso are inside (SDFs): flips winding and normals");
+    sub->add_option("--largest", a->largest,
+                    "keep only the N connected pieces with the most triangles (drops specks of noise around a "
+                    "CT's surface)")
+        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 32));
     sub->add_flag("--json", a->json, "print the summary as JSON");
     add_raw_flags(sub, a->raw);
     return {sub, [a] { return run_mesh(*a); }};

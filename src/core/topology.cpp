@@ -1,4 +1,5 @@
 // A Mesh's structure: the arrays' consistency, and edges shared by triangles.
+#include "components.hpp"
 #include "mesh_arrays.hpp"
 
 #include <algorithm>
@@ -55,6 +56,7 @@ MeshTopology analyze_topology(const Mesh& mesh) {
     }
     const long long vertices = std::count(used.begin(), used.end(), true);
     topo.euler = vertices - unique_edges + static_cast<long long>(mesh.triangle_count());
+    topo.components = detail::mesh_pieces(mesh).triangles.size();
     return topo;
 }
 

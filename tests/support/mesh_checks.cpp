@@ -4,6 +4,7 @@
 #include <cstring>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <random>
 #include <stdexcept>
 #include <utility>
@@ -235,6 +236,64 @@ std::vector<std::array<float, 9>> triangle_corners(const voxmesh::Mesh& mesh) {
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t)
         for (std::size_t k = 0; k < 3; ++k)
             for (std::size_t c = 0; c < 3; ++c) out[t][3 * k + c] = mesh.positions[3 * mesh.indices[3 * t + k] + c];
+    return out;
+}
+
+std::vector<std::size_t> oracle_pieces(const voxmesh::Mesh& m, std::size_t& piece_count) {
+    std::vector<std::vector<std::size_t>> triangles_at(m.vertex_count());
+    for (std::size_t t = 0; t < m.triangle_count(); ++t)
+        for (int k = 0; k < 3; ++k) triangles_at[m.indices[3 * t + k]].push_back(t);
+    const std::size_t none = static_cast<std::size_t>(-1);
+    std::vector<std::size_t> piece(m.triangle_count(), none);
+    piece_count = 0;
+    for (std::size_t start = 0; start < m.triangle_count(); ++start) {
+        if (piece[start] != none) continue;
+        std::vector<std::size_t> todo{start};
+        piece[start] = piece_count;
+        while (!todo.empty()) {
+            const std::size_t t = todo.back();
+            todo.pop_back();
+            for (int k = 0; k < 3; ++k)
+                for (std::size_t u : triangles_at[m.indices[3 * t + k]])
+                    if (piece[u] == none) {
+                        piece[u] = piece_count;
+                        todo.push_back(u);
+                    }
+        }
+        ++piece_count;
+    }
+    return piece;
+}
+
+voxmesh::Mesh oracle_keep_largest(const voxmesh::Mesh& m, std::size_t count) {
+    std::size_t pieces = 0;
+    const std::vector<std::size_t> piece = oracle_pieces(m, pieces);
+    std::vector<std::size_t> size(pieces, 0);
+    for (std::size_t p : piece) ++size[p];
+    std::vector<bool> keep(pieces, false);
+    for (std::size_t kept = 0; kept < count && kept < pieces; ++kept) {
+        std::size_t best = 0;  // the largest not kept yet; the lowest-numbered of equals
+        while (keep[best]) ++best;
+        for (std::size_t p = best + 1; p < pieces; ++p)
+            if (!keep[p] && size[p] > size[best]) best = p;
+        keep[best] = true;
+    }
+    std::map<std::uint32_t, std::uint32_t> renumber;  // old vertex -> new, in old order
+    for (std::size_t t = 0; t < m.triangle_count(); ++t)
+        if (keep[piece[t]])
+            for (int k = 0; k < 3; ++k) renumber[m.indices[3 * t + k]] = 0;
+    voxmesh::Mesh out;
+    std::uint32_t next = 0;
+    for (auto& [old, fresh] : renumber) {
+        fresh = next++;
+        for (int c = 0; c < 3; ++c) {
+            out.positions.push_back(m.positions[3 * old + c]);
+            if (!m.normals.empty()) out.normals.push_back(m.normals[3 * old + c]);
+        }
+    }
+    for (std::size_t t = 0; t < m.triangle_count(); ++t)
+        if (keep[piece[t]])
+            for (int k = 0; k < 3; ++k) out.indices.push_back(renumber[m.indices[3 * t + k]]);
     return out;
 }
 

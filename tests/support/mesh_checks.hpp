@@ -50,6 +50,16 @@ bool same_bits(const std::vector<float>& a, const std::vector<float>& b);
 // floats, -0 equals +0.
 std::vector<std::array<float, 9>> triangle_corners(const voxmesh::Mesh& mesh);
 
+// ------------------------------------------------------------------ connected pieces
+
+// The oracle for keep_largest_components and MeshTopology::components, deliberately simple: a
+// breadth-first walk over triangles sharing a vertex numbers each triangle's piece (pieces in
+// order of their first triangle); `piece_count` receives how many there are.
+std::vector<std::size_t> oracle_pieces(const voxmesh::Mesh& mesh, std::size_t& piece_count);
+// The `count` pieces with the most triangles (the lowest-numbered of equals), kept triangles
+// and their vertices in the mesh's order, normals carried along.
+voxmesh::Mesh oracle_keep_largest(const voxmesh::Mesh& mesh, std::size_t count);
+
 // ------------------------------------------------------------------ triangle sets
 
 using TriKey = std::array<std::uint64_t, 3>;
