@@ -60,16 +60,19 @@ int main(int argc, char** argv) {
         const voxmesh::MeshTopology topology = voxmesh::analyze_topology(mesh);
         std::printf("index buffers identical: %s, positions identical: %s\n", same_indices ? "yes" : "NO",
                     same_positions ? "yes" : "NO");
-        std::printf("closed: %s (boundary edges %zu, non-manifold edges %zu), Euler characteristic %lld\n",
+        std::printf("closed: %s (boundary edges %zu, non-manifold edges %zu), Euler characteristic %lld, %zu piece%s\n",
                     topology.closed() ? "yes" : "NO", topology.boundary_edges, topology.nonmanifold_edges,
-                    topology.euler);
+                    topology.euler, topology.components, topology.components == 1 ? "" : "s");
+        // One piece: keeping the largest keeps it all (a CT's surface would shed its noise here).
+        const bool one_piece = topology.components == 1 &&
+                               voxmesh::keep_largest_components(mesh).indices == mesh.indices;
 
         // 5. Optionally write it (.ply, .stl or .obj by extension).
         if (argc > 1) {
             voxmesh::write_mesh(argv[1], mesh);
             std::printf("wrote %s\n", argv[1]);
         }
-        const bool ok = same_indices && same_positions && topology.closed() && topology.euler == 2 &&
+        const bool ok = same_indices && same_positions && topology.closed() && topology.euler == 2 && one_piece &&
                         mesh.triangle_count() > 0;
         std::printf("%s\n", ok ? "OK" : "FAILED");
         return ok ? 0 : 1;
