@@ -579,6 +579,28 @@ TEST_CASE("cli: sculpt without strokes voxelizes and meshes the model again", "[
     CHECK(a == iotest::read_file(two));
 }
 
+// A dab in a far corner raises a second, floating piece; --largest 1 writes the model alone,
+// the file sculpt writes without that dab (the model's samples are untouched by it).
+TEST_CASE("cli: sculpt --largest drops a piece a brush left floating", "[cli]") {
+    Scratch s;
+    const std::string model = quote(data_file("unit_sphere.stl"));
+    const std::string blob = s.write("blob.txt", "add 4 4 4 3 8\n");
+    const std::string both = s.path("both.ply"), kept = s.path("kept.ply"), plain = s.path("plain.ply");
+    const Result r = run(s, "sculpt " + model + " --resolution 40 --strokes " + quote(blob) + " -o " + quote(both));
+    INFO(r.out << r.err);
+    REQUIRE(r.code == 0);
+    CHECK(r.out.find("in 2 pieces, closed (euler 4)") != std::string::npos);
+    const Result k = run(s, "sculpt " + model + " --resolution 40 --strokes " + quote(blob) + " -o " + quote(kept) +
+                                " --largest 1");
+    INFO(k.out << k.err);
+    REQUIRE(k.code == 0);
+    CHECK(k.out.find("in 1 piece, closed (euler 2)") != std::string::npos);
+    REQUIRE(run(s, "sculpt " + model + " --resolution 40 -o " + quote(plain)).code == 0);
+    CHECK(iotest::read_file(kept) == iotest::read_file(plain));
+    expect_rejected(s, "sculpt " + model + " --resolution 40 -o " + quote(s.path("never.ply")) + " --largest 0",
+                    "--largest", s.path("never.ply"));
+}
+
 #else
 TEST_CASE("cli: not built", "[cli]") { WARN("voxmesh_cli is not built (VOXMESH_BUILD_CLI=OFF): CLI tests skipped"); }
 #endif

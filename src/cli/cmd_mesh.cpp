@@ -135,10 +135,7 @@ Command add_mesh(CLI::App& app) {
     sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(CLI::NonNegativeNumber);
     sub->add_flag("--no-normals", a->no_normals, "do not compute vertex normals");
     sub->add_flag("--inside-below", a->inside_below, "values below iso are inside (SDFs): flips winding and normals");
-    sub->add_option("--largest", a->largest,
-                    "keep only the N connected pieces with the most triangles (drops specks of noise around a "
-                    "CT's surface)")
-        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 32));
+    add_largest_option(sub, a->largest, "drops the specks of noise around a CT's surface");
     sub->add_flag("--json", a->json, "print the summary as JSON");
     add_raw_flags(sub, a->raw);
     return {sub, [a] { return run_mesh(*a); }};

@@ -1,5 +1,5 @@
 // voxmesh sculpt MODEL.stl|.ply|.obj --resolution N [--strokes FILE] -o OUT.ply [--backend cpu|opencl|auto]
-//                [--device I] [--threads T] [--frames]
+//                [--device I] [--threads T] [--frames] [--largest N]
 // The paper's loop: voxelize a model, apply brush dabs, re-mesh only what each dab touched.
 // Without strokes, the paper's pipeline in one step: the model voxelized and meshed again.
 #include "common.hpp"
@@ -24,6 +24,7 @@ struct SculptArgs {
     std::string backend = "cpu";
     int device = -1;  // -1: a GPU/accelerator, else the first device
     bool frames = false;
+    std::size_t largest = 0;  // keep that many pieces with the most triangles; 0: all
 };
 
 int run_sculpt(const SculptArgs& a) {
@@ -53,7 +54,8 @@ int run_sculpt(const SculptArgs& a) {
             std::printf("frame %zu: edit %.2f ms, update %.2f ms, %zu blocks re-meshed\n", f.frame, 1e3 * f.edit_seconds,
                         1e3 * f.update_seconds, f.blocks_remeshed);
     });
-    const Mesh mesh = sculpt.mesh();
+    Mesh mesh = sculpt.mesh();
+    if (a.largest > 0) mesh = keep_largest_components(mesh, a.largest);  // e.g. without the crumbs a brush left
     about_file(a.output, [&] { write_mesh(a.output, mesh); });
 
     const LatencySummary s = summarize_latencies(update_ms);
@@ -67,7 +69,8 @@ int run_sculpt(const SculptArgs& a) {
         std::printf("%zu dabs re-meshed on %s, update p50 %.2f ms, p95 %.2f ms, p99 %.2f ms, max %.2f ms; ", dabs.size(),
                     sculpt.device_name().c_str(), s.p50, s.p95, s.p99, s.max);
     const std::string shape = topo.closed() ? "closed (euler " + std::to_string(topo.euler) + ")" : "open";
-    std::printf("%zu vertices, %zu triangles, %s\n", mesh.vertex_count(), mesh.triangle_count(), shape.c_str());
+    std::printf("%zu vertices, %zu triangles in %zu piece%s, %s\n", mesh.vertex_count(), mesh.triangle_count(),
+                topo.components, topo.components == 1 ? "" : "s", shape.c_str());
     return kExitOk;
 }
 
@@ -93,6 +96,7 @@ Command add_sculpt(CLI::App& app) {
     sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(CLI::NonNegativeNumber);
     sub->add_option("--threads", a->threads, "CPU threads (default: all cores)");
     sub->add_flag("--frames", a->frames, "print every frame's edit and update time");
+    add_largest_option(sub, a->largest, "drops what a brush cut off or left floating");
     return {sub, [a] { return run_sculpt(*a); }};
 }
 

@@ -50,6 +50,11 @@ ValueRange range_of(const T* s, const std::array<std::size_t, 3>& dims) {
 
 }  // namespace
 
+void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& why) {
+    sub->add_option("--largest", largest, "write only the N connected pieces with the most triangles (" + why + ")")
+        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 32));
+}
+
 void add_raw_flags(CLI::App* sub, RawFlags& raw) {
     const char* group = "Headerless .raw input";
     sub->add_option("--dims", raw.dims, "samples along x, y, z")->expected(3)->group(group);

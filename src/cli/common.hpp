@@ -65,6 +65,9 @@ struct RawFlags {
     bool any_given() const { return !dims.empty() || !type.empty() || offset != 0 || !spacing.empty() || !origin.empty(); }
 };
 void add_raw_flags(CLI::App* sub, RawFlags& raw);
+// --largest N (N >= 1): write only the N connected pieces with the most triangles; `why` ends
+// the help text.
+void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& why);
 
 bool is_raw_path(const std::string& path);
 std::string lower_extension(const std::string& path);
