@@ -1,7 +1,8 @@
-// libFuzzer target: keep_largest_components and MeshTopology::components against the tests'
-// breadth-first oracle, on meshes of any shape (repeated corners, unused vertices, pieces
-// touching at a vertex). The input is a vertex count byte, a count-to-keep byte, then two
-// bytes per index (modulo the vertex count); positions and normals are made from the ids.
+// libFuzzer target: analyze_topology against the tests' sorted-edge oracle, and
+// keep_largest_components and MeshTopology::components against their breadth-first one, on
+// meshes of any shape (repeated corners, unused vertices, pieces touching at a vertex). The
+// input is a vertex count byte, a count-to-keep byte, then two bytes per index (modulo the
+// vertex count); positions and normals are made from the ids.
 #include "fuzz_common.hpp"
 #include "support/mesh_checks.hpp"
 
@@ -23,7 +24,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
     std::size_t pieces = 0;
     vmtest::oracle_pieces(mesh, pieces);
-    if (voxmesh::analyze_topology(mesh).components != pieces) std::abort();
+    const voxmesh::MeshTopology topology = voxmesh::analyze_topology(mesh);
+    const vmtest::Topology edges = vmtest::topology(mesh);
+    if (topology.components != pieces || topology.boundary_edges != edges.boundary_edges ||
+        topology.nonmanifold_edges != edges.nonmanifold_edges || topology.euler != edges.euler)
+        std::abort();
     const voxmesh::Mesh kept = voxmesh::keep_largest_components(mesh, keep);
     const voxmesh::Mesh expected = vmtest::oracle_keep_largest(mesh, keep);
     if (kept.indices != expected.indices || !vmtest::same_bits(kept.positions, expected.positions) ||

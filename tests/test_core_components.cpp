@@ -1,6 +1,7 @@
-// keep_largest_components and MeshTopology::components, against a deliberately simple oracle
-// (a breadth-first walk over triangles that share a vertex) and against extract itself: a
-// piece of a canonical mesh must be exactly the mesh of a volume holding that piece alone.
+// analyze_topology, keep_largest_components and MeshTopology::components, against deliberately
+// simple oracles (sorted edge keys; a breadth-first walk over triangles that share a vertex)
+// and against extract itself: a piece of a canonical mesh must be exactly the mesh of a volume
+// holding that piece alone.
 #include "support/mesh_checks.hpp"
 
 #include <voxmesh/io.hpp>
@@ -10,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -129,4 +131,34 @@ TEST_CASE("keep_largest_components: empty meshes, unused vertices and bad argume
     bad = clean;
     bad.positions.pop_back();
     CHECK_THROWS_AS(keep_largest_components(bad), Error);
+}
+
+TEST_CASE("analyze_topology agrees with the sorted-edge oracle on open, non-manifold and degenerate meshes", "[core][components]") {
+    std::mt19937 rng(20261124);
+    for (int round = 0; round < 200; ++round) {
+        // Few vertices for many triangles: shared edges, edges in three or more triangles,
+        // repeated corners, vertices no triangle uses.
+        const std::size_t vertices = 1 + rng() % 40, triangles = rng() % 120;
+        Mesh m;
+        m.positions.assign(3 * vertices, 0.0f);
+        for (std::size_t i = 0; i < 3 * triangles; ++i) m.indices.push_back(static_cast<std::uint32_t>(rng() % vertices));
+        INFO("round " << round << ": " << vertices << " vertices, " << triangles << " triangles");
+        const MeshTopology lib = analyze_topology(m);
+        const vmtest::Topology oracle = vmtest::topology(m);
+        CHECK(lib.boundary_edges == oracle.boundary_edges);
+        CHECK(lib.nonmanifold_edges == oracle.nonmanifold_edges);
+        CHECK(lib.euler == oracle.euler);
+        std::size_t pieces = 0;
+        vmtest::oracle_pieces(m, pieces);
+        CHECK(lib.components == pieces);
+    }
+    // And on a real CT's open surface.
+    const Volume v = read_volume(std::string(VOXMESH_TEST_DATA) + "/headsq.nrrd");
+    const Mesh head = extract(v.view(), vmtest::cpu_options(499.5, 0));
+    const vmtest::Topology oracle = vmtest::topology(head);
+    const MeshTopology lib = analyze_topology(head);
+    CHECK(lib.boundary_edges == oracle.boundary_edges);
+    CHECK(lib.boundary_edges > 0);
+    CHECK(lib.nonmanifold_edges == oracle.nonmanifold_edges);
+    CHECK(lib.euler == oracle.euler);
 }

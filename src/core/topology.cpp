@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -32,30 +33,45 @@ void check_finite_vertices(const std::vector<float>& values, const std::string& 
 
 MeshTopology analyze_topology(const Mesh& mesh) {
     detail::check_mesh_arrays(mesh, "analyze_topology: ");
-    std::vector<std::uint64_t> edges;
-    edges.reserve(mesh.indices.size());
-    std::vector<bool> used(mesh.vertex_count(), false);
-    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-        for (int k = 0; k < 3; ++k) {
-            const std::uint64_t a = mesh.indices[3 * t + k], b = mesh.indices[3 * t + (k + 1) % 3];
-            edges.push_back(std::min(a, b) << 32 | std::max(a, b));
-            used[a] = true;
+    const std::size_t vertices = mesh.vertex_count();
+    // Each triangle side filed under its lower vertex, holding the higher one (a counting
+    // sort: linear, where sorting 3 keys a triangle took longer than extract itself on large
+    // meshes). A vertex's list is a handful long; sorted, a run of one higher vertex is one
+    // edge and its length the triangles on it.
+    std::vector<std::size_t> list_end(vertices + 1, 0);
+    std::vector<bool> used(vertices, false);
+    const auto sides = [&](auto&& visit) {
+        for (std::size_t i = 0; i < mesh.indices.size(); i += 3)
+            for (std::size_t k = 0; k < 3; ++k) {
+                const std::uint32_t a = mesh.indices[i + k], b = mesh.indices[i + (k + 1) % 3];
+                visit(std::min(a, b), std::max(a, b));
+            }
+    };
+    sides([&](std::uint32_t lo, std::uint32_t) { ++list_end[lo + 1]; });
+    for (std::size_t v = 0; v < vertices; ++v) list_end[v + 1] += list_end[v];  // list_end[v]: where v's list starts
+    std::vector<std::uint32_t> higher(mesh.indices.size());
+    sides([&](std::uint32_t lo, std::uint32_t hi) {
+        higher[list_end[lo]++] = hi;  // list_end[v] ends at the start of v + 1's list
+        used[lo] = used[hi] = true;
+    });
+
+    MeshTopology topo;
+    long long edges = 0, used_vertices = 0;
+    for (std::size_t v = 0; v < vertices; ++v) {
+        used_vertices += used[v];
+        const auto first = higher.begin() + static_cast<std::ptrdiff_t>(v == 0 ? 0 : list_end[v - 1]);
+        const auto last = higher.begin() + static_cast<std::ptrdiff_t>(list_end[v]);
+        std::sort(first, last);
+        for (auto i = first; i != last;) {
+            const auto j = std::find_if(i, last, [&](std::uint32_t h) { return h != *i; });
+            const auto uses = j - i;
+            ++edges;
+            if (uses == 1) ++topo.boundary_edges;
+            else if (uses > 2) ++topo.nonmanifold_edges;
+            i = j;
         }
     }
-    std::sort(edges.begin(), edges.end());
-    MeshTopology topo;
-    long long unique_edges = 0;
-    for (std::size_t i = 0; i < edges.size();) {
-        std::size_t j = i;
-        while (j < edges.size() && edges[j] == edges[i]) ++j;
-        const std::size_t uses = j - i;
-        ++unique_edges;
-        if (uses == 1) ++topo.boundary_edges;
-        else if (uses > 2) ++topo.nonmanifold_edges;
-        i = j;
-    }
-    const long long vertices = std::count(used.begin(), used.end(), true);
-    topo.euler = vertices - unique_edges + static_cast<long long>(mesh.triangle_count());
+    topo.euler = used_vertices - edges + static_cast<long long>(mesh.triangle_count());
     topo.components = detail::mesh_pieces(mesh).triangles.size();
     return topo;
 }
