@@ -103,9 +103,10 @@ Mesh keep_largest_components(const Mesh& mesh, std::size_t count) {
     out.indices.resize(3 * triangles);
     for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
         if (new_index[v] == kDropped) continue;
+        const std::size_t to = 3 * std::size_t{new_index[v]};
         for (std::size_t c = 0; c < 3; ++c) {
-            out.positions[3 * new_index[v] + c] = mesh.positions[3 * v + c];
-            if (!mesh.normals.empty()) out.normals[3 * new_index[v] + c] = mesh.normals[3 * v + c];
+            out.positions[to + c] = mesh.positions[3 * v + c];
+            if (!mesh.normals.empty()) out.normals[to + c] = mesh.normals[3 * v + c];
         }
     }
     std::size_t written = 0;
