@@ -70,8 +70,10 @@ std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{
 // many depends on timing).
 std::atomic<bool> g_deal_first_chunks{false};
 
-void pretend_slow(const std::atomic<double>& seconds) {
-    if (const double s = seconds; s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(s));
+// Sleeps `times` × the hook's seconds (a chunk count for per-chunk hooks); nothing when unset.
+void pretend_slow(const std::atomic<double>& seconds, std::size_t times = 1) {
+    if (const double s = seconds; s > 0)
+        std::this_thread::sleep_for(std::chrono::duration<double>(s * static_cast<double>(times)));
 }
 
 // Hybrid's rates from earlier calls, per device, volume shape and settings (hybrid_schedule.hpp).
@@ -849,7 +851,7 @@ void Engine::cpu_count_worker(unsigned worker) {
         const ZRange range{chunks_[first].begin, chunks_[first + n - 1].end};
         const auto t = Clock::now();
         results_[first].push_back(count_on_cpu(range, worker, threads_));
-        if (g_slow_cpu_count_s > 0) std::this_thread::sleep_for(std::chrono::duration<double>(g_slow_cpu_count_s * n));
+        pretend_slow(g_slow_cpu_count_s, n);
         const double s = seconds_since(t);
         cpu_pass_seconds_[0] += s;
         cpu_stats_.chunks += n;
@@ -1048,9 +1050,7 @@ void Engine::cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, 
         }
         const auto t = Clock::now();
         generate_counted_on_cpu(*p, worker, threads_, mesh);
-        if (g_slow_cpu_count_s > 0)  // it counts the piece again: as slow as its own chunks
-            std::this_thread::sleep_for(
-                std::chrono::duration<double>(g_slow_cpu_count_s * static_cast<double>(chunks_in(p->range))));
+        pretend_slow(g_slow_cpu_count_s, chunks_in(p->range));  // it counts the piece again: as slow as its own
         p->vbase = p->tbase = p->cell_groups = p->data = p->bits = cl::Buffer();
         const std::size_t voxels = (p->range.end - p->range.begin) * plane_;
         std::lock_guard<std::mutex> lock(queue_mutex_);
