@@ -62,7 +62,6 @@ int run_model_info(const std::string& path) {
         volume += (p[0][0] * (p[1][1] * p[2][2] - p[1][2] * p[2][1]) - p[0][1] * (p[1][0] * p[2][2] - p[1][2] * p[2][0]) +
                    p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0])) / 6;
     }
-    const std::string pieces = std::to_string(t.components) + (t.components == 1 ? " piece" : " pieces");
     const std::string ext = lower_extension(path);
     std::cout << "file:      " << path << "\n"
               << "format:    " << ext.substr(1) << " mesh" << (ext == ".stl" ? " (vertices welded by position)" : "")
@@ -76,13 +75,13 @@ int run_model_info(const std::string& path) {
     if (m.triangle_count() == 0)
         std::cout << "topology:  no triangles (a point cloud; voxelize needs a closed model)\n";
     else if (t.closed())
-        std::cout << "topology:  closed 2-manifold, euler " << t.euler << ", " << pieces << "\n"
+        std::cout << "topology:  closed 2-manifold, euler " << t.euler << ", " << pieces_text(t.components) << "\n"
                   << "area:      " << format_double(area) << "\n"
                   << "volume:    " << format_double(volume)
                   << (volume < 0 ? " (negative: the triangles face inward)" : "") << "\n";
     else
         std::cout << "topology:  open: " << t.boundary_edges << " boundary edges, " << t.nonmanifold_edges
-                  << " edges in three or more triangles, euler " << t.euler << ", " << pieces
+                  << " edges in three or more triangles, euler " << t.euler << ", " << pieces_text(t.components)
                   << " (voxelize needs a closed model)\n"
                   << "area:      " << format_double(area) << "\n";
     return kExitOk;

@@ -102,7 +102,7 @@ int run_mesh(const MeshArgs& a) {
     }
     std::ostringstream o;
     o << a.input << " -> " << a.output << ": " << mesh.vertex_count() << " vertices, " << mesh.triangle_count()
-      << " triangles in " << topo.components << (topo.components == 1 ? " piece" : " pieces");
+      << " triangles in " << pieces_text(topo.components);
     if (a.largest > 0)
         o << " (the " << (a.largest == 1 ? "largest" : std::to_string(a.largest) + " largest") << "; "
           << extracted_triangles << " triangles extracted)";

@@ -69,8 +69,8 @@ int run_sculpt(const SculptArgs& a) {
         std::printf("%zu dabs re-meshed on %s, update p50 %.2f ms, p95 %.2f ms, p99 %.2f ms, max %.2f ms; ", dabs.size(),
                     sculpt.device_name().c_str(), s.p50, s.p95, s.p99, s.max);
     const std::string shape = topo.closed() ? "closed (euler " + std::to_string(topo.euler) + ")" : "open";
-    std::printf("%zu vertices, %zu triangles in %zu piece%s, %s\n", mesh.vertex_count(), mesh.triangle_count(),
-                topo.components, topo.components == 1 ? "" : "s", shape.c_str());
+    std::printf("%zu vertices, %zu triangles in %s, %s\n", mesh.vertex_count(), mesh.triangle_count(),
+                pieces_text(topo.components).c_str(), shape.c_str());
     return kExitOk;
 }
 

@@ -230,6 +230,8 @@ std::string triple_text(const std::array<double, 3>& v) {
     return format_double(v[0]) + " " + format_double(v[1]) + " " + format_double(v[2]);
 }
 
+std::string pieces_text(std::size_t pieces) { return std::to_string(pieces) + (pieces == 1 ? " piece" : " pieces"); }
+
 std::string device_type_name(DeviceType type) {
     switch (type) {
         case DeviceType::Any: return "any";

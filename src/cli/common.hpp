@@ -98,6 +98,7 @@ std::string format_ms(double seconds);
 std::string json_string(const std::string& s);
 std::string dims_text(const std::array<std::size_t, 3>& d);
 std::string triple_text(const std::array<double, 3>& v);
+std::string pieces_text(std::size_t pieces);  // "1 piece", "29 pieces"
 std::string device_type_name(DeviceType type);
 Backend parse_backend(const std::string& name);
 
