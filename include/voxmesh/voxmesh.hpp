@@ -159,7 +159,8 @@ struct MeshTopology {
     bool closed() const { return boundary_edges == 0 && nonmanifold_edges == 0; }
 };
 // Throws Error, as write_mesh does, for arrays that are not whole triples, normals for a
-// different number of vertices, or an index past the last vertex.
+// different number of vertices, or an index past the last vertex; out of memory is an Error
+// too, as from extract.
 MeshTopology analyze_topology(const Mesh& mesh);
 
 // The `count` connected pieces with the most triangles (triangles sharing a vertex are in one
@@ -168,7 +169,8 @@ MeshTopology analyze_topology(const Mesh& mesh);
 // around it. Kept triangles and vertices stay in their order, so a piece of a canonical mesh
 // is exactly what extract gives for a volume holding that piece alone (the same samples
 // around it, nothing else crossing iso). Normals are kept.
-// Throws Error for count 0 and for the malformed arrays analyze_topology rejects.
+// Throws Error for count 0, for the malformed arrays analyze_topology rejects, and when out
+// of memory.
 Mesh keep_largest_components(const Mesh& mesh, std::size_t count = 1);
 
 // OpenCL devices as plain structs (empty without OpenCL or without a platform).

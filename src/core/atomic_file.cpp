@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
+#include <new>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -120,7 +121,8 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     } catch (const std::exception& e) {
         std::fclose(file);
         ::unlink(temp.c_str());
-        throw Error("cannot write '" + path + "': " + e.what());
+        const bool out_of_memory = dynamic_cast<const std::bad_alloc*>(&e) != nullptr;
+        throw Error("cannot write '" + path + "': " + (out_of_memory ? "out of memory" : e.what()));
     }
     if (std::fclose(file) != 0) {
         ::unlink(temp.c_str());

@@ -3,6 +3,7 @@
 // noise; keep_largest_components keeps the large ones.
 #include "components.hpp"
 #include "mesh_arrays.hpp"
+#include "out_of_memory.hpp"
 
 #include <algorithm>
 #include <cstdint>
@@ -70,9 +71,9 @@ MeshPieces mesh_pieces(const Mesh& mesh) {
 
 }  // namespace detail
 
-Mesh keep_largest_components(const Mesh& mesh, std::size_t count) {
-    detail::check_mesh_arrays(mesh, "keep_largest_components: ");
-    if (count == 0) throw Error("keep_largest_components: count must be at least 1");
+namespace {
+
+Mesh largest_pieces(const Mesh& mesh, std::size_t count) {
     const detail::MeshPieces pieces = detail::mesh_pieces(mesh);
 
     // The `count` pieces with the most triangles; of equal ones, those met first.
@@ -114,6 +115,15 @@ Mesh keep_largest_components(const Mesh& mesh, std::size_t count) {
         if (kept_piece[pieces.of_triangle[t]])
             for (std::size_t k = 0; k < 3; ++k) out.indices[written++] = new_index[mesh.indices[3 * t + k]];
     return out;
+}
+
+}  // namespace
+
+Mesh keep_largest_components(const Mesh& mesh, std::size_t count) {
+    detail::check_mesh_arrays(mesh, "keep_largest_components: ");
+    if (count == 0) throw Error("keep_largest_components: count must be at least 1");
+    return detail::out_of_memory_as_error("keep_largest_components: " + detail::out_of_memory_for(mesh),
+                                          [&] { return largest_pieces(mesh, count); });
 }
 
 }  // namespace voxmesh

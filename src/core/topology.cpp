@@ -1,6 +1,7 @@
 // A Mesh's structure: the arrays' consistency, and edges shared by triangles.
 #include "components.hpp"
 #include "mesh_arrays.hpp"
+#include "out_of_memory.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -31,8 +32,9 @@ void check_finite_vertices(const std::vector<float>& values, const std::string& 
 
 }  // namespace detail
 
-MeshTopology analyze_topology(const Mesh& mesh) {
-    detail::check_mesh_arrays(mesh, "analyze_topology: ");
+namespace {
+
+MeshTopology topology_of(const Mesh& mesh) {
     const std::size_t vertices = mesh.vertex_count();
     // Each triangle side filed under its lower vertex, holding the higher one (a counting
     // sort: linear, where sorting 3 keys a triangle took longer than extract itself on large
@@ -74,6 +76,14 @@ MeshTopology analyze_topology(const Mesh& mesh) {
     topo.euler = used_vertices - edges + static_cast<long long>(mesh.triangle_count());
     topo.components = detail::mesh_pieces(mesh).triangles.size();
     return topo;
+}
+
+}  // namespace
+
+MeshTopology analyze_topology(const Mesh& mesh) {
+    detail::check_mesh_arrays(mesh, "analyze_topology: ");
+    return detail::out_of_memory_as_error("analyze_topology: " + detail::out_of_memory_for(mesh),
+                                          [&] { return topology_of(mesh); });
 }
 
 }  // namespace voxmesh

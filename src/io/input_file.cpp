@@ -100,8 +100,8 @@ std::size_t available_memory() {
 void check_memory(const std::string& path, std::size_t bytes) {
     const std::size_t available = available_memory();
     if (bytes > available)
-        fail(path, "the volume needs " + std::to_string(bytes) + " bytes but only " + std::to_string(available) +
-                       " bytes of memory are available");
+        fail(path, "reading it needs " + std::to_string(bytes) + " bytes of memory but only " +
+                       std::to_string(available) + " bytes are available");
 }
 
 bool ends_with_nocase(const std::string& path, const std::string& suffix) {

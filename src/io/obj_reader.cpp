@@ -14,6 +14,8 @@
 #include "header_text.hpp"
 #include "input_file.hpp"
 
+#include "core/out_of_memory.hpp"
+
 #include <voxmesh/io.hpp>
 
 #include <charconv>
@@ -195,9 +197,7 @@ private:
     std::size_t line_ = 0;
 };
 
-}  // namespace
-
-Mesh read_obj(const std::string& path) {
+Mesh read_obj_file(const std::string& path) {
     const io::MappedFile file = io::map_whole_file(path);
     const std::string_view text = file.text;
 
@@ -223,6 +223,13 @@ Mesh read_obj(const std::string& path) {
         parser.statement(joined, first_line);
     }
     return parser.finish();
+}
+
+}  // namespace
+
+Mesh read_obj(const std::string& path) {
+    return detail::out_of_memory_as_error("'" + path + "': out of memory reading the mesh",
+                                          [&] { return read_obj_file(path); });
 }
 
 }  // namespace voxmesh

@@ -17,6 +17,8 @@
 #include "header_text.hpp"
 #include "input_file.hpp"
 
+#include "core/out_of_memory.hpp"
+
 #include <voxmesh/io.hpp>
 
 #include <algorithm>
@@ -530,9 +532,7 @@ void read_elements(Body& body, const Header& h, Mesh& mesh) {
     body.finish();
 }
 
-}  // namespace
-
-Mesh read_ply(const std::string& path) {
+Mesh read_ply_file(const std::string& path) {
     const io::MappedFile file = io::map_whole_file(path);
     const std::size_t size = file.text.size();
     const unsigned char* data = file.bytes();
@@ -556,6 +556,13 @@ Mesh read_ply(const std::string& path) {
         read_elements(body, h, mesh);
     }
     return mesh;
+}
+
+}  // namespace
+
+Mesh read_ply(const std::string& path) {
+    return detail::out_of_memory_as_error("'" + path + "': out of memory reading the mesh",
+                                          [&] { return read_ply_file(path); });
 }
 
 }  // namespace voxmesh

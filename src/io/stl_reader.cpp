@@ -5,6 +5,8 @@
 #include "input_file.hpp"
 #include "samples.hpp"
 
+#include "core/out_of_memory.hpp"
+
 #include <voxmesh/io.hpp>
 
 #include <array>
@@ -150,9 +152,7 @@ bool starts_with_solid(std::string_view text) {
     return io::lower(text.substr(i, 5)) == "solid";
 }
 
-}  // namespace
-
-Mesh read_stl(const std::string& path) {
+Mesh read_stl_file(const std::string& path) {
     const io::MappedFile file = io::map_whole_file(path);
     const std::size_t size = file.text.size();
     const unsigned char* data = file.bytes();
@@ -183,6 +183,13 @@ Mesh read_stl(const std::string& path) {
     }
     if (mesh.indices.empty()) fail(path, "ASCII STL with no triangles");
     return mesh;
+}
+
+}  // namespace
+
+Mesh read_stl(const std::string& path) {
+    return detail::out_of_memory_as_error("'" + path + "': out of memory reading the mesh",
+                                          [&] { return read_stl_file(path); });
 }
 
 }  // namespace voxmesh

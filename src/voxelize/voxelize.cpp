@@ -12,6 +12,7 @@
 
 #include "core/float_extent.hpp"
 #include "core/mesh_arrays.hpp"
+#include "core/out_of_memory.hpp"
 #include "core/parallel.hpp"
 #include "io/input_file.hpp"
 
@@ -225,9 +226,7 @@ double triangle_distance2(const Vec3& p, const GridTriangle& t) {
     return std::min({segment_distance2(p, t.a, t.b), segment_distance2(p, t.b, t.c), segment_distance2(p, t.c, t.a)});
 }
 
-}  // namespace
-
-Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
+Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
     if (options.resolution < 2 || options.resolution > kMaxResolution)
         throw Error("voxelize: resolution " + std::to_string(options.resolution) + " is out of range (2.." +
                     std::to_string(kMaxResolution) + ")");
@@ -399,6 +398,14 @@ Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
                     std::to_string(nz) + " grid lies inside the mesh (it is flat, or thinner than a voxel of " +
                     std::to_string(grid.h) + " everywhere); raise the resolution");
     return volume;
+}
+
+}  // namespace
+
+Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
+    return detail::out_of_memory_as_error("voxelize: " + detail::out_of_memory_for(mesh) + " at resolution " +
+                                              std::to_string(options.resolution),
+                                          [&] { return voxelize_mesh(mesh, options); });
 }
 
 }  // namespace voxmesh

@@ -1,0 +1,28 @@
+// voxmesh::Error promises that every failure throws it: std::bad_alloc from deep inside a call
+// (a vector growing, a mapping refused) becomes one at the public entry points.
+#pragma once
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <new>
+#include <string>
+
+namespace voxmesh::detail {
+
+// Returns f(); std::bad_alloc out of it becomes Error(message), which says what ran out.
+template <class F>
+auto out_of_memory_as_error(const std::string& message, F&& f) {
+    try {
+        return f();
+    } catch (const std::bad_alloc&) {
+        throw Error(message);
+    }
+}
+
+// "out of memory for a mesh of V vertices and T triangles"
+inline std::string out_of_memory_for(const Mesh& mesh) {
+    return "out of memory for a mesh of " + std::to_string(mesh.vertex_count()) + " vertices and " +
+           std::to_string(mesh.triangle_count()) + " triangles";
+}
+
+}  // namespace voxmesh::detail

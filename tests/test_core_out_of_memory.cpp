@@ -1,0 +1,178 @@
+// Out of memory is a voxmesh::Error, never a std::bad_alloc, from extract, analyze_topology,
+// keep_largest_components, the mesh readers and voxelize. Each call runs in a forked child whose address space is capped
+// (RLIMIT_DATA) a little above what it has mapped already, so that its large allocations fail;
+// the same call with room to spare must return, so the cap is what made it fail.
+#include "support/mesh_checks.hpp"
+
+#include "core/atomic_file.hpp"
+
+#include <voxmesh/fields.hpp>
+#include <voxmesh/io.hpp>
+#include <voxmesh/voxelize.hpp>
+#include <voxmesh/voxmesh.hpp>
+
+#include <catch2/catch.hpp>
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstddef>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <new>
+#include <string>
+
+namespace {
+
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+constexpr bool kCapWorks = false;  // the sanitizers' allocators die rather than throw
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
+constexpr bool kCapWorks = false;
+#else
+constexpr bool kCapWorks = true;
+#endif
+#else
+constexpr bool kCapWorks = true;
+#endif
+
+// VmData: the process's private writable memory, what RLIMIT_DATA caps. (RLIMIT_AS would
+// not do: glibc's per-thread malloc arenas reserve 64 MB of address space each, and a failed
+// allocation is retried in another arena, which grows into its reservation uncounted.)
+std::size_t data_bytes() {
+    std::ifstream status("/proc/self/status");
+    std::string key;
+    std::size_t kib = 0;
+    while (status >> key) {
+        if (key == "VmData:" && status >> kib) return kib * 1024;
+        status.ignore(1 << 20, '\n');
+    }
+    return 0;
+}
+
+// What `call` did in a child process capped at its data bytes + `headroom`: "returned",
+// "Error: <message>", "bad_alloc" or "other exception".
+std::string outcome_when_capped(std::size_t headroom, const std::function<void()>& call) {
+    int pipe_fds[2];
+    REQUIRE(pipe(pipe_fds) == 0);
+    const pid_t child = fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+        close(pipe_fds[0]);
+        std::string outcome;
+        outcome.reserve(512);  // before the cap
+        rlimit cap{};
+        cap.rlim_cur = cap.rlim_max = data_bytes() + headroom;
+        if (setrlimit(RLIMIT_DATA, &cap) != 0) {
+            outcome = "setrlimit failed";
+        } else {
+            try {
+                call();
+                outcome = "returned";
+            } catch (const voxmesh::Error& e) {
+                outcome = std::string("Error: ") + e.what();
+            } catch (const std::bad_alloc&) {
+                outcome = "bad_alloc";
+            } catch (...) {
+                outcome = "other exception";
+            }
+        }
+        const ssize_t written = write(pipe_fds[1], outcome.data(), outcome.size());
+        _exit(written == static_cast<ssize_t>(outcome.size()) ? 0 : 1);
+    }
+    close(pipe_fds[1]);
+    std::string outcome;
+    char buffer[256];
+    for (ssize_t n; (n = read(pipe_fds[0], buffer, sizeof buffer)) > 0;) outcome.append(buffer, static_cast<std::size_t>(n));
+    close(pipe_fds[0]);
+    int status = 0;
+    REQUIRE(waitpid(child, &status, 0) == child);
+    CHECK(WIFEXITED(status));
+    CHECK(WEXITSTATUS(status) == 0);
+    return outcome;
+}
+
+bool starts_with(const std::string& text, const std::string& prefix) { return text.rfind(prefix, 0) == 0; }
+
+constexpr std::size_t kTight = std::size_t{2} << 20, kRoomy = std::size_t{2} << 30;
+
+// `call` returns with room to spare, and with `tight` bytes of room throws an Error starting
+// `expected`.
+void check_out_of_memory_is_error(const std::function<void()>& call, const std::string& expected,
+                                  std::size_t tight = kTight) {
+    CHECK(outcome_when_capped(kRoomy, call) == "returned");
+    const std::string outcome = outcome_when_capped(tight, call);
+    INFO(outcome);
+    CHECK(starts_with(outcome, "Error: " + expected));
+}
+
+}  // namespace
+
+TEST_CASE("out of memory is an Error from extract, analyze_topology and keep_largest_components", "[core][memory]") {
+    if (!kCapWorks) {
+        WARN("skipped under a sanitizer: its allocator reports running out and dies, it throws nothing");
+        return;
+    }
+    // A dense surface: the mesh (about 20 MB) and the engine's scratch are far past 2 MB.
+    const voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Gyroid, 128);
+    const voxmesh::Options options = vmtest::cpu_options(field.iso, 1);  // no worker threads in the child
+    const voxmesh::Mesh mesh = voxmesh::extract(field.volume.view(), options);
+    REQUIRE(mesh.triangle_count() > 500000);
+    const std::string mesh_size = "out of memory for a mesh of " + std::to_string(mesh.vertex_count()) +
+                                  " vertices and " + std::to_string(mesh.triangle_count()) + " triangles";
+
+    SECTION("extract") {
+        check_out_of_memory_is_error([&] { (void)voxmesh::extract(field.volume.view(), options); },
+                                     "out of memory meshing a 128x128x128 volume");
+    }
+    SECTION("analyze_topology") {
+        check_out_of_memory_is_error([&] { (void)voxmesh::analyze_topology(mesh); }, "analyze_topology: " + mesh_size);
+    }
+    SECTION("keep_largest_components") {
+        check_out_of_memory_is_error([&] { (void)voxmesh::keep_largest_components(mesh, 2); },
+                                     "keep_largest_components: " + mesh_size);
+    }
+}
+
+TEST_CASE("out of memory is an Error from the mesh readers and voxelize", "[io][memory]") {
+    if (!kCapWorks) {
+        WARN("skipped under a sanitizer: its allocator reports running out and dies, it throws nothing");
+        return;
+    }
+    // A closed surface with about 200 000 triangles: 10 MB as STL, more as arrays.
+    const voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Sphere, 160);
+    const voxmesh::Mesh mesh = voxmesh::extract(field.volume.view(), vmtest::cpu_options(field.iso, 1));
+    REQUIRE(mesh.triangle_count() > 150000);
+    vmtest::TempDir dir;
+    for (const char* name : {"sphere.stl", "sphere.ply", "sphere.obj"}) {
+        DYNAMIC_SECTION(name) {
+            const std::string path = dir.file(name);
+            voxmesh::write_mesh(path, mesh);
+            // Room for the file's mapping (private and writable, so it counts), not the arrays.
+            check_out_of_memory_is_error([&] { (void)voxmesh::read_mesh(path); },
+                                         "'" + path + "': out of memory reading the mesh",
+                                         std::filesystem::file_size(path) + kTight);
+        }
+    }
+    SECTION("voxelize") {
+        voxmesh::VoxelizeOptions vo;
+        vo.resolution = 64;  // a small grid: the welding of the mesh's corners runs out first
+        vo.threads = 1;
+        check_out_of_memory_is_error([&] { (void)voxmesh::voxelize(mesh, vo); },
+                                     "voxelize: out of memory for a mesh of " + std::to_string(mesh.vertex_count()));
+    }
+}
+
+TEST_CASE("a write that runs out of memory says so and leaves nothing", "[core][memory]") {
+    vmtest::TempDir dir;
+    const std::string path = dir.file("mesh.stl");
+    try {
+        voxmesh::detail::write_file_atomically(path, [](std::FILE*) { throw std::bad_alloc(); });
+        FAIL("no error");
+    } catch (const voxmesh::Error& e) {
+        CHECK(std::string(e.what()) == "cannot write '" + path + "': out of memory");
+    }
+    CHECK(dir.entries().empty());
+}
