@@ -196,6 +196,25 @@ TEST_CASE("ply: normals need all of nx, ny, nz; 'vertex_index' names the corners
     CHECK(read_ply(s.file("both.ply", encode({vertex, both}, "ascii"))).indices == std::vector<std::uint32_t>{1, 2, 0});
 }
 
+TEST_CASE("ply: a NaN or infinite normal drops the normals, as in read_obj; the mesh is kept", "[io][ply]") {
+    Scratch s;
+    for (const double bad : {double(NAN), double(INFINITY), -double(INFINITY)}) {
+        for (const char* type : {"float", "double"}) {
+            const std::string t = type;
+            Elem vertex{"vertex", {{"float", "x", ""}, {"float", "y", ""}, {"float", "z", ""}, {t, "nx", ""}, {t, "ny", ""}, {t, "nz", ""}},
+                        {{{0}, {0}, {0}, {0}, {0}, {1}}, {{1}, {0}, {0}, {0}, {bad}, {1}}, {{0}, {1}, {0}, {0}, {0}, {1}}}};
+            Elem face{"face", {{"int", "vertex_indices", "uchar"}}, {{{0, 1, 2}}}};
+            for (const char* format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+                INFO(bad << " " << type << " " << format);
+                const Mesh m = read_ply(s.file("nan-normal.ply", encode({vertex, face}, format)));
+                CHECK(m.normals.empty());
+                CHECK(m.positions == std::vector<float>{0, 0, 0, 1, 0, 0, 0, 1, 0});
+                CHECK(m.indices == std::vector<std::uint32_t>{0, 1, 2});
+            }
+        }
+    }
+}
+
 TEST_CASE("ply: point clouds and empty meshes", "[io][ply]") {
     Scratch s;
     Elem vertex{"vertex", {{"float", "x", ""}, {"float", "y", ""}, {"float", "z", ""}}, {{{1}, {2}, {3}}, {{4}, {5}, {6}}}};
@@ -308,8 +327,11 @@ TEST_CASE("ply: bad files are errors naming the file and the problem", "[io][ply
                   "end_header\n0 0 0 w\n",
           "'w' is not a number");
     fails(ascii + "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\n"
-                  "property float ny\nproperty float nz\nend_header\n0 0 0 0 nan 1\n",
-          "property 'ny' is not finite");
+                  "property float ny\nproperty float nz\nend_header\n0 0 1e39 0 0 1\n",
+          "'1e39' is beyond the range of float");
+    fails(ascii + "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\n"
+                  "property float ny\nproperty float nz\nend_header\n0 0 0 0 1e39 1\n",
+          "'1e39' is beyond the range of float");
 
     // Binary.
     Elem vertex{"vertex", {{"float", "x", ""}, {"float", "y", ""}, {"double", "z", ""}}, {{{0}, {0}, {0}}, {{1}, {0}, {0}}, {{0}, {1}, {0}}}};

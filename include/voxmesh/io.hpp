@@ -117,7 +117,8 @@ void write_nrrd(const std::string& path, const VolumeView& volume,
 Mesh read_stl(const std::string& path);
 // PLY: ascii, binary_little_endian or binary_big_endian 1.0. The "vertex" element's x, y, z
 // (any PLY scalar type, read as float) become positions, and its nx, ny, nz normals where all
-// three are present; other properties and elements are skipped. The "face" element's list
+// three are present (left empty, as read_obj leaves them, when one is NaN or infinite);
+// other properties and elements are skipped. The "face" element's list
 // "vertex_indices" (or "vertex_index") becomes triangles: polygons are fanned from their
 // first corner, keeping the file's order and winding. Vertices are kept as the file indexes
 // them (not welded). A file with vertices and no faces (a point cloud) reads as vertices with

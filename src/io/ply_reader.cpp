@@ -13,7 +13,9 @@
 //  * A PLY with vertices and no faces (a point cloud) reads as vertices with no indices, and
 //    one with no vertices at all as an empty mesh; only a missing "vertex" element is an error.
 //  * "vertex_indices" is used when the face element has both it and "vertex_index".
-//  * Normals are kept when nx, ny and nz are all scalar properties of the vertex element.
+//  * Normals are kept when nx, ny and nz are all scalar properties of the vertex element, and
+//    dropped, not an error, when one is NaN or infinite (scanners write NaN where they have
+//    none), as read_obj does; a coordinate so is an error.
 #include "header_text.hpp"
 #include "input_file.hpp"
 
@@ -506,6 +508,7 @@ void read_polygon(Body& body, const Property& p, long long n, std::uint64_t vert
 template <class Body>
 void read_elements(Body& body, const Header& h, Mesh& mesh) {
     const std::uint64_t vertices = h.elements[h.vertex].count;
+    bool finite_normals = true;
     for (const Element& e : h.elements) {
         if (e.properties.empty() || e.count == 0 || body.skip_element(e)) continue;
         const bool is_vertex = &e == &h.elements[h.vertex];
@@ -519,7 +522,9 @@ void read_elements(Body& body, const Header& h, Mesh& mesh) {
                     if (p.corners) read_polygon(body, p, n, vertices, mesh.indices);
                     else body.skip_items(p, static_cast<std::uint64_t>(n));
                 } else if (p.slot != kSkip) {
-                    kept[p.slot] = to_float(body.number(p), p, body);
+                    const double value = body.number(p);
+                    if (p.slot >= 3 && !std::isfinite(value)) finite_normals = false;
+                    else kept[p.slot] = to_float(value, p, body);
                 } else {
                     body.skip(p);
                 }
@@ -530,6 +535,7 @@ void read_elements(Body& body, const Header& h, Mesh& mesh) {
         }
     }
     body.finish();
+    if (!finite_normals) mesh.normals = {};
 }
 
 Mesh read_ply_file(const std::string& path) {
