@@ -1,5 +1,5 @@
 // Out of memory is a voxmesh::Error, never a std::bad_alloc, from extract, analyze_topology,
-// keep_largest_components, the mesh readers and voxelize. Each call runs in a forked child whose address space is capped
+// keep_largest_components, the mesh readers, voxelize and a Sculpt's update and mesh. Each call runs in a forked child whose address space is capped
 // (RLIMIT_DATA) a little above what it has mapped already, so that its large allocations fail;
 // the same call with room to spare must return, so the cap is what made it fail.
 #include "support/mesh_checks.hpp"
@@ -8,6 +8,7 @@
 
 #include <voxmesh/fields.hpp>
 #include <voxmesh/io.hpp>
+#include <voxmesh/sculpt.hpp>
 #include <voxmesh/voxelize.hpp>
 #include <voxmesh/voxmesh.hpp>
 
@@ -64,7 +65,8 @@ std::string outcome_when_capped(std::size_t headroom, const std::function<void()
         std::string outcome;
         outcome.reserve(512);  // before the cap
         rlimit cap{};
-        cap.rlim_cur = cap.rlim_max = data_bytes() + headroom;
+        getrlimit(RLIMIT_DATA, &cap);
+        cap.rlim_cur = data_bytes() + headroom;  // the soft limit: lift_cap() can raise it again
         if (setrlimit(RLIMIT_DATA, &cap) != 0) {
             outcome = "setrlimit failed";
         } else {
@@ -92,6 +94,14 @@ std::string outcome_when_capped(std::size_t headroom, const std::function<void()
     CHECK(WIFEXITED(status));
     CHECK(WEXITSTATUS(status) == 0);
     return outcome;
+}
+
+// In a capped child: back to the hard limit, to retry what ran out.
+void lift_cap() {
+    rlimit cap{};
+    getrlimit(RLIMIT_DATA, &cap);
+    cap.rlim_cur = cap.rlim_max;
+    setrlimit(RLIMIT_DATA, &cap);
 }
 
 bool starts_with(const std::string& text, const std::string& prefix) { return text.rfind(prefix, 0) == 0; }
@@ -175,4 +185,42 @@ TEST_CASE("a write that runs out of memory says so and leaves nothing", "[core][
         CHECK(std::string(e.what()) == "cannot write '" + path + "': out of memory");
     }
     CHECK(dir.entries().empty());
+}
+
+TEST_CASE("out of memory is an Error from Sculpt::update, which can be retried, and Sculpt::mesh", "[sculpt][memory]") {
+    if (!kCapWorks) {
+        WARN("skipped under a sanitizer: its allocator reports running out and dies, it throws nothing");
+        return;
+    }
+    voxmesh::SculptOptions options;
+    options.threads = 1;  // no worker threads in the child
+    options.backend = voxmesh::Backend::Cpu;
+    voxmesh::Sculpt sculpt = voxmesh::make_sculpt_sphere(256, options);  // every block dirty, none meshed
+    REQUIRE(sculpt.dirty());
+
+    SECTION("update") {
+        const voxmesh::Mesh expected = voxmesh::extract(sculpt.view(), vmtest::cpu_options(0, 1));
+        REQUIRE(expected.triangle_count() > 100000);
+        // Runs out, stays dirty, and once there is memory again gives the whole mesh.
+        check_out_of_memory_is_error(
+            [&] {
+                try {
+                    sculpt.update();
+                } catch (const voxmesh::Error&) {
+                    lift_cap();
+                    if (!sculpt.dirty()) throw voxmesh::Error("not dirty after a failed update");
+                    sculpt.update();
+                    const voxmesh::Mesh mesh = sculpt.mesh();
+                    if (mesh.indices != expected.indices || mesh.positions != expected.positions)
+                        throw voxmesh::Error("a different mesh after the retried update");
+                    throw;
+                }
+            },
+            "sculpt: out of memory re-meshing " + std::to_string(sculpt.block_count()) + " blocks");
+    }
+    SECTION("mesh") {
+        sculpt.update();
+        check_out_of_memory_is_error([&] { (void)sculpt.mesh(); },
+                                     "sculpt: out of memory welding the blocks' meshes into one");
+    }
 }

@@ -139,7 +139,9 @@ public:
     void invalidate_all();
 
     // ---- meshing
-    UpdateResult update();                // re-meshes dirty blocks in parallel
+    // Re-meshes dirty blocks in parallel. Out of memory is an Error, and the blocks stay dirty
+    // for the next update().
+    UpdateResult update();
     bool dirty() const;                   // edits not yet meshed
     std::size_t block_count() const;
     std::array<std::size_t, 3> block_grid() const;  // blocks per axis

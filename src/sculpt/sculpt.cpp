@@ -16,6 +16,7 @@
 #include "block_mesher.hpp"
 #include "device_blocks.hpp"
 #include "core/cpu_engine.hpp"
+#include "core/out_of_memory.hpp"
 #include "core/parallel.hpp"
 #include "core/threshold.hpp"
 
@@ -764,7 +765,12 @@ void Sculpt::invalidate_all() {
     impl_->mark_all();
 }
 
-UpdateResult Sculpt::update() { return impl_->update(); }
+UpdateResult Sculpt::update() {
+    // impl_->update() clears the dirty list only once every block is meshed.
+    return detail::out_of_memory_as_error("sculpt: out of memory re-meshing " + std::to_string(impl_->dirty_list.size()) +
+                                              " blocks",
+                                          [&] { return impl_->update(); });
+}
 bool Sculpt::dirty() const { return !impl_->dirty_list.empty(); }
 std::size_t Sculpt::block_count() const { return impl_->blocks.size(); }
 std::array<std::size_t, 3> Sculpt::block_grid() const { return impl_->nb; }
@@ -791,7 +797,9 @@ BlockMesh Sculpt::block(std::size_t index) const {
 
 Mesh Sculpt::mesh() {
     if (dirty()) update();
-    return dispatch_sculpt_type(impl_->volume.type, [&](auto tag) { return impl_->assemble<decltype(tag)>(); });
+    return detail::out_of_memory_as_error("sculpt: out of memory welding the blocks' meshes into one", [&] {
+        return dispatch_sculpt_type(impl_->volume.type, [&](auto tag) { return impl_->assemble<decltype(tag)>(); });
+    });
 }
 
 VolumeView Sculpt::view() const { return impl_->view(); }
