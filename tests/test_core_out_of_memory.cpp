@@ -1,7 +1,8 @@
 // Out of memory is a voxmesh::Error, never a std::bad_alloc, from extract, analyze_topology,
-// keep_largest_components, the mesh readers, voxelize and a Sculpt's update and mesh. Each call runs in a forked child whose address space is capped
-// (RLIMIT_DATA) a little above what it has mapped already, so that its large allocations fail;
-// the same call with room to spare must return, so the cap is what made it fail.
+// keep_largest_components, the volume and mesh readers, voxelize and a Sculpt's update and
+// mesh. Each call runs in a forked child whose private writable memory is capped
+// (RLIMIT_DATA) a little above what it uses already, so that its large allocations fail; the
+// same call with room to spare must return, so the cap is what made it fail.
 #include "support/mesh_checks.hpp"
 
 #include "core/atomic_file.hpp"
@@ -222,5 +223,31 @@ TEST_CASE("out of memory is an Error from Sculpt::update, which can be retried, 
         sculpt.update();
         check_out_of_memory_is_error([&] { (void)sculpt.mesh(); },
                                      "sculpt: out of memory welding the blocks' meshes into one");
+    }
+}
+
+TEST_CASE("out of memory is an Error naming the file from the volume readers", "[io][memory]") {
+    if (!kCapWorks) {
+        WARN("skipped under a sanitizer: its allocator reports running out and dies, it throws nothing");
+        return;
+    }
+    // Gzip NRRD and NIfTI: the header, the mapping, the inflated samples each need memory.
+    // Wherever in the read it runs out, it is an Error naming the file.
+    for (const char* name : {"headsq.nrrd", "mri_someones_anatomy.nii.gz"}) {
+        const std::string path = std::string(VOXMESH_TEST_DATA) + "/" + name;
+        INFO(path);
+        bool ran_out = false, returned = false;
+        for (std::size_t room = 0; room <= (std::size_t{4} << 20); room += std::size_t{256} << 10) {
+            INFO("room " << room);
+            const std::string outcome = outcome_when_capped(room, [&] { (void)voxmesh::read_volume(path); });
+            INFO(outcome);
+            // The files are sound: an Error here is the cap's doing.
+            const bool error = starts_with(outcome, "Error: '" + path + "': ");
+            CHECK((outcome == "returned" || error));
+            ran_out = ran_out || error;
+            returned = returned || outcome == "returned";
+        }
+        CHECK(ran_out);
+        CHECK(returned);
     }
 }

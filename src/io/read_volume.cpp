@@ -1,6 +1,7 @@
 // read_volume / read_volume_info: pick the reader by extension, then load or check the
 // samples the header describes. Also read_raw, the same path with a caller-given header.
 #include "core/float_extent.hpp"
+#include "core/out_of_memory.hpp"
 #include "header_text.hpp"
 #include "input_file.hpp"
 #include "readers.hpp"
@@ -146,13 +147,21 @@ Volume placed(Volume v, const VolumeInfo& info) {
     v.origin = info.origin;
     return v;
 }
+
+// f(), out of memory in it an Error naming the file.
+template <class F>
+auto reading(const std::string& path, F&& f) {
+    return detail::out_of_memory_as_error("'" + path + "': out of memory reading the volume", f);
+}
 }  // namespace
 
 Volume read_volume(const std::string& path, VolumeInfo& info) {
-    const io::VolumeHeader h = io::read_header(path);
-    Volume v = placed(io::load_samples(path, h.layout), h.info);
-    info = h.info;
-    return v;
+    return reading(path, [&] {
+        const io::VolumeHeader h = io::read_header(path);
+        Volume v = placed(io::load_samples(path, h.layout), h.info);
+        info = h.info;
+        return v;
+    });
 }
 
 Volume read_volume(const std::string& path) {
@@ -161,26 +170,34 @@ Volume read_volume(const std::string& path) {
 }
 
 VolumeInfo read_volume_info(const std::string& path) {
-    io::VolumeHeader h = io::read_header(path);
-    const std::size_t data_bytes = io::check_samples(path, h.layout);
-    if (h.layout.data_path == path) h.info.file_bytes = data_bytes;
-    return h.info;
+    return reading(path, [&] {
+        io::VolumeHeader h = io::read_header(path);
+        const std::size_t data_bytes = io::check_samples(path, h.layout);
+        if (h.layout.data_path == path) h.info.file_bytes = data_bytes;
+        return h.info;
+    });
 }
 
 Volume read_raw(const std::string& path, const RawLayout& layout) {
-    const io::VolumeHeader h = io::raw_header(path, layout);
-    return placed(io::load_samples(path, h.layout), h.info);
+    return reading(path, [&] {
+        const io::VolumeHeader h = io::raw_header(path, layout);
+        return placed(io::load_samples(path, h.layout), h.info);
+    });
 }
 
 Volume read_raw(std::istream& in, const std::string& name, const RawLayout& layout) {
-    const io::VolumeHeader h = io::raw_header(name, layout);
-    return placed(io::load_stream_samples(in, name, h.layout), h.info);
+    return reading(name, [&] {
+        const io::VolumeHeader h = io::raw_header(name, layout);
+        return placed(io::load_stream_samples(in, name, h.layout), h.info);
+    });
 }
 
 VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout) {
-    io::VolumeHeader h = io::raw_header(path, layout);
-    h.info.file_bytes = io::check_samples(path, h.layout);
-    return h.info;
+    return reading(path, [&] {
+        io::VolumeHeader h = io::raw_header(path, layout);
+        h.info.file_bytes = io::check_samples(path, h.layout);
+        return h.info;
+    });
 }
 
 }  // namespace voxmesh

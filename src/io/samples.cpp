@@ -27,6 +27,15 @@ std::string dims_text(std::array<std::size_t, 3> d) {
     return std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]);
 }
 
+// Volume::allocate, its Error (out of memory) naming the file.
+Volume allocate_samples(const std::string& path, const SampleLayout& layout) {
+    try {
+        return Volume::allocate(layout.type, layout.dims);
+    } catch (const Error& e) {
+        fail(path, e.what());
+    }
+}
+
 struct Located {
     std::size_t file_size = 0;
     std::size_t start = 0;   // raw: first sample; compressed: first stream byte
@@ -149,7 +158,7 @@ Volume load_samples(const std::string& header_path, const SampleLayout& layout) 
     }
 
     check_memory(file.path(), bytes);
-    Volume v = Volume::allocate(layout.type, layout.dims);
+    Volume v = allocate_samples(file.path(), layout);
     if (!layout.compressed) {
         file.read_exact(at.start, v.data, bytes);
     } else {
@@ -218,7 +227,7 @@ Volume load_stream_samples(std::istream& in, const std::string& name, const Samp
                            std::to_string(layout.offset) + "-byte offset");
         left -= got;
     }
-    Volume v = Volume::allocate(layout.type, layout.dims);
+    Volume v = allocate_samples(name, layout);
     const std::size_t got = read_some(static_cast<char*>(v.data), bytes);
     if (got < bytes)
         fail(name, "the stream holds " + std::to_string(got) + " bytes of samples but " + dims_text(layout.dims) + " " +
