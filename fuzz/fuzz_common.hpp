@@ -80,6 +80,18 @@ inline void check_mesh(const voxmesh::Mesh& mesh) {
         if (!std::isfinite(v)) std::abort();
 }
 
+// Reads `data` as a mesh file named `name` (its extension picks the reader): a well-formed
+// mesh (at least one triangle where `faces_required`) or an Error, nothing else.
+inline void read_mesh_input(const char* name, const std::uint8_t* data, std::size_t size, bool faces_required) {
+    const std::string path = input_file(name, data, size);
+    try {
+        const voxmesh::Mesh mesh = voxmesh::read_mesh(path);
+        check_mesh(mesh);
+        if (faces_required && mesh.indices.empty()) std::abort();
+    } catch (const voxmesh::Error&) {
+    }
+}
+
 // extract() of a volume the library made (a sculpt's, voxelize's), on the CPU engine and one
 // thread: it must mesh it, so an Error is a finding.
 inline voxmesh::Mesh extract_or_abort(const voxmesh::VolumeView& volume, double iso) {
