@@ -5,7 +5,9 @@
 
 #include <voxmesh/voxmesh.hpp>
 
+#include <charconv>
 #include <clocale>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdint>
@@ -15,6 +17,7 @@
 #include <fstream>
 #include <sstream>
 #include <limits>
+#include <random>
 #include <iterator>
 #include <string>
 #include <sys/resource.h>
@@ -324,6 +327,66 @@ TEST_CASE("write_mesh: OBJ numbers keep the decimal point under a decimal-comma 
     CHECK(p.positions == mesh.positions);
     CHECK(p.normals == mesh.normals);
     CHECK(p.indices == mesh.indices);
+}
+
+TEST_CASE("write_mesh: OBJ text formatted in blocks on several threads is the one-pass text", "[core]") {
+    // More lines than several 32768-line blocks, the last one partial, so that rounds of
+    // blocks on the worker threads and their order in the file are both exercised.
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> coordinate(-1000.f, 1000.f);
+    std::uniform_int_distribution<int> exponent(-40, 38);
+    voxmesh::Mesh mesh;
+    const std::size_t vertices = 100003, triangles = 140001;
+    for (std::size_t i = 0; i < 3 * vertices; ++i) mesh.positions.push_back(std::ldexp(coordinate(rng), exponent(rng) / 4));
+    for (std::size_t i = 0; i < 3 * vertices; ++i) mesh.normals.push_back(coordinate(rng) / 1000.f);
+    std::uniform_int_distribution<std::uint32_t> corner(0, vertices - 1);
+    for (std::size_t i = 0; i < 3 * triangles; ++i) mesh.indices.push_back(corner(rng));
+
+    // The one-pass text, as the format defines it: shortest round-trip numbers, 1-based
+    // indices, "i//i" corners where there are normals.
+    const auto expected = [](const voxmesh::Mesh& m) {
+        std::string text = "# written by voxmesh " + std::string(VOXMESH_VERSION_STRING) + "\n";
+        const auto number = [&](auto value) {
+            char digits[32];
+            text.append(digits, std::to_chars(digits, digits + sizeof digits, value).ptr);
+        };
+        const auto triples = [&](const std::vector<float>& values, const char* tag) {
+            for (std::size_t i = 0; i < values.size(); i += 3) {
+                text += tag;
+                for (int k = 0; k < 3; ++k) {
+                    text += ' ';
+                    number(values[i + k]);
+                }
+                text += '\n';
+            }
+        };
+        triples(m.positions, "v");
+        triples(m.normals, "vn");
+        for (std::size_t i = 0; i < m.indices.size(); i += 3) {
+            text += 'f';
+            for (int k = 0; k < 3; ++k) {
+                text += ' ';
+                number(m.indices[i + k] + 1ull);
+                if (!m.normals.empty()) {
+                    text += "//";
+                    number(m.indices[i + k] + 1ull);
+                }
+            }
+            text += '\n';
+        }
+        return text;
+    };
+    vmtest::TempDir dir;
+    for (const bool normals : {true, false}) {
+        INFO((normals ? "with normals" : "without normals"));
+        voxmesh::Mesh m = mesh;
+        if (!normals) m.normals.clear();
+        const std::string path = dir.file("many.obj");
+        voxmesh::write_mesh(path, m);
+        const std::string text = read_all(path);
+        CHECK(text.size() == expected(m).size());
+        CHECK(text == expected(m));
+    }
 }
 
 TEST_CASE("write_mesh: an empty mesh writes valid empty files", "[core]") {
