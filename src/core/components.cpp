@@ -43,15 +43,30 @@ private:
     std::vector<std::uint32_t> parent_;
 };
 
-}  // namespace
-
-MeshPieces mesh_pieces(const Mesh& mesh) {
+// The pieces as vertex sets: a triangle's corners united.
+VertexSets united_corners(const Mesh& mesh) {
     VertexSets sets(mesh.vertex_count());
     const std::size_t triangles = mesh.triangle_count();
     for (std::size_t t = 0; t < triangles; ++t) {
         sets.unite(mesh.indices[3 * t], mesh.indices[3 * t + 1]);
         sets.unite(mesh.indices[3 * t], mesh.indices[3 * t + 2]);
     }
+    return sets;
+}
+
+}  // namespace
+
+std::size_t count_mesh_pieces(const Mesh& mesh, const std::vector<bool>& used) {
+    VertexSets sets = united_corners(mesh);
+    std::size_t pieces = 0;  // one root, its lowest vertex, a piece
+    for (std::size_t v = 0; v < used.size(); ++v)
+        pieces += used[v] && sets.find(static_cast<std::uint32_t>(v)) == v;  // used: named by a 32-bit index
+    return pieces;
+}
+
+MeshPieces mesh_pieces(const Mesh& mesh) {
+    VertexSets sets = united_corners(mesh);
+    const std::size_t triangles = mesh.triangle_count();
     // Pieces numbered in the order of their first triangle.
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
     std::vector<std::uint32_t> piece_of_root(mesh.vertex_count(), kNone);

@@ -16,5 +16,8 @@ struct MeshPieces {
 };
 // The mesh's arrays must have passed check_mesh_arrays.
 MeshPieces mesh_pieces(const Mesh& mesh);
+// How many pieces, where used[v] says whether a triangle names vertex v: the count alone,
+// without mesh_pieces' per-triangle array (4 bytes a triangle, written and then unread).
+std::size_t count_mesh_pieces(const Mesh& mesh, const std::vector<bool>& used);
 
 }  // namespace voxmesh::detail

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -51,7 +52,8 @@ MeshTopology topology_of(const Mesh& mesh) {
     };
     sides([&](std::uint32_t lo, std::uint32_t) { ++list_end[lo + 1]; });
     for (std::size_t v = 0; v < vertices; ++v) list_end[v + 1] += list_end[v];  // list_end[v]: where v's list starts
-    std::vector<std::uint32_t> higher(mesh.indices.size());
+    // Every entry is written below: no zero-fill first (120 MB for 10 M triangles).
+    const auto higher = std::make_unique_for_overwrite<std::uint32_t[]>(mesh.indices.size());
     sides([&](std::uint32_t lo, std::uint32_t hi) {
         higher[list_end[lo]++] = hi;  // list_end[v] ends at the start of v + 1's list
         used[lo] = used[hi] = true;
@@ -61,8 +63,8 @@ MeshTopology topology_of(const Mesh& mesh) {
     long long edges = 0, used_vertices = 0;
     for (std::size_t v = 0; v < vertices; ++v) {
         used_vertices += used[v];
-        const auto first = higher.begin() + static_cast<std::ptrdiff_t>(v == 0 ? 0 : list_end[v - 1]);
-        const auto last = higher.begin() + static_cast<std::ptrdiff_t>(list_end[v]);
+        std::uint32_t* const first = higher.get() + (v == 0 ? 0 : list_end[v - 1]);
+        std::uint32_t* const last = higher.get() + list_end[v];
         std::sort(first, last);
         for (auto i = first; i != last;) {
             const auto j = std::find_if(i, last, [&](std::uint32_t h) { return h != *i; });
@@ -74,7 +76,7 @@ MeshTopology topology_of(const Mesh& mesh) {
         }
     }
     topo.euler = used_vertices - edges + static_cast<long long>(mesh.triangle_count());
-    topo.components = detail::mesh_pieces(mesh).triangles.size();
+    topo.components = detail::count_mesh_pieces(mesh, used);
     return topo;
 }
 
