@@ -329,7 +329,7 @@ TEST_CASE("write_mesh: OBJ numbers keep the decimal point under a decimal-comma 
     CHECK(p.indices == mesh.indices);
 }
 
-TEST_CASE("write_mesh: OBJ text formatted in blocks on several threads is the one-pass text", "[core]") {
+TEST_CASE("write_mesh: OBJ and STL made in blocks on several threads are the one-pass bytes", "[core]") {
     // More lines than several 32768-line blocks, the last one partial, so that rounds of
     // blocks on the worker threads and their order in the file are both exercised.
     std::mt19937 rng(7);
@@ -387,6 +387,37 @@ TEST_CASE("write_mesh: OBJ text formatted in blocks on several threads is the on
         CHECK(text.size() == expected(m).size());
         CHECK(text == expected(m));
     }
+
+    // STL: the header, the count, then a record per triangle: its unit normal (from the
+    // corners in double), its corners, two zero bytes.
+    std::string stl(80, '\0');
+    const std::string title = "binary STL written by voxmesh " + std::string(VOXMESH_VERSION_STRING);
+    stl.replace(0, title.size(), title);
+    const auto put = [&](const void* bytes, std::size_t n) { stl.append(static_cast<const char*>(bytes), n); };
+    const std::uint32_t count = static_cast<std::uint32_t>(mesh.triangle_count());
+    put(&count, 4);
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+        const float* p[3];
+        for (int k = 0; k < 3; ++k) p[k] = &mesh.positions[3 * std::size_t{mesh.indices[3 * t + k]}];
+        double u[3], v[3];
+        for (int d = 0; d < 3; ++d) {
+            u[d] = double(p[1][d]) - p[0][d];
+            v[d] = double(p[2][d]) - p[0][d];
+        }
+        const double c[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        const double len = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+        for (int d = 0; d < 3; ++d) {
+            const float n = len > 0 ? static_cast<float>(c[d] / len) : 0.f;
+            put(&n, 4);
+        }
+        for (int k = 0; k < 3; ++k) put(p[k], 12);
+        stl.append(2, '\0');
+    }
+    const std::string path = dir.file("many.stl");
+    voxmesh::write_mesh(path, mesh);
+    const std::string bytes = read_all(path);
+    CHECK(bytes.size() == stl.size());
+    CHECK(bytes == stl);
 }
 
 TEST_CASE("write_mesh: an empty mesh writes valid empty files", "[core]") {
