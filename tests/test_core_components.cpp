@@ -4,6 +4,9 @@
 // holding that piece alone.
 #include "support/mesh_checks.hpp"
 
+#include "core/components.hpp"
+
+#include <voxmesh/fields.hpp>
 #include <voxmesh/io.hpp>
 #include <voxmesh/voxmesh.hpp>
 
@@ -151,6 +154,15 @@ TEST_CASE("analyze_topology agrees with the sorted-edge oracle on open, non-mani
         std::size_t pieces = 0;
         vmtest::oracle_pieces(m, pieces);
         CHECK(lib.components == pieces);
+        // The same on any number of worker threads, more than there are vertices too.
+        for (unsigned workers : {2u, 3u, 7u}) {
+            INFO(workers << " workers");
+            const MeshTopology split = detail::topology_with_workers(m, workers);
+            CHECK(split.boundary_edges == lib.boundary_edges);
+            CHECK(split.nonmanifold_edges == lib.nonmanifold_edges);
+            CHECK(split.euler == lib.euler);
+            CHECK(split.components == lib.components);
+        }
     }
     // And on a real CT's open surface.
     const Volume v = read_volume(std::string(VOXMESH_TEST_DATA) + "/headsq.nrrd");
@@ -162,3 +174,29 @@ TEST_CASE("analyze_topology agrees with the sorted-edge oracle on open, non-mani
     CHECK(lib.nonmanifold_edges == oracle.nonmanifold_edges);
     CHECK(lib.euler == oracle.euler);
 }
+
+TEST_CASE("analyze_topology and keep_largest_components on a mesh large enough for several threads", "[core][components]") {
+    // The CT phantom at 160³: about 270 000 triangles in 5 pieces, past the size where the
+    // passes split over worker threads.
+    const FieldVolume field = make_field(Field::Ct, 160);
+    const Mesh m = extract(field.volume.view(), vmtest::cpu_options(field.iso, 0));
+    REQUIRE(m.indices.size() > (std::size_t{2} << 18));
+    const vmtest::Topology oracle = vmtest::topology(m);
+    std::size_t pieces = 0;
+    vmtest::oracle_pieces(m, pieces);
+    for (unsigned workers : {1u, 2u, 3u, 8u}) {
+        INFO(workers << " workers");
+        const MeshTopology t = detail::topology_with_workers(m, workers);
+        CHECK(t.boundary_edges == oracle.boundary_edges);
+        CHECK(t.nonmanifold_edges == oracle.nonmanifold_edges);
+        CHECK(t.euler == oracle.euler);
+        CHECK(t.components == pieces);
+    }
+    REQUIRE(pieces > 3);
+    CHECK(analyze_topology(m).components == pieces);
+    for (std::size_t count : {std::size_t{1}, std::size_t{3}, pieces}) {
+        INFO("count " << count);
+        require_identical(keep_largest_components(m, count), vmtest::oracle_keep_largest(m, count));
+    }
+}
+

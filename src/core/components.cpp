@@ -4,10 +4,13 @@
 #include "components.hpp"
 #include "mesh_arrays.hpp"
 #include "out_of_memory.hpp"
+#include "parallel.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -18,54 +21,81 @@ namespace detail {
 
 namespace {
 
-// Union-find over vertex ids with path halving; the smaller root wins a union, so a piece's
-// root is its lowest vertex whatever order the triangles come in.
+// Sides per worker below which one more worker is not worth its wake-up.
+constexpr std::size_t kSidesPerWorker = std::size_t{1} << 18;
+
+// Union-find over vertex ids, shared by worker threads: a root is only ever linked under a
+// lower vertex (by compare-and-swap, retried when another thread linked it first), so
+// parent <= vertex always, no cycle can form, and a piece's root is its lowest vertex
+// whatever order the triangles are united in. Path halving on the way up.
 class VertexSets {
 public:
-    explicit VertexSets(std::size_t vertices) : parent_(vertices) {
-        std::iota(parent_.begin(), parent_.end(), std::uint32_t{0});
+    VertexSets(std::size_t vertices, unsigned workers)
+        : parent_(std::make_unique_for_overwrite<std::uint32_t[]>(vertices)) {
+        run_workers(workers, [&](unsigned w) {
+            for (std::size_t v = vertices * w / workers; v < vertices * (w + 1) / workers; ++v)
+                parent_[v] = static_cast<std::uint32_t>(v);
+        });
     }
     std::uint32_t find(std::uint32_t v) {
-        while (parent_[v] != v) {
-            parent_[v] = parent_[parent_[v]];
-            v = parent_[v];
+        for (;;) {
+            std::uint32_t p = at(v).load(std::memory_order_relaxed);
+            if (p == v) return v;
+            const std::uint32_t grand = at(p).load(std::memory_order_relaxed);
+            if (grand != p) at(v).compare_exchange_weak(p, grand, std::memory_order_relaxed);  // a lost race is harmless
+            v = grand;
         }
-        return v;
     }
     void unite(std::uint32_t a, std::uint32_t b) {
-        a = find(a);
-        b = find(b);
-        if (a < b) parent_[b] = a;
-        else if (b < a) parent_[a] = b;
+        for (;;) {
+            a = find(a);
+            b = find(b);
+            if (a == b) return;
+            if (a > b) std::swap(a, b);
+            std::uint32_t expected = b;
+            if (at(b).compare_exchange_strong(expected, a, std::memory_order_relaxed)) return;
+        }
     }
 
 private:
-    std::vector<std::uint32_t> parent_;
+    std::atomic_ref<std::uint32_t> at(std::uint32_t v) { return std::atomic_ref<std::uint32_t>(parent_[v]); }
+    std::unique_ptr<std::uint32_t[]> parent_;
 };
 
-// The pieces as vertex sets: a triangle's corners united.
-VertexSets united_corners(const Mesh& mesh) {
-    VertexSets sets(mesh.vertex_count());
+// The pieces as vertex sets: each triangle's corners united, the triangles split among
+// `workers` threads.
+VertexSets united_corners(const Mesh& mesh, unsigned workers) {
+    VertexSets sets(mesh.vertex_count(), workers);
     const std::size_t triangles = mesh.triangle_count();
-    for (std::size_t t = 0; t < triangles; ++t) {
-        sets.unite(mesh.indices[3 * t], mesh.indices[3 * t + 1]);
-        sets.unite(mesh.indices[3 * t], mesh.indices[3 * t + 2]);
-    }
+    const std::uint32_t* const corners = mesh.indices.data();
+    run_workers(workers, [&](unsigned w) {
+        for (std::size_t t = triangles * w / workers; t < triangles * (w + 1) / workers; ++t) {
+            sets.unite(corners[3 * t], corners[3 * t + 1]);
+            sets.unite(corners[3 * t], corners[3 * t + 2]);
+        }
+    });
     return sets;
 }
 
 }  // namespace
 
-std::size_t count_mesh_pieces(const Mesh& mesh, const std::vector<bool>& used) {
-    VertexSets sets = united_corners(mesh);
-    std::size_t pieces = 0;  // one root, its lowest vertex, a piece
-    for (std::size_t v = 0; v < used.size(); ++v)
-        pieces += used[v] && sets.find(static_cast<std::uint32_t>(v)) == v;  // used: named by a 32-bit index
-    return pieces;
+unsigned workers_for_sides(std::size_t sides) {
+    return static_cast<unsigned>(std::clamp<std::size_t>(sides / kSidesPerWorker, 1, resolve_threads(0)));
+}
+
+std::size_t count_mesh_pieces(const Mesh& mesh, const std::vector<std::uint8_t>& used, unsigned workers) {
+    VertexSets sets = united_corners(mesh, workers);
+    std::vector<std::size_t> roots(workers, 0);  // one root, its lowest vertex, a piece
+    const std::size_t vertices = used.size();
+    run_workers(workers, [&](unsigned w) {
+        for (std::size_t v = vertices * w / workers; v < vertices * (w + 1) / workers; ++v)
+            roots[w] += used[v] && sets.find(static_cast<std::uint32_t>(v)) == v;  // used: named by a 32-bit index
+    });
+    return std::accumulate(roots.begin(), roots.end(), std::size_t{0});
 }
 
 MeshPieces mesh_pieces(const Mesh& mesh) {
-    VertexSets sets = united_corners(mesh);
+    VertexSets sets = united_corners(mesh, workers_for_sides(mesh.indices.size()));
     const std::size_t triangles = mesh.triangle_count();
     // Pieces numbered in the order of their first triangle.
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();

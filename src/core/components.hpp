@@ -16,8 +16,17 @@ struct MeshPieces {
 };
 // The mesh's arrays must have passed check_mesh_arrays.
 MeshPieces mesh_pieces(const Mesh& mesh);
-// How many pieces, where used[v] says whether a triangle names vertex v: the count alone,
-// without mesh_pieces' per-triangle array (4 bytes a triangle, written and then unread).
-std::size_t count_mesh_pieces(const Mesh& mesh, const std::vector<bool>& used);
+// How many pieces, where used[v] != 0 says that a triangle names vertex v: the count alone,
+// without mesh_pieces' per-triangle array (4 bytes a triangle, written and then unread), on
+// `workers` threads.
+std::size_t count_mesh_pieces(const Mesh& mesh, const std::vector<std::uint8_t>& used, unsigned workers);
+
+// Threads for a pass over a mesh of `sides` triangle sides: one per 2^18 sides, at most the
+// machine's cores.
+unsigned workers_for_sides(std::size_t sides);
+
+// analyze_topology's work on `workers` threads (it picks the count from the mesh's size); the
+// same result on any count. Arrays checked by the caller.
+MeshTopology topology_with_workers(const Mesh& mesh, unsigned workers);
 
 }  // namespace voxmesh::detail

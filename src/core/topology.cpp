@@ -2,6 +2,7 @@
 #include "components.hpp"
 #include "mesh_arrays.hpp"
 #include "out_of_memory.hpp"
+#include "parallel.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -33,59 +34,93 @@ void check_finite_vertices(const std::vector<float>& values, const std::string& 
 
 }  // namespace detail
 
-namespace {
+namespace detail {
 
-MeshTopology topology_of(const Mesh& mesh) {
-    const std::size_t vertices = mesh.vertex_count();
-    // Each triangle side filed under its lower vertex, holding the higher one (a counting
-    // sort: linear, where sorting 3 keys a triangle took longer than extract itself on large
-    // meshes). A vertex's list is a handful long; sorted, a run of one higher vertex is one
-    // edge and its length the triangles on it.
-    std::vector<std::size_t> list_end(vertices + 1, 0);
-    std::vector<bool> used(vertices, false);
-    const auto sides = [&](auto&& visit) {
-        for (std::size_t i = 0; i < mesh.indices.size(); i += 3)
+// Each triangle side is filed under its lower vertex, holding the higher one (a counting
+// sort: linear, where sorting 3 keys a triangle took longer than extract itself on large
+// meshes). A vertex's list is a handful long; sorted, a run of one higher vertex is one edge
+// and its length the triangles on it.
+// In parallel, worker w owns the vertices [bound(w), bound(w + 1)): it reads every side and
+// files those whose lower vertex it owns, so that each list is written by one worker, in
+// the order of the triangles, as on one thread; the counts do not depend on the workers.
+MeshTopology topology_with_workers(const Mesh& mesh, unsigned workers) {
+    const std::size_t vertices = mesh.vertex_count(), side_count = mesh.indices.size();
+    const std::uint32_t* const corners = mesh.indices.data();
+    workers = std::max(workers, 1u);
+    const auto bound = [&](unsigned w) { return vertices * w / workers; };
+    // Visits (lower, higher) of the sides whose lower vertex worker w owns, and the corners it
+    // owns (each once per triangle naming it).
+    const auto owned = [&](unsigned w, auto&& side, auto&& corner) {
+        const std::size_t begin = bound(w), span = bound(w + 1) - begin;
+        for (std::size_t i = 0; i < side_count; i += 3) {
+            const std::uint32_t c[3] = {corners[i], corners[i + 1], corners[i + 2]};
             for (std::size_t k = 0; k < 3; ++k) {
-                const std::uint32_t a = mesh.indices[i + k], b = mesh.indices[i + (k + 1) % 3];
-                visit(std::min(a, b), std::max(a, b));
+                const std::uint32_t a = c[k], b = c[(k + 1) % 3], lo = std::min(a, b);
+                if (lo - begin < span) side(lo, std::max(a, b));
+                if (a - begin < span) corner(a);
             }
+        }
     };
-    sides([&](std::uint32_t lo, std::uint32_t) { ++list_end[lo + 1]; });
+
+    std::vector<std::size_t> list_end(vertices + 1, 0);
+    std::vector<std::uint8_t> used(vertices, 0);  // bytes: workers mark their own vertices only
+    detail::run_workers(workers, [&](unsigned w) {
+        owned(w, [&](std::uint32_t lo, std::uint32_t) { ++list_end[lo + 1]; }, [](std::uint32_t) {});
+    });
     for (std::size_t v = 0; v < vertices; ++v) list_end[v + 1] += list_end[v];  // list_end[v]: where v's list starts
     // Every entry is written below: no zero-fill first (120 MB for 10 M triangles).
-    const auto higher = std::make_unique_for_overwrite<std::uint32_t[]>(mesh.indices.size());
-    sides([&](std::uint32_t lo, std::uint32_t hi) {
-        higher[list_end[lo]++] = hi;  // list_end[v] ends at the start of v + 1's list
-        used[lo] = used[hi] = true;
+    const auto higher = std::make_unique_for_overwrite<std::uint32_t[]>(side_count);
+    detail::run_workers(workers, [&](unsigned w) {
+        owned(
+            w,
+            [&](std::uint32_t lo, std::uint32_t hi) { higher[list_end[lo]++] = hi; },  // list_end[v]: v's list's end
+            [&](std::uint32_t v) { used[v] = 1; });
     });
 
+    struct Counts {
+        long long edges = 0, used_vertices = 0;
+        std::size_t boundary = 0, nonmanifold = 0;
+    };
+    std::vector<Counts> counts(workers);
+    detail::run_workers(workers, [&](unsigned w) {
+        Counts& n = counts[w];
+        for (std::size_t v = bound(w); v < bound(w + 1); ++v) {
+            n.used_vertices += used[v];
+            std::uint32_t* const first = higher.get() + (v == 0 ? 0 : list_end[v - 1]);
+            std::uint32_t* const last = higher.get() + list_end[v];
+            std::sort(first, last);
+            for (auto i = first; i != last;) {
+                const auto j = std::find_if(i, last, [&](std::uint32_t h) { return h != *i; });
+                const auto uses = j - i;
+                ++n.edges;
+                if (uses == 1) ++n.boundary;
+                else if (uses > 2) ++n.nonmanifold;
+                i = j;
+            }
+        }
+    });
     MeshTopology topo;
     long long edges = 0, used_vertices = 0;
-    for (std::size_t v = 0; v < vertices; ++v) {
-        used_vertices += used[v];
-        std::uint32_t* const first = higher.get() + (v == 0 ? 0 : list_end[v - 1]);
-        std::uint32_t* const last = higher.get() + list_end[v];
-        std::sort(first, last);
-        for (auto i = first; i != last;) {
-            const auto j = std::find_if(i, last, [&](std::uint32_t h) { return h != *i; });
-            const auto uses = j - i;
-            ++edges;
-            if (uses == 1) ++topo.boundary_edges;
-            else if (uses > 2) ++topo.nonmanifold_edges;
-            i = j;
-        }
+    for (const Counts& n : counts) {
+        edges += n.edges;
+        used_vertices += n.used_vertices;
+        topo.boundary_edges += n.boundary;
+        topo.nonmanifold_edges += n.nonmanifold;
     }
     topo.euler = used_vertices - edges + static_cast<long long>(mesh.triangle_count());
-    topo.components = detail::count_mesh_pieces(mesh, used);
+    topo.components = detail::count_mesh_pieces(mesh, used, workers);
     return topo;
 }
 
-}  // namespace
+}  // namespace detail
 
 MeshTopology analyze_topology(const Mesh& mesh) {
     detail::check_mesh_arrays(mesh, "analyze_topology: ");
     return detail::out_of_memory_as_error("analyze_topology: " + detail::out_of_memory_for(mesh),
-                                          [&] { return topology_of(mesh); });
+                                          [&] {
+                                              return detail::topology_with_workers(
+                                                  mesh, detail::workers_for_sides(mesh.indices.size()));
+                                          });
 }
 
 }  // namespace voxmesh
