@@ -1,6 +1,7 @@
 // voxmesh-bench internals: what is measured, how results are kept and printed.
 #pragma once
 
+#include <voxmesh/fields.hpp>
 #include <voxmesh/voxmesh.hpp>
 
 #include <array>
@@ -155,6 +156,12 @@ void print_paper(const std::vector<Result>& results, const std::string& field, c
 // all cores; pause_ms: a sleep before each dab (--pause). Returns the exit code.
 int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::size_t dabs, double pause_ms,
                const std::vector<std::string>& backends, bool json, bool quiet);
+
+// ---- mesh_ops_bench.cpp ----
+// --mesh-ops: analyze_topology, keep_largest_components and write_mesh per format, beside the
+// extract of the same built-in volume (CPU engine, all cores). Returns the exit code.
+int run_mesh_ops(const std::vector<voxmesh::Field>& fields, const std::vector<voxmesh::ScalarType>& types,
+                 const std::vector<std::size_t>& sizes, int repeat, bool json, bool quiet);
 
 // ---- volume_files.cpp ----
 // NRRD with the iso and field as key/value pairs (voxmesh_iso:=...).

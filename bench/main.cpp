@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
     std::uint32_t seed = 1;
     Settings settings;
     bool paper = false, csv = false, json = false, no_normals = false, list = false, no_floor = false;
-    bool sculpt = false;
+    bool sculpt = false, mesh_ops = false;
     std::size_t dabs = 300;
 
     app.add_option("--field", fields, "built-in fields: sphere, gyroid, blobs, ct (comma list; default sphere)")
@@ -134,6 +134,9 @@ int main(int argc, char** argv) {
     app.add_flag("--sculpt", sculpt,
                  "sculpting: a built-in stroke path over a sphere, update latency p50/p95/p99 beside a full re-mesh "
                  "(sizes default 256,512)");
+    app.add_flag("--mesh-ops", mesh_ops,
+                 "time analyze_topology (1 worker, all), keep_largest_components and write_mesh (stl, ply, obj) "
+                 "beside the extract of each --field/--type/--sizes volume (default sizes 256,512)");
     app.add_option("--dabs", dabs, "brush dabs of the --sculpt stroke path")->check(CLI::Range(1, 100000));
     app.add_flag("--csv", csv, "CSV output");
     app.add_flag("--json", json, "one JSON object per line");
@@ -181,6 +184,11 @@ int main(int argc, char** argv) {
         for (const auto& f : fields) field_ids.push_back(voxmesh::parse_field(f));
         std::vector<voxmesh::ScalarType> type_ids;
         for (const auto& t : types) type_ids.push_back(parse_type(t));
+        if (mesh_ops) {
+            handle_signal_unless_ignored(SIGINT, on_sigint);
+            return run_mesh_ops(field_ids, type_ids, sizes_opt->count() ? sizes : std::vector<std::size_t>{256, 512},
+                                settings.repeat, json, settings.quiet);
+        }
         std::vector<voxmesh::Backend> backend_ids;
         for (const auto& b : backends) backend_ids.push_back(parse_backend(b));
         const std::vector<Combo> device_sel = parse_devices(devices);

@@ -122,6 +122,29 @@ TEST_CASE("bench: the paper's grid runs 1, 2, 4, 6 and 16 threads", "[bench]") {
     CHECK(r.out.substr(row, 30).find(" - ") == std::string::npos);
 }
 
+TEST_CASE("bench: --mesh-ops times each operation on one mesh and leaves no file behind", "[bench]") {
+    Scratch s;
+    const std::string tmp = s.dir + "/tmp";
+    std::filesystem::create_directory(tmp);
+    const auto r = vmtest::run_program(VOXMESH_BENCH_PATH, "--mesh-ops --field sphere --type u8 --sizes 40 --repeat 2 --json -q",
+                                       s.dir, "TMPDIR=" + shell_quote(tmp));
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const std::vector<std::string> lines = lines_of(r.out);
+    std::vector<std::string> ops;
+    for (const std::string& line : lines) {
+        CHECK(json_value(line, "bench") == "mesh_ops");
+        CHECK(json_value(line, "triangles") == json_value(lines[0], "triangles"));
+        CHECK(std::stod(json_value(line, "median_s")) >= 0);
+        ops.push_back(json_value(line, "op"));
+    }
+    CHECK(ops == std::vector<std::string>{"extract", "analyze_topology_1_worker", "analyze_topology",
+                                          "keep_largest_components", "write_stl", "write_ply", "write_obj"});
+    CHECK(std::stoul(json_value(lines[0], "triangles")) > 1000);
+    CHECK(json_value(lines[0], "vs_extract") == "1.000");
+    CHECK(std::filesystem::is_empty(tmp));  // its directory and files removed
+}
+
 TEST_CASE("bench: a volume written for the peers reads back to the same mesh", "[bench]") {
     Scratch s;
     const std::string file = s.dir + "/gyroid.nrrd";
