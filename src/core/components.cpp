@@ -22,7 +22,7 @@ namespace detail {
 namespace {
 
 // Sides per worker below which one more worker is not worth its wake-up.
-constexpr std::size_t kSidesPerWorker = std::size_t{1} << 18;
+constexpr std::size_t kSidesPerWorker = std::size_t{1} << 20;
 
 // Union-find over vertex ids, shared by worker threads: a root is only ever linked under a
 // lower vertex (by compare-and-swap, retried when another thread linked it first), so
@@ -94,8 +94,8 @@ std::size_t count_mesh_pieces(const Mesh& mesh, const std::vector<std::uint8_t>&
     return std::accumulate(roots.begin(), roots.end(), std::size_t{0});
 }
 
-MeshPieces mesh_pieces(const Mesh& mesh) {
-    VertexSets sets = united_corners(mesh, workers_for_sides(mesh.indices.size()));
+MeshPieces mesh_pieces(const Mesh& mesh, unsigned workers) {
+    VertexSets sets = united_corners(mesh, std::max(workers, 1u));
     const std::size_t triangles = mesh.triangle_count();
     // Pieces numbered in the order of their first triangle.
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
@@ -119,7 +119,7 @@ MeshPieces mesh_pieces(const Mesh& mesh) {
 namespace {
 
 Mesh largest_pieces(const Mesh& mesh, std::size_t count) {
-    const detail::MeshPieces pieces = detail::mesh_pieces(mesh);
+    const detail::MeshPieces pieces = detail::mesh_pieces(mesh, detail::workers_for_sides(mesh.indices.size()));
 
     // The `count` pieces with the most triangles; of equal ones, those met first.
     std::vector<std::uint32_t> order(pieces.triangles.size());
