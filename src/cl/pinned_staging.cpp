@@ -12,7 +12,7 @@ namespace {
 void parallel_copy(void* dst, const void* src, std::size_t bytes, unsigned threads) {
     const std::size_t parts = std::clamp<std::size_t>(bytes >> 20, 1, std::max(threads, 1u));
     run_workers(static_cast<unsigned>(parts), [&](unsigned w) {
-        const std::size_t begin = bytes * w / parts, end = bytes * (w + 1) / parts;
+        const auto [begin, end] = share_of(bytes, w, static_cast<unsigned>(parts));
         std::memcpy(static_cast<unsigned char*>(dst) + begin, static_cast<const unsigned char*>(src) + begin,
                     end - begin);
     });

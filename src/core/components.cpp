@@ -33,8 +33,8 @@ public:
     VertexSets(std::size_t vertices, unsigned workers)
         : parent_(std::make_unique_for_overwrite<std::uint32_t[]>(vertices)) {
         run_workers(workers, [&](unsigned w) {
-            for (std::size_t v = vertices * w / workers; v < vertices * (w + 1) / workers; ++v)
-                parent_[v] = static_cast<std::uint32_t>(v);
+            const Share mine = share_of(vertices, w, workers);
+            for (std::size_t v = mine.begin; v < mine.end; ++v) parent_[v] = static_cast<std::uint32_t>(v);
         });
     }
     std::uint32_t find(std::uint32_t v) {
@@ -69,7 +69,8 @@ VertexSets united_corners(const Mesh& mesh, unsigned workers) {
     const std::size_t triangles = mesh.triangle_count();
     const std::uint32_t* const corners = mesh.indices.data();
     run_workers(workers, [&](unsigned w) {
-        for (std::size_t t = triangles * w / workers; t < triangles * (w + 1) / workers; ++t) {
+        const Share mine = share_of(triangles, w, workers);
+        for (std::size_t t = mine.begin; t < mine.end; ++t) {
             sets.unite(corners[3 * t], corners[3 * t + 1]);
             sets.unite(corners[3 * t], corners[3 * t + 2]);
         }
@@ -88,7 +89,8 @@ std::size_t count_mesh_pieces(const Mesh& mesh, const std::vector<std::uint8_t>&
     std::vector<std::size_t> roots(workers, 0);  // one root, its lowest vertex, a piece
     const std::size_t vertices = used.size();
     run_workers(workers, [&](unsigned w) {
-        for (std::size_t v = vertices * w / workers; v < vertices * (w + 1) / workers; ++v)
+        const Share mine = share_of(vertices, w, workers);
+        for (std::size_t v = mine.begin; v < mine.end; ++v)
             roots[w] += used[v] && sets.find(static_cast<std::uint32_t>(v)) == v;  // used: named by a 32-bit index
     });
     return std::accumulate(roots.begin(), roots.end(), std::size_t{0});
@@ -167,7 +169,7 @@ Mesh largest_pieces(const Mesh& mesh, std::size_t count) {
 Mesh keep_largest_components(const Mesh& mesh, std::size_t count) {
     detail::check_mesh_arrays(mesh, "keep_largest_components: ");
     if (count == 0) throw Error("keep_largest_components: count must be at least 1");
-    return detail::out_of_memory_as_error("keep_largest_components: " + detail::out_of_memory_for(mesh),
+    return detail::out_of_memory_as_error([&] { return "keep_largest_components: " + detail::out_of_memory_for(mesh); },
                                           [&] { return largest_pieces(mesh, count); });
 }
 

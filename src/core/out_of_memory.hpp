@@ -9,13 +9,14 @@
 
 namespace voxmesh::detail {
 
-// Returns f(); std::bad_alloc out of it becomes Error(message), which says what ran out.
-template <class F>
-auto out_of_memory_as_error(const std::string& message, F&& f) {
+// Returns f(); std::bad_alloc out of it becomes Error(message()), which says what ran out. The
+// message is made only then: some callers run every frame (Sculpt::update).
+template <class Message, class F>
+auto out_of_memory_as_error(const Message& message, F&& f) {
     try {
         return f();
     } catch (const std::bad_alloc&) {
-        throw Error(message);
+        throw Error(message());
     }
 }
 

@@ -40,6 +40,15 @@ void run_workers(unsigned n, F&& f) {
 // Hardware concurrency when `requested` is 0, at least 1.
 unsigned resolve_threads(unsigned requested);
 
+// Share `part` of [0, n) split into `parts` consecutive shares of near-equal size: the range
+// [begin, end) a worker takes when each takes its own.
+struct Share {
+    std::size_t begin, end;
+};
+inline Share share_of(std::size_t n, unsigned part, unsigned parts) {
+    return {n * part / parts, n * (part + 1) / parts};
+}
+
 // Runs f(0..n-1) for n independent pieces of work (slabs) on at most max_threads threads and
 // at most as many as the machine runs at once: more threads than that only take turns on the same cores, and a slab
 // whose thread is descheduled holds up the rest. Threads pull slabs in order; the partition,

@@ -40,18 +40,18 @@ namespace detail {
 // sort: linear, where sorting 3 keys a triangle took longer than extract itself on large
 // meshes). A vertex's list is a handful long; sorted, a run of one higher vertex is one edge
 // and its length the triangles on it.
-// In parallel, worker w owns the vertices [bound(w), bound(w + 1)): it reads every side and
+// In parallel, worker w owns a share of the vertex ids (share_of): it reads every side and
 // files those whose lower vertex it owns, so that each list is written by one worker, in
 // the order of the triangles, as on one thread; the counts do not depend on the workers.
 MeshTopology topology_with_workers(const Mesh& mesh, unsigned workers) {
     const std::size_t vertices = mesh.vertex_count(), side_count = mesh.indices.size();
     const std::uint32_t* const corners = mesh.indices.data();
     workers = std::max(workers, 1u);
-    const auto bound = [&](unsigned w) { return vertices * w / workers; };
     // Visits (lower, higher) of the sides whose lower vertex worker w owns, and the corners it
     // owns (each once per triangle naming it).
     const auto owned = [&](unsigned w, auto&& side, auto&& corner) {
-        const std::size_t begin = bound(w), span = bound(w + 1) - begin;
+        const detail::Share mine = detail::share_of(vertices, w, workers);
+        const std::size_t begin = mine.begin, span = mine.end - mine.begin;
         for (std::size_t i = 0; i < side_count; i += 3) {
             const std::uint32_t c[3] = {corners[i], corners[i + 1], corners[i + 2]};
             for (std::size_t k = 0; k < 3; ++k) {
@@ -84,7 +84,8 @@ MeshTopology topology_with_workers(const Mesh& mesh, unsigned workers) {
     std::vector<Counts> counts(workers);
     detail::run_workers(workers, [&](unsigned w) {
         Counts& n = counts[w];
-        for (std::size_t v = bound(w); v < bound(w + 1); ++v) {
+        const detail::Share mine = detail::share_of(vertices, w, workers);
+        for (std::size_t v = mine.begin; v < mine.end; ++v) {
             n.used_vertices += used[v];
             std::uint32_t* const first = higher.get() + (v == 0 ? 0 : list_end[v - 1]);
             std::uint32_t* const last = higher.get() + list_end[v];
@@ -116,11 +117,9 @@ MeshTopology topology_with_workers(const Mesh& mesh, unsigned workers) {
 
 MeshTopology analyze_topology(const Mesh& mesh) {
     detail::check_mesh_arrays(mesh, "analyze_topology: ");
-    return detail::out_of_memory_as_error("analyze_topology: " + detail::out_of_memory_for(mesh),
-                                          [&] {
-                                              return detail::topology_with_workers(
-                                                  mesh, detail::workers_for_sides(mesh.indices.size()));
-                                          });
+    return detail::out_of_memory_as_error(
+        [&] { return "analyze_topology: " + detail::out_of_memory_for(mesh); },
+        [&] { return detail::topology_with_workers(mesh, detail::workers_for_sides(mesh.indices.size())); });
 }
 
 }  // namespace voxmesh

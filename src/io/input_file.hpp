@@ -2,6 +2,8 @@
 // before anything blocks on it), with errors that name the path.
 #pragma once
 
+#include "core/out_of_memory.hpp"
+
 #include <algorithm>
 #include <cstddef>
 #include <memory>
@@ -63,6 +65,12 @@ void reserve_checked(const std::string& path, std::vector<T>& v, std::size_t tot
     const std::size_t grown = std::max(total, 2 * v.capacity());
     check_memory(path, grown * sizeof(T));
     v.reserve(grown);
+}
+
+// f(); out of memory in it an Error "'path': out of memory reading the <what>".
+template <class F>
+auto out_of_memory_reading(const std::string& path, const char* what, F&& f) {
+    return detail::out_of_memory_as_error([&] { return "'" + path + "': out of memory reading the " + what; }, f);
 }
 
 // True when `path` ends with `suffix`, ignoring ASCII case.

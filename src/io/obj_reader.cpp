@@ -14,8 +14,6 @@
 #include "header_text.hpp"
 #include "input_file.hpp"
 
-#include "core/out_of_memory.hpp"
-
 #include <voxmesh/io.hpp>
 
 #include <charconv>
@@ -228,8 +226,7 @@ Mesh read_obj_file(const std::string& path) {
 }  // namespace
 
 Mesh read_obj(const std::string& path) {
-    return detail::out_of_memory_as_error("'" + path + "': out of memory reading the mesh",
-                                          [&] { return read_obj_file(path); });
+    return io::out_of_memory_reading(path, "mesh", [&] { return read_obj_file(path); });
 }
 
 }  // namespace voxmesh

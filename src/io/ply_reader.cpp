@@ -19,8 +19,6 @@
 #include "header_text.hpp"
 #include "input_file.hpp"
 
-#include "core/out_of_memory.hpp"
-
 #include <voxmesh/io.hpp>
 
 #include <algorithm>
@@ -567,8 +565,7 @@ Mesh read_ply_file(const std::string& path) {
 }  // namespace
 
 Mesh read_ply(const std::string& path) {
-    return detail::out_of_memory_as_error("'" + path + "': out of memory reading the mesh",
-                                          [&] { return read_ply_file(path); });
+    return io::out_of_memory_reading(path, "mesh", [&] { return read_ply_file(path); });
 }
 
 }  // namespace voxmesh

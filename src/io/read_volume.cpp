@@ -1,7 +1,6 @@
 // read_volume / read_volume_info: pick the reader by extension, then load or check the
 // samples the header describes. Also read_raw, the same path with a caller-given header.
 #include "core/float_extent.hpp"
-#include "core/out_of_memory.hpp"
 #include "header_text.hpp"
 #include "input_file.hpp"
 #include "readers.hpp"
@@ -151,7 +150,7 @@ Volume placed(Volume v, const VolumeInfo& info) {
 // f(), out of memory in it an Error naming the file.
 template <class F>
 auto reading(const std::string& path, F&& f) {
-    return detail::out_of_memory_as_error("'" + path + "': out of memory reading the volume", f);
+    return io::out_of_memory_reading(path, "volume", f);
 }
 }  // namespace
 

@@ -5,8 +5,6 @@
 #include "input_file.hpp"
 #include "samples.hpp"
 
-#include "core/out_of_memory.hpp"
-
 #include <voxmesh/io.hpp>
 
 #include <array>
@@ -188,8 +186,7 @@ Mesh read_stl_file(const std::string& path) {
 }  // namespace
 
 Mesh read_stl(const std::string& path) {
-    return detail::out_of_memory_as_error("'" + path + "': out of memory reading the mesh",
-                                          [&] { return read_stl_file(path); });
+    return io::out_of_memory_reading(path, "mesh", [&] { return read_stl_file(path); });
 }
 
 }  // namespace voxmesh

@@ -648,7 +648,8 @@ Sculpt Sculpt::from_function(std::array<std::size_t, 3> dims, ScalarType type,
         const unsigned workers = static_cast<unsigned>(std::min<std::size_t>(im.threads, dims[2]));
         std::atomic<bool> nan{false};
         detail::run_workers(workers, [&](unsigned w) {
-            for (std::size_t z = dims[2] * w / workers; z < dims[2] * (w + 1) / workers; ++z)
+            const detail::Share planes = detail::share_of(dims[2], w, workers);
+            for (std::size_t z = planes.begin; z < planes.end; ++z)
                 for (std::size_t y = 0; y < dims[1]; ++y) {
                     T* row = data + (z * dims[1] + y) * dims[0];
                     for (std::size_t x = 0; x < dims[0]; ++x) {
@@ -766,10 +767,11 @@ void Sculpt::invalidate_all() {
 }
 
 UpdateResult Sculpt::update() {
-    // impl_->update() clears the dirty list only once every block is meshed.
-    return detail::out_of_memory_as_error("sculpt: out of memory re-meshing " + std::to_string(impl_->dirty_list.size()) +
-                                              " blocks",
-                                          [&] { return impl_->update(); });
+    // impl_->update() clears the dirty list only once every block is meshed, so it still
+    // counts the blocks when the message is made.
+    return detail::out_of_memory_as_error(
+        [&] { return "sculpt: out of memory re-meshing " + std::to_string(impl_->dirty_list.size()) + " blocks"; },
+        [&] { return impl_->update(); });
 }
 bool Sculpt::dirty() const { return !impl_->dirty_list.empty(); }
 std::size_t Sculpt::block_count() const { return impl_->blocks.size(); }
@@ -797,9 +799,11 @@ BlockMesh Sculpt::block(std::size_t index) const {
 
 Mesh Sculpt::mesh() {
     if (dirty()) update();
-    return detail::out_of_memory_as_error("sculpt: out of memory welding the blocks' meshes into one", [&] {
-        return dispatch_sculpt_type(impl_->volume.type, [&](auto tag) { return impl_->assemble<decltype(tag)>(); });
-    });
+    return detail::out_of_memory_as_error(
+        [] { return std::string("sculpt: out of memory welding the blocks' meshes into one"); },
+        [&] {
+            return dispatch_sculpt_type(impl_->volume.type, [&](auto tag) { return impl_->assemble<decltype(tag)>(); });
+        });
 }
 
 VolumeView Sculpt::view() const { return impl_->view(); }

@@ -318,7 +318,7 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
         static_cast<unsigned>(std::min<std::size_t>(detail::resolve_threads(options.threads), nz));
     std::vector<std::size_t> inside_samples(workers, 0);
     detail::run_workers(workers, [&](unsigned w) {
-        const std::size_t z0 = nz * w / workers, z1 = nz * (w + 1) / workers;
+        const auto [z0, z1] = detail::share_of(nz, w, workers);
         const std::size_t plane = nx * ny;
         float* dist = distance ? static_cast<float*>(volume.data) : nullptr;
 
@@ -403,9 +403,12 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
 }  // namespace
 
 Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options) {
-    return detail::out_of_memory_as_error("voxelize: " + detail::out_of_memory_for(mesh) + " at resolution " +
-                                              std::to_string(options.resolution),
-                                          [&] { return voxelize_mesh(mesh, options); });
+    return detail::out_of_memory_as_error(
+        [&] {
+            return "voxelize: " + detail::out_of_memory_for(mesh) + " at resolution " +
+                   std::to_string(options.resolution);
+        },
+        [&] { return voxelize_mesh(mesh, options); });
 }
 
 }  // namespace voxmesh
