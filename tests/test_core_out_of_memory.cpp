@@ -1,8 +1,9 @@
 // Out of memory is a voxmesh::Error, never a std::bad_alloc, from extract, analyze_topology,
-// keep_largest_components, the volume and mesh readers, voxelize and a Sculpt's update and
-// mesh. Each call runs in a forked child whose private writable memory is capped
+// keep_largest_components, the volume and mesh readers, voxelize, make_field, the stroke-script
+// parser, and a Sculpt's construction, update and mesh. Each call runs in a forked child whose private writable memory is capped
 // (RLIMIT_DATA) a little above what it uses already, so that its large allocations fail; the
 // same call with room to spare must return, so the cap is what made it fail.
+#include "support/child_process.hpp"
 #include "support/mesh_checks.hpp"
 
 #include "core/atomic_file.hpp"
@@ -16,7 +17,6 @@
 #include <catch2/catch.hpp>
 
 #include <sys/resource.h>
-#include <sys/wait.h>
 #include <malloc.h>
 #include <unistd.h>
 
@@ -25,6 +25,7 @@
 #include <fstream>
 #include <functional>
 #include <new>
+#include <sstream>
 #include <string>
 
 namespace {
@@ -55,55 +56,38 @@ std::size_t data_bytes() {
     return 0;
 }
 
-// What `call` did in a child process capped at its data bytes + `headroom`: "returned",
-// "Error: <message>", "bad_alloc" or "other exception".
-std::string outcome_when_capped(std::size_t headroom, const std::function<void()>& call) {
-    int pipe_fds[2];
-    REQUIRE(pipe(pipe_fds) == 0);
-    const pid_t child = fork();
-    REQUIRE(child >= 0);
-    if (child == 0) {
-        close(pipe_fds[0]);
-        std::string outcome;
-        outcome.reserve(512);  // before the cap
-        rlimit cap{};
-        getrlimit(RLIMIT_DATA, &cap);
-        cap.rlim_cur = data_bytes() + headroom;  // the soft limit: lift_cap() can raise it again
-        if (setrlimit(RLIMIT_DATA, &cap) != 0) {
-            outcome = "setrlimit failed";
-        } else {
-            try {
-                call();
-                outcome = "returned";
-            } catch (const voxmesh::Error& e) {
-                outcome = std::string("Error: ") + e.what();
-            } catch (const std::bad_alloc&) {
-                outcome = "bad_alloc";
-            } catch (...) {
-                outcome = "other exception";
-            }
-        }
-        const ssize_t written = write(pipe_fds[1], outcome.data(), outcome.size());
-        _exit(written == static_cast<ssize_t>(outcome.size()) ? 0 : 1);
-    }
-    close(pipe_fds[1]);
-    std::string outcome;
-    char buffer[256];
-    for (ssize_t n; (n = read(pipe_fds[0], buffer, sizeof buffer)) > 0;) outcome.append(buffer, static_cast<std::size_t>(n));
-    close(pipe_fds[0]);
-    int status = 0;
-    REQUIRE(waitpid(child, &status, 0) == child);
-    CHECK(WIFEXITED(status));
-    CHECK(WEXITSTATUS(status) == 0);
-    return outcome;
-}
-
 // In a capped child: back to the hard limit, to retry what ran out.
 void lift_cap() {
     rlimit cap{};
     getrlimit(RLIMIT_DATA, &cap);
     cap.rlim_cur = cap.rlim_max;
     setrlimit(RLIMIT_DATA, &cap);
+}
+
+// What `call` did in a child process capped at its data bytes + `headroom`: "returned",
+// "Error: <message>", "bad_alloc" or "other exception" (or why the child said nothing).
+std::string outcome_when_capped(std::size_t headroom, const std::function<void()>& call) {
+    return vmtest::output_of_child([&] {
+        rlimit cap{};
+        getrlimit(RLIMIT_DATA, &cap);
+        cap.rlim_cur = data_bytes() + headroom;  // the soft limit: lift_cap() can raise it again
+        if (setrlimit(RLIMIT_DATA, &cap) != 0) return std::string("setrlimit failed");
+        // The cap is lifted before the outcome is put into words, which needs memory.
+        try {
+            call();
+            lift_cap();
+            return std::string("returned");
+        } catch (const voxmesh::Error& e) {
+            lift_cap();
+            return "Error: " + std::string(e.what());
+        } catch (const std::bad_alloc&) {
+            lift_cap();
+            return std::string("bad_alloc");
+        } catch (...) {
+            lift_cap();
+            return std::string("other exception");
+        }
+    });
 }
 
 // Whether a cap just above the memory in use makes large allocations fail here; says why not
@@ -259,5 +243,33 @@ TEST_CASE("out of memory is an Error naming the file from the volume readers", "
         }
         CHECK(ran_out);
         CHECK(returned);
+    }
+}
+
+TEST_CASE("out of memory is an Error from a Sculpt's construction, make_field and the stroke-script parser",
+          "[sculpt][memory]") {
+    if (!cap_can_be_tight()) return;
+    SECTION("a Sculpt's block table") {
+        // Blocks of 2 cells: 64^3 of them, some 25 MB of table, for a volume of 2 MB that fits.
+        const voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Sphere, 128, voxmesh::ScalarType::U8);
+        voxmesh::SculptOptions options;
+        options.threads = 1;
+        options.backend = voxmesh::Backend::Cpu;
+        options.iso = field.iso;
+        options.block_size = 2;
+        check_out_of_memory_is_error([&] { (void)voxmesh::Sculpt(field.volume.view(), options); },
+                                     "sculpt: out of memory for a 128x128x128 volume in 262144 blocks",
+                                     field.volume.byte_size() + 2 * kTight);
+    }
+    SECTION("make_field") {
+        check_out_of_memory_is_error([] { (void)voxmesh::make_field(voxmesh::Field::Gyroid, 128); },
+                                     "cannot allocate 8388608 bytes for a volume");
+    }
+    SECTION("parse_stroke_script") {
+        std::string script;
+        for (int i = 0; i < 300000; ++i) script += "add 1 2 3 4 5\n";  // some 20 MB of dabs
+        std::istringstream in(script);
+        check_out_of_memory_is_error([&] { (void)voxmesh::parse_stroke_script(in, "big.strokes"); },
+                                     "'big.strokes': out of memory reading the stroke script");
     }
 }

@@ -1,14 +1,19 @@
 // run_workers on the cached threads (src/core/parallel.cpp): every worker runs once per run,
-// runs nest and overlap without waiting on each other's threads, and exceptions come back.
+// runs nest and overlap without waiting on each other's threads, exceptions come back, a
+// forked child starts threads of its own, and a worker whose thread cannot start runs anyway.
 #include <catch2/catch.hpp>
 
 #include "core/parallel.hpp"
+#include "support/child_process.hpp"
 
 #include <atomic>
 #include <chrono>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
+
+#include <sys/resource.h>
 
 #if defined(__linux__)
 #include <sched.h>
@@ -98,5 +103,52 @@ TEST_CASE("run_workers wakes a sleeping worker off the caller's CPU and keeps it
         CHECK(CPU_EQUAL(&worker_affinity, &all));
     }
     sched_setaffinity(0, sizeof all, &all);
+}
+#endif
+
+// A child of a process whose cache holds threads has none of them (fork copies only the
+// thread that called it): its runs start threads of their own instead of waiting for ever.
+TEST_CASE("run_workers in a forked child starts threads of its own", "[core][parallel]") {
+    run_workers(4, [](unsigned) {});  // threads in the cache, idle
+    const std::string child = vmtest::output_of_child(
+        [] {
+            std::vector<std::atomic<int>> seen(4);
+            run_workers(4, [&](unsigned w) { seen[w] += 1; });
+            for (auto& s : seen)
+                if (s != 1) return std::string("a worker ran ") + std::to_string(s.load()) + " times";
+            return std::string("ran");
+        },
+        30);
+    CHECK(child == "ran");
+    run_workers(4, [](unsigned) {});  // and the parent's cache still works
+}
+
+#if !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+// With too little memory for a thread's stack (RLIMIT_DATA), a run's workers whose threads
+// cannot start run on the caller: a run still runs every worker once, where an exception
+// escaping mid-run used to leave the started workers using the caller's finished frame.
+TEST_CASE("run_workers runs on the caller the workers whose threads cannot start", "[core][parallel]") {
+    const std::string child = vmtest::output_of_child(
+        [] {
+            constexpr unsigned n = 64;  // more stacks than glibc caches from earlier threads
+            std::vector<std::atomic<int>> seen(n);
+            std::atomic<unsigned> on_caller{0};
+            const std::thread::id caller = std::this_thread::get_id();
+            rlimit cap{};
+            getrlimit(RLIMIT_DATA, &cap);
+            rlimit tight = cap;
+            tight.rlim_cur = 1;  // below what is in use: nothing new can be mapped
+            if (setrlimit(RLIMIT_DATA, &tight) != 0) return std::string("setrlimit failed");
+            run_workers(n, [&](unsigned w) {
+                seen[w] += 1;
+                if (std::this_thread::get_id() == caller) on_caller += 1;
+            });
+            setrlimit(RLIMIT_DATA, &cap);
+            for (auto& s : seen)
+                if (s != 1) return std::string("a worker ran ") + std::to_string(s.load()) + " times";
+            return "ran, " + std::string(on_caller > 1 ? "some" : "none") + " beside worker 0 on the caller";
+        },
+        30);
+    CHECK(child == "ran, some beside worker 0 on the caller");
 }
 #endif

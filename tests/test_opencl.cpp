@@ -5,6 +5,7 @@
 
 #include "core/case_tables.hpp"
 #include "core/opencl_hook.hpp"
+#include "support/child_process.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -895,4 +896,40 @@ TEST_CASE("OpenCL extract_into gives extract()'s mesh in a reused mesh's storage
             require_same(run(view, o, Backend::Cpu), mesh, view);
         }
     }
+}
+
+// A child forked after the parent opened its OpenCL devices has none: PoCL's worker threads
+// stayed in the parent, and a kernel run in the child waited for them for ever. Auto meshes on
+// the CPU there, and OpenCL says why it cannot run.
+TEST_CASE("a forked child of a process using OpenCL meshes on the CPU and says why OpenCL cannot", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{33, 30, 28}};
+    const std::vector<float> v = sphere(g);
+    const VolumeView view = view_of(v.data(), ScalarType::F32, g);
+    const Mesh on_device = run(view, Options{}, Backend::OpenCL);  // the devices opened here
+    const Mesh expected = run(view, Options{}, Backend::Cpu);
+    const std::string child = vmtest::output_of_child(
+        [&] {
+            if (!list_devices().empty() || opencl_available()) return std::string("devices listed in the child");
+            Options o;
+            o.backend = Backend::Auto;
+            Stats stats;
+            const Mesh mesh = extract(view, o, stats);
+            if (stats.backend != Backend::Cpu || mesh.indices != expected.indices ||
+                mesh.positions != expected.positions)
+                return std::string("Auto gave another mesh or backend");
+            o.backend = Backend::OpenCL;
+            try {
+                (void)extract(view, o);
+                return std::string("OpenCL ran in the child");
+            } catch (const Error& e) {
+                return std::string(e.what());
+            }
+        },
+        60);
+    CHECK(child ==
+          "the OpenCL devices were opened before this process was forked, and a forked child cannot use them (the "
+          "OpenCL runtime's threads stay in the parent); use Backend::Cpu or Backend::Auto in the child, or OpenCL in "
+          "the parent only after it forks");
+    CHECK(run(view, Options{}, Backend::OpenCL).indices == on_device.indices);  // the parent's devices still work
 }

@@ -121,6 +121,8 @@ struct Stats {
 // Callable from several threads at once, with any backends: the calls share the CPU thread
 // pool and the OpenCL devices (a device meshes for one call at a time, the others wait for
 // it), and each still returns the canonical mesh.
+// In a child forked after the parent used OpenCL, the parent's devices are not listed (their
+// runtime's threads stayed in the parent): Auto meshes on the CPU, OpenCL throws an Error.
 Mesh extract(const VolumeView& volume, const Options& options);
 Mesh extract(const VolumeView& volume, const Options& options, Stats& stats);
 

@@ -300,7 +300,7 @@ void set_device_block_tuning(const DeviceBlockTuning& tuning) {
 std::unique_ptr<DeviceBlockMesher> open_opencl_block_mesher(const DeviceBlockSetup& setup, int device,
                                                             std::string& why) {
     if (devices().empty()) {
-        why = "no OpenCL platform or usable device was found";
+        why = why_no_devices();
         return nullptr;
     }
     try {

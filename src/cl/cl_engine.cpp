@@ -1079,13 +1079,16 @@ Mesh Engine::run(Stats& stats) {
         const bool only_cpus = hybrid_ && !all.empty() && options_.device_type == DeviceType::Any &&
                                std::all_of(all.begin(), all.end(),
                                            [](const auto& d) { return d->info.type == DeviceType::Cpu; });
-        const std::string why = all.empty()   ? "no OpenCL platform or usable device was found"
+        const std::string why = all.empty()   ? why_no_devices()
                                 : only_cpus ? "the only OpenCL devices run on this CPU and would compete with the CPU "
                                               "engine's threads (name one in Options::devices, or set device_type "
                                               "to Cpu, to use it anyway)"
                                             : "no OpenCL device matches the requested devices/device_type";
         // Auto comes here only with devices or device_type set: advise what applies to the caller.
-        const std::string advice = all.empty() ? "use Backend::Cpu, Backend::Auto or check the OpenCL installation (clinfo)"
+        const std::string advice = devices_left_in_parent()
+                                       ? "use Backend::Cpu or Backend::Auto in the child, or OpenCL in the parent "
+                                         "only after it forks"
+                                   : all.empty() ? "use Backend::Cpu, Backend::Auto or check the OpenCL installation (clinfo)"
                                                : "list_devices() shows the devices there are; use Backend::Cpu, or "
                                                  "leave devices and device_type unset with Backend::Auto";
         if (!hybrid_) throw Error(why + "; " + advice);

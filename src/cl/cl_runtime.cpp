@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstring>
 
+#include <unistd.h>
+
 namespace voxmesh::detail::cl_engine {
 
 static_assert(sizeof(CaseEntry) == 16, "kernels read the case table as 16 bytes per case");
@@ -46,6 +48,7 @@ DeviceInfo describe(const cl::Device& device, const std::string& platform, const
 struct Registry {
     std::mutex mutex;
     bool discovered = false;
+    pid_t discovered_in = 0;  // the process that discovered them; another one is a forked child
     bool split = false;
     std::vector<std::shared_ptr<Device>> devices;
 };
@@ -252,14 +255,31 @@ void Device::release_memory() {
     staging_.reset();
 }
 
+bool forked_since_discovery(const Registry& r) { return r.discovered && r.discovered_in != getpid(); }
+
 std::vector<std::shared_ptr<Device>> devices() {
     Registry& r = registry();
     std::lock_guard<std::mutex> lock(r.mutex);
+    if (forked_since_discovery(r)) return {};
     if (!r.discovered) {
         discover(r);
         r.discovered = true;
+        r.discovered_in = getpid();
     }
     return r.devices;
+}
+
+bool devices_left_in_parent() {
+    Registry& r = registry();
+    std::lock_guard<std::mutex> lock(r.mutex);
+    return forked_since_discovery(r);
+}
+
+std::string why_no_devices() {
+    if (devices_left_in_parent())
+        return "the OpenCL devices were opened before this process was forked, and a forked child cannot use "
+               "them (the OpenCL runtime's threads stay in the parent)";
+    return "no OpenCL platform or usable device was found";
 }
 
 void split_devices(bool split) {
@@ -279,6 +299,7 @@ void split_devices(bool split) {
     r.split = split;
     discover(r);
     r.discovered = true;
+    r.discovered_in = getpid();
 }
 
 double event_seconds(const cl::Event& event) {

@@ -92,8 +92,14 @@ private:
     ScanShape scan_shapes_[2];  // the device's own, the GPU shape
 };
 
-// Every usable device (available, with a compiler), discovered once per process.
+// Every usable device (available, with a compiler), discovered once per process. None in a
+// child forked after the parent discovered them: the OpenCL runtime's threads and contexts
+// stay behind in the parent (PoCL's kernels would wait for ever on workers the child lacks).
 std::vector<std::shared_ptr<Device>> devices();
+// Whether devices() is empty because this process is such a child.
+bool devices_left_in_parent();
+// Why devices() is empty, for an error or warning.
+std::string why_no_devices();
 // Test hook: present each partitionable device as sub-devices of 1 compute unit each (at
 // most 2), i.e. several OpenCL devices on a machine that has one.
 void split_devices(bool split);

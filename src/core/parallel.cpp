@@ -14,6 +14,14 @@
 // watches for the next one for kSpin, and the caller of a run watches for its tasks' end as
 // long before it waits on the count.
 //
+// A thread that cannot be started (a limit on threads or memory) is not an error: its worker
+// runs on the caller after worker 0, so a run's workers must never wait for each other
+// without a deadline (none in voxmesh does).
+//
+// fork(): the child has only the thread that forked, so the cache forgets its threads there
+// (pthread_atfork below) and the child starts its own; without that a run in the child posted
+// its tasks to threads that were not there and waited for ever.
+//
 // A run also keeps its threads off the caller's CPU when it wakes or starts them (keep_off
 // below): on Linux a thread woken or started after the process was idle for a while can be
 // put on the CPU of the thread that woke it, and then the two take turns there.
@@ -28,8 +36,10 @@
 #include <thread>
 #include <vector>
 
-#if defined(__linux__)
+#if defined(__unix__) || defined(__APPLE__)
 #include <pthread.h>
+#endif
+#if defined(__linux__)
 #include <sched.h>
 #endif
 
@@ -61,9 +71,21 @@ int current_cpu() {
 #endif
 }
 
+class ThreadCache;
+std::atomic<ThreadCache*> g_live_cache{nullptr};  // for the fork handlers; null once destroyed
+
 class ThreadCache {
 public:
+    ThreadCache() {
+        g_live_cache.store(this);
+#if defined(__unix__) || defined(__APPLE__)
+        static std::once_flag registered;  // handlers cannot be removed: register them once
+        std::call_once(registered, [] { pthread_atfork(before_fork, after_fork_in_parent, after_fork_in_child); });
+#endif
+    }
+
     ~ThreadCache() {
+        g_live_cache.store(nullptr);
         std::vector<std::unique_ptr<Worker>> all;
         {
             std::lock_guard<std::mutex> lock(mutex_);
@@ -90,7 +112,12 @@ public:
             } else {
                 workers_.push_back(std::make_unique<Worker>());
                 w = workers_.back().get();
-                w->thread = std::thread([this, w] { loop(*w); });
+                try {
+                    w->thread = std::thread([this, w] { loop(*w); });
+                } catch (...) {
+                    workers_.pop_back();  // no thread to join later
+                    throw;
+                }
             }
         }
         {
@@ -105,6 +132,26 @@ public:
     }
 
 private:
+    // The cache's own lock is held across fork(), so the child's copy of the lists is whole.
+    static void before_fork() {
+        if (ThreadCache* c = g_live_cache.load()) c->mutex_.lock();
+    }
+    static void after_fork_in_parent() {
+        if (ThreadCache* c = g_live_cache.load()) c->mutex_.unlock();
+    }
+    // The workers' threads do not exist in the child: their records are kept (a std::thread
+    // still joinable must not be destroyed, and leak checkers see them as reachable) but no
+    // longer offered, and the child's runs start threads of their own.
+    static void after_fork_in_child() {
+        ThreadCache* c = g_live_cache.load();
+        if (!c) return;
+        static std::vector<std::unique_ptr<Worker>>* abandoned = new std::vector<std::unique_ptr<Worker>>;
+        for (auto& w : c->workers_) abandoned->push_back(std::move(w));
+        c->workers_.clear();
+        c->idle_.clear();
+        c->mutex_.unlock();
+    }
+
     struct Worker {
         std::mutex mutex;
         std::condition_variable wake;
@@ -188,14 +235,24 @@ void run_on_threads(unsigned n, const std::function<void(unsigned)>& f) {
     // seeing 0, returns.
     const auto pending = std::make_shared<std::atomic<unsigned>>(n - 1);
     const int caller_cpu = current_cpu();
-    for (unsigned w = 1; w < n; ++w)
-        cache().post(
-            [&f, pending, w] {
-                f(w);
-                if (pending->fetch_sub(1, std::memory_order_acq_rel) == 1) pending->notify_one();
-            },
-            caller_cpu);
+    unsigned posted = 1;
+    for (; posted < n; ++posted) {
+        try {
+            cache().post(
+                [&f, pending, w = posted] {
+                    f(w);
+                    if (pending->fetch_sub(1, std::memory_order_acq_rel) == 1) pending->notify_one();
+                },
+                caller_cpu);
+        } catch (...) {
+            break;  // no thread to be had (a limit on threads or memory): the caller runs the rest
+        }
+    }
     f(0);
+    for (unsigned w = posted; w < n; ++w) {
+        f(w);
+        pending->fetch_sub(1, std::memory_order_acq_rel);
+    }
     spin_until([&] { return pending->load(std::memory_order_acquire) == 0; });
     for (unsigned left = pending->load(std::memory_order_acquire); left != 0;
          left = pending->load(std::memory_order_acquire))

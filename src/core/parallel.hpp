@@ -13,7 +13,8 @@ namespace voxmesh::detail {
 
 // Runs f(0..n-1) in parallel, worker 0 on the calling thread and the others on threads from
 // a process-wide cache of idle threads (parallel.cpp), and returns when all have returned.
-// f must not throw.
+// f must not throw. A worker whose thread cannot be started runs on the caller after worker 0,
+// so workers must not wait for each other without a deadline.
 void run_on_threads(unsigned n, const std::function<void(unsigned)>& f);
 
 // run_on_threads for any callable: rethrows the first exception a worker threw, after all

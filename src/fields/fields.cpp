@@ -8,6 +8,7 @@
 // the same for any thread count.
 #include <voxmesh/fields.hpp>
 
+#include "core/out_of_memory.hpp"
 #include "core/parallel.hpp"
 
 #include <algorithm>
@@ -336,11 +337,8 @@ double make_typed(Field field, const Generator& gen, std::size_t n, void* data) 
     }
 }
 
-}  // namespace
-
-FieldVolume make_field(Field field, std::size_t n, ScalarType type, std::uint32_t seed) {
-    if (n < 2) throw Error("a built-in field needs at least 2 samples per axis (got " + std::to_string(n) + ")");
-    if (n > (std::size_t(1) << 20)) throw Error("built-in field size " + std::to_string(n) + " is too large");
+// make_field, its arguments checked.
+FieldVolume make_field_unchecked(Field field, std::size_t n, ScalarType type, std::uint32_t seed) {
     std::unique_ptr<Generator> gen;
     switch (field) {
         case Field::Sphere: gen = std::make_unique<SphereField>(n); break;
@@ -364,6 +362,18 @@ FieldVolume make_field(Field field, std::size_t n, ScalarType type, std::uint32_
         default: throw Error("unknown scalar type");
     }
     return out;
+}
+
+}  // namespace
+
+FieldVolume make_field(Field field, std::size_t n, ScalarType type, std::uint32_t seed) {
+    if (n < 2) throw Error("a built-in field needs at least 2 samples per axis (got " + std::to_string(n) + ")");
+    if (n > (std::size_t(1) << 20)) throw Error("built-in field size " + std::to_string(n) + " is too large");
+    // Volume::allocate names the volume's bytes itself; this is for the generators' own memory.
+    return detail::out_of_memory_as_error(
+        [&] { return "out of memory making the built-in " + std::string(field_name(field)) + " field of " +
+                        std::to_string(n) + "^3 samples"; },
+        [&] { return make_field_unchecked(field, n, type, seed); });
 }
 
 Field parse_field(const std::string& name) {

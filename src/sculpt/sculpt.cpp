@@ -708,29 +708,42 @@ std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarT
     probe.origin = origin;
     detail::validate_volume(probe);
 
-    auto impl = std::make_unique<Sculpt::Impl>();
-    Sculpt::Impl& im = *impl;
-    im.options = options;
-    if (im.options.strength_scale == 0) im.options.strength_scale = 1;
-    im.threads = detail::resolve_threads(options.threads);
-    im.bs = options.block_size;
-    im.volume = Volume::allocate(type, dims);
-    im.volume.spacing = spacing;
-    im.volume.origin = origin;
-    im.n = dims;
-    for (int d = 0; d < 3; ++d) im.nb[d] = (dims[d] - 1 + im.bs - 1) / im.bs;
-    const std::size_t count = im.nb[0] * im.nb[1] * im.nb[2];
+    std::array<std::size_t, 3> nb{};
+    for (int d = 0; d < 3; ++d) nb[d] = (dims[d] - 1 + options.block_size - 1) / options.block_size;
+    const std::size_t count = nb[0] * nb[1] * nb[2];
     if (count > std::numeric_limits<std::uint32_t>::max())
         throw Error("sculpt: too many blocks; use a larger block size");
-    im.blocks.resize(count);
-    im.dirty_flag.assign(count, 0);
-    im.dirty_list.reserve(count);
-    dispatch_sculpt_type(type, [&](auto tag) {
-        using T = decltype(tag);
-        im.no_surface = detail::make_threshold<T>(options.iso).uniform != detail::Uniform::Mixed;
-    });
-    im.mark_all();
-    choose_backend(im);
+
+    // The volume's own bytes are Volume::allocate's Error; the block table is this one's (a
+    // small block size makes it as large as the volume).
+    auto impl = detail::out_of_memory_as_error(
+        [&] {
+            return "sculpt: out of memory for a " + std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" +
+                   std::to_string(dims[2]) + " volume in " + std::to_string(count) + " blocks";
+        },
+        [&] {
+            auto made = std::make_unique<Sculpt::Impl>();
+            Sculpt::Impl& im = *made;
+            im.options = options;
+            if (im.options.strength_scale == 0) im.options.strength_scale = 1;
+            im.threads = detail::resolve_threads(options.threads);
+            im.bs = options.block_size;
+            im.volume = Volume::allocate(type, dims);
+            im.volume.spacing = spacing;
+            im.volume.origin = origin;
+            im.n = dims;
+            im.nb = nb;
+            im.blocks.resize(count);
+            im.dirty_flag.assign(count, 0);
+            im.dirty_list.reserve(count);
+            dispatch_sculpt_type(type, [&](auto tag) {
+                using T = decltype(tag);
+                im.no_surface = detail::make_threshold<T>(options.iso).uniform != detail::Uniform::Mixed;
+            });
+            im.mark_all();
+            return made;
+        });
+    choose_backend(*impl);
     return impl;
 }
 

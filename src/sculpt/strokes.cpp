@@ -2,6 +2,8 @@
 // the CLI (`voxmesh sculpt`) and voxmesh-bench (`--sculpt`) call.
 #include <voxmesh/sculpt.hpp>
 
+#include "core/out_of_memory.hpp"
+
 #include <algorithm>
 #include <charconv>
 #include <chrono>
@@ -44,7 +46,9 @@ double parse_number(const std::string& token, const std::string& name, std::size
 
 // ---------------------------------------------------------------- scripts
 
-std::vector<ScriptDab> parse_stroke_script(std::istream& in, const std::string& name) {
+namespace {
+
+std::vector<ScriptDab> parse_script_lines(std::istream& in, const std::string& name) {
     std::vector<ScriptDab> dabs;
     Units units = Units::Samples;
     std::string text;
@@ -83,6 +87,14 @@ std::vector<ScriptDab> parse_stroke_script(std::istream& in, const std::string& 
     }
     if (in.bad()) throw Error(name + ": read error");
     return dabs;
+}
+
+}  // namespace
+
+std::vector<ScriptDab> parse_stroke_script(std::istream& in, const std::string& name) {
+    // A script of millions of dabs, or one endless line, can outgrow memory.
+    return detail::out_of_memory_as_error([&] { return "'" + name + "': out of memory reading the stroke script"; },
+                                          [&] { return parse_script_lines(in, name); });
 }
 
 std::vector<ScriptDab> read_stroke_script(const std::string& path) {

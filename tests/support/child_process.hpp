@@ -1,0 +1,15 @@
+// A forked child for the tests that must not run in the test process itself: under a memory
+// cap, or to check what a child of a process with running threads can do.
+#pragma once
+
+#include <functional>
+#include <string>
+
+namespace vmtest {
+
+// Runs `body` in a forked child and returns the text it returned; when it returned none,
+// why: "exception", "killed by signal N" (SIGALRM: still running after `seconds`, a hang)
+// or "exited with N". The child ends with _exit: no destructors, no atexit handlers.
+std::string output_of_child(const std::function<std::string()>& body, unsigned seconds = 120);
+
+}  // namespace vmtest
