@@ -134,6 +134,7 @@ private:
 };
 // Whether /proc/self/clear_refs can reset VmHWM (per-run peaks) on this system.
 bool rss_reset_works();
+// The CPUs this process may use (its affinity and CPU quota): what threads = 0 gives.
 unsigned hardware_threads();
 
 // ---- report.cpp ----

@@ -1,6 +1,8 @@
 // Timing one extraction combination, the streaming floor, and peak memory.
 #include "bench.hpp"
 
+#include "core/parallel.hpp"
+
 #include <algorithm>
 #include <barrier>
 #include <chrono>
@@ -35,7 +37,7 @@ double median(std::vector<double> v) {
     return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
 }
 
-unsigned hardware_threads() { return std::max(1u, std::thread::hardware_concurrency()); }
+unsigned hardware_threads() { return voxmesh::detail::resolve_threads(0); }  // the CPUs this process may use
 
 // ---- streaming floor -----------------------------------------------------------------------
 

@@ -65,7 +65,8 @@ enum class DeviceType { Any, Cpu, Gpu, Accelerator };
 struct Options {
     double iso = 0;
     Backend backend = Backend::Auto;
-    // CPU worker threads; 0 = all cores. Copies to a discrete GPU run on as many; Hybrid's on
+    // CPU worker threads; 0 = all cores this process may use (its affinity mask, capped by a
+    // cgroup CPU quota), counted once per process. Copies to a discrete GPU run on as many; Hybrid's on
     // the cores its CPU worker leaves (at least 2).
     unsigned threads = 0;
     bool normals = true;

@@ -2,6 +2,7 @@
 // (index buffers, positions) and times printed. OpenCL being unavailable is reported, not
 // an error.
 #include "common.hpp"
+#include "core/parallel.hpp"
 
 #include <voxmesh/fields.hpp>
 
@@ -84,7 +85,7 @@ std::string comparison_text(const Comparison& c) {
 }
 
 int run_demo() {
-    const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+    const unsigned hw = voxmesh::detail::resolve_threads(0);  // what "all cores" gives this process
     std::printf("voxmesh %s demo: built-in '%s' volume, %zu^3 %s samples (%s)\n", VOXMESH_VERSION_STRING,
                 field_name(kField), kSize, scalar_name(kType),
                 format_bytes(std::uint64_t(kSize) * kSize * kSize * scalar_size(kType)).c_str());

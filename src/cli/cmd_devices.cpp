@@ -1,5 +1,6 @@
 // voxmesh devices: every OpenCL platform/device with its key limits, and the CPU.
 #include "common.hpp"
+#include "core/parallel.hpp"
 
 #include <fstream>
 #include <iostream>
@@ -22,8 +23,11 @@ std::string cpu_model() {
 
 int run_devices() {
     const unsigned threads = std::thread::hardware_concurrency();
+    const unsigned usable = voxmesh::detail::resolve_threads(0);
     std::cout << "CPU: " << cpu_model() << ", " << (threads ? std::to_string(threads) : "unknown")
-              << " hardware threads (the cpu backend uses all of them by default)\n";
+              << " hardware threads, " << usable
+              << " of them usable by this process (its affinity and CPU quota): the cpu backend's default thread "
+                 "count\n";
     const std::vector<DeviceInfo> devices = list_devices();
     if (devices.empty()) {
         std::cout << "OpenCL: no usable device (no platform found, or voxmesh built without OpenCL); the "

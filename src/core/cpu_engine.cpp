@@ -554,7 +554,7 @@ private:
 constexpr unsigned kClassifySlabsPerThread = 4, kGenerateSlabsPerThread = 4;
 
 // Slabs for `threads` requested threads over `planes` planes: one for a single thread, else
-// `per_thread` for each thread that actually runs (run_slabs caps them at the hardware's).
+// `per_thread` for each thread that actually runs (run_slabs caps them at resolve_threads(0)).
 unsigned slab_count(unsigned threads, std::size_t planes, unsigned per_thread) {
     const unsigned running = std::min(std::max(threads, 1u), resolve_threads(0));
     const std::size_t slabs = running > 1 ? std::size_t{per_thread} * running : 1;

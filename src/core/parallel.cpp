@@ -26,6 +26,7 @@
 // below): on Linux a thread woken or started after the process was idle for a while can be
 // put on the CPU of the thread that woke it, and then the two take turns there.
 #include "parallel.hpp"
+#include "cpu_count.hpp"
 
 #include <atomic>
 #include <chrono>
@@ -261,8 +262,10 @@ void run_on_threads(unsigned n, const std::function<void(unsigned)>& f) {
 
 unsigned resolve_threads(unsigned requested) {
     if (requested > 0) return requested;
-    const unsigned hw = std::thread::hardware_concurrency();
-    return hw > 0 ? hw : 1;
+    // Counted once: the engines size per-worker tables and their runs by it separately in one
+    // call, so it must not change under them.
+    static const unsigned usable = usable_cpus();
+    return usable;
 }
 
 }  // namespace voxmesh::detail

@@ -38,7 +38,8 @@ void run_workers(unsigned n, F&& f) {
     if (failure) std::rethrow_exception(failure);
 }
 
-// Hardware concurrency when `requested` is 0, at least 1.
+// `requested`, or when it is 0 the CPUs this process may run on (its affinity mask, capped by
+// a cgroup CPU quota; cpu_count.hpp), counted at the first call.
 unsigned resolve_threads(unsigned requested);
 
 // Share `part` of [0, n) split into `parts` consecutive shares of near-equal size: the range
@@ -51,7 +52,7 @@ inline Share share_of(std::size_t n, unsigned part, unsigned parts) {
 }
 
 // Runs f(0..n-1) for n independent pieces of work (slabs) on at most max_threads threads and
-// at most as many as the machine runs at once: more threads than that only take turns on the same cores, and a slab
+// at most as many as this process can run at once (resolve_threads(0)): more threads than that only take turns on the same cores, and a slab
 // whose thread is descheduled holds up the rest. Threads pull slabs in order; the partition,
 // and so the output, is the caller's and does not depend on the cap.
 // f(slab, worker): worker < the number of threads used, so per-thread scratch can be kept

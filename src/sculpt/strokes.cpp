@@ -3,6 +3,7 @@
 #include <voxmesh/sculpt.hpp>
 
 #include "core/out_of_memory.hpp"
+#include "core/parallel.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -296,10 +297,7 @@ SculptBenchResult run_sculpt_benchmark(const SculptBenchOptions& options,
         r.full_extract_ms = summarize_latencies(times).p50;
     }
     r.threads = options.threads;
-    if (r.threads == 0) {
-        const unsigned hw = std::thread::hardware_concurrency();
-        r.threads = hw > 0 ? hw : 1;
-    }
+    if (r.threads == 0) r.threads = detail::resolve_threads(0);
     return r;
 }
 
