@@ -34,6 +34,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -71,6 +72,8 @@ int current_cpu() {
     return -1;
 #endif
 }
+
+std::atomic<bool> g_refuse_new_threads{false};  // refuse_new_threads_for_testing
 
 class ThreadCache;
 std::atomic<ThreadCache*> g_live_cache{nullptr};  // for the fork handlers; null once destroyed
@@ -114,6 +117,8 @@ public:
                 workers_.push_back(std::make_unique<Worker>());
                 w = workers_.back().get();
                 try {
+                    if (g_refuse_new_threads.load(std::memory_order_relaxed))
+                        throw std::system_error(std::make_error_code(std::errc::resource_unavailable_try_again));
                     w->thread = std::thread([this, w] { loop(*w); });
                 } catch (...) {
                     workers_.pop_back();  // no thread to join later
@@ -259,6 +264,8 @@ void run_on_threads(unsigned n, const std::function<void(unsigned)>& f) {
          left = pending->load(std::memory_order_acquire))
         pending->wait(left, std::memory_order_acquire);
 }
+
+void refuse_new_threads_for_testing(bool refuse) { g_refuse_new_threads.store(refuse); }
 
 unsigned resolve_threads(unsigned requested) {
     if (requested > 0) return requested;

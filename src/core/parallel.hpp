@@ -17,6 +17,10 @@ namespace voxmesh::detail {
 // so workers must not wait for each other without a deadline.
 void run_on_threads(unsigned n, const std::function<void(unsigned)>& f);
 
+// Test hook: the cache starts no new thread while set (as when a limit on threads or memory
+// refuses one); idle threads still take work.
+void refuse_new_threads_for_testing(bool refuse);
+
 // run_on_threads for any callable: rethrows the first exception a worker threw, after all
 // have returned.
 template <class F>
