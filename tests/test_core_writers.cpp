@@ -609,3 +609,50 @@ TEST_CASE("write_mesh: an unwritable target throws and leaves nothing behind", "
     }
     CHECK(no_temp_files(dir));
 }
+
+// A shell's `>` writes through a link and keeps the file's permissions; a rename onto the
+// link used to put a new file in the link's place (its target left stale) with the umask's mode.
+TEST_CASE("write_mesh: a symbolic link is written through and a replaced file keeps its mode", "[core]") {
+    namespace fs = std::filesystem;
+    vmtest::TempDir dir;
+    const voxmesh::Mesh mesh = test_mesh(false);
+    const std::string expected_path = dir.file("expected.stl");
+    voxmesh::write_mesh(expected_path, mesh);
+    const std::string expected = read_all(expected_path);
+    fs::create_directory(dir.file("store"));
+
+    SECTION("a chain of links, relative and absolute, to an existing file") {
+        { std::ofstream(dir.file("store/real.stl")) << "old contents"; }
+        fs::create_symlink("store/real.stl", dir.file("hop.stl"));      // relative to the link's directory
+        fs::create_symlink(dir.file("hop.stl"), dir.file("link.stl"));  // absolute
+        voxmesh::write_mesh(dir.file("link.stl"), mesh);
+        CHECK(fs::is_symlink(dir.file("link.stl")));
+        CHECK(fs::is_symlink(dir.file("hop.stl")));
+        CHECK(read_all(dir.file("store/real.stl")) == expected);
+        CHECK(vmtest::directory_entries(dir.file("store")) == std::vector<std::string>{"real.stl"});
+    }
+    SECTION("a dangling link: the file it names is made") {
+        fs::create_symlink("store/new.stl", dir.file("link.stl"));
+        voxmesh::write_mesh(dir.file("link.stl"), mesh);
+        CHECK(fs::is_symlink(dir.file("link.stl")));
+        CHECK(read_all(dir.file("store/new.stl")) == expected);
+    }
+    SECTION("a loop of links is an Error naming the path") {
+        fs::create_symlink("b.stl", dir.file("a.stl"));
+        fs::create_symlink("a.stl", dir.file("b.stl"));
+        CHECK_THROWS_WITH(voxmesh::write_mesh(dir.file("a.stl"), mesh),
+                          "cannot write '" + dir.file("a.stl") + "': too many levels of symbolic links");
+    }
+    SECTION("a replaced file keeps its permission bits") {
+        const std::string path = dir.file("store/private.stl");
+        { std::ofstream(path) << "old contents"; }
+        fs::permissions(path, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read);
+        voxmesh::write_mesh(path, mesh);
+        struct stat st {};
+        REQUIRE(::stat(path.c_str(), &st) == 0);
+        CHECK((st.st_mode & 0777) == 0640);
+        CHECK(read_all(path) == expected);
+    }
+    CHECK(no_temp_files(dir));
+    CHECK(vmtest::directory_entries(dir.file("store")).size() <= 1);
+}

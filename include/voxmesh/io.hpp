@@ -100,7 +100,8 @@ VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout);
 
 // NRRD with raw encoding in host byte order (spacing and origin written as `space
 // directions` / `space origin` with `space dimension: 3`), through a temporary file renamed
-// into place.
+// into place (through a symbolic link, keeping a replaced file's permission bits, as
+// write_mesh).
 // `key_values` become "key:=value" lines that read back exactly: a key is non-empty, does not
 // start with '#' and holds no ":=" or ": ", neither holds '\r' or '\n', and the header stays
 // within the 1 MiB the reader reads (an Error otherwise).

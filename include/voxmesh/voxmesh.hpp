@@ -146,6 +146,8 @@ void release_scratch_memory();
 // Writes .stl (binary), .ply (binary) or .obj, chosen by extension, through a temporary
 // file renamed into place: a failure never leaves a partial file. A malformed mesh (see
 // analyze_topology) or a NaN or infinite coordinate or normal is an Error; nothing is written.
+// A symbolic link at `path` is written through (the file it names is replaced, the link
+// kept), and a file replaced keeps its permission bits, as a shell's `>` would do.
 void write_mesh(const std::string& path, const Mesh& mesh);
 
 // Removes the temporary files of writes in progress (write_mesh, write_nrrd), for a program's

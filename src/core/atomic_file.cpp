@@ -85,6 +85,22 @@ int create_temp(const std::filesystem::path& dir, const std::string& filename, s
     return -1;  // errno is EEXIST
 }
 
+// `path`, or where its chain of symbolic links ends: a write replaces the file a link names
+// and keeps the link, as a shell's `>` writes through it (a rename onto the link itself would
+// put a file in its place and leave its target as it was).
+std::string followed_path(const std::string& path) {
+    namespace fs = std::filesystem;
+    fs::path p(path);
+    for (int hops = 0; hops < 40; ++hops) {  // Linux's own limit
+        std::error_code ec;
+        if (!fs::is_symlink(p, ec)) return p.string();
+        const fs::path link = fs::read_symlink(p, ec);
+        if (ec) throw Error("cannot write '" + path + "': " + ec.message());
+        p = link.is_absolute() ? link : p.parent_path() / link;
+    }
+    throw Error("cannot write '" + path + "': too many levels of symbolic links");
+}
+
 }  // namespace
 
 std::filesystem::path target_directory(const std::string& path) {
@@ -98,14 +114,19 @@ std::filesystem::path target_directory(const std::string& path) {
 }
 
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
-    const std::filesystem::path target(path);
-    const std::filesystem::path dir = target_directory(path);
+    const std::string destination = followed_path(path);
+    const std::filesystem::path target(destination);
+    const std::filesystem::path dir = target_directory(destination);
 
     std::string temp;
     // Listed while it exists; a signal after the rename unlinks a name that is gone.
     Listed listed;
     const int fd = create_temp(dir, target.filename().string(), temp, listed);
     if (fd < 0) throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    // A file replaced keeps its permissions (as `>` would), not the umask's: a private output
+    // stays private. Not its set-id bits.
+    if (struct stat existing {}; ::stat(destination.c_str(), &existing) == 0 && S_ISREG(existing.st_mode))
+        (void)::fchmod(fd, existing.st_mode & 0777);
     std::FILE* file = fdopen(fd, "wb");
     if (!file) {
         ::close(fd);
@@ -128,7 +149,7 @@ void write_file_atomically(const std::string& path, const std::function<void(std
         ::unlink(temp.c_str());
         throw Error("cannot write '" + path + "': " + std::strerror(errno));
     }
-    if (std::rename(temp.c_str(), path.c_str()) != 0) {
+    if (std::rename(temp.c_str(), destination.c_str()) != 0) {
         const int err = errno;
         ::unlink(temp.c_str());
         throw Error("cannot write '" + path + "': " + std::strerror(err));

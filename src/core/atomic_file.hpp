@@ -10,7 +10,9 @@
 namespace voxmesh::detail {
 
 // Calls write(FILE*) on a temporary next to `path`; throws Error (naming the path) on any
-// failure, removing the temporary.
+// failure, removing the temporary. A symbolic link at `path` is followed: the file it names
+// is replaced, the link kept. A file replaced keeps its permission bits; a new one gets 0666
+// less the umask.
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write);
 
 // The directory a write of `path` puts its temporary in: `path`'s own, or "."; throws Error
