@@ -112,7 +112,9 @@ struct DeviceStats {
 
 struct Stats {
     Backend backend = Backend::Cpu;  // what actually ran
-    unsigned threads = 0;            // CPU workers used
+    // Options::threads resolved (0 becomes the usable CPUs): the CPU slabs, which run on no more
+    // threads than the process may use at once; 0 for the OpenCL engine alone.
+    unsigned threads = 0;
     PassTimes times;
     std::vector<DeviceStats> devices;
     std::vector<std::string> warnings;  // also sent to Options::log
