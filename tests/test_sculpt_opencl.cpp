@@ -6,6 +6,7 @@
 
 #include <voxmesh/sculpt.hpp>
 
+#include "support/child_process.hpp"
 #include "support/sculpt_fields.hpp"
 
 #include "sculpt/device_blocks.hpp"
@@ -16,6 +17,7 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <memory>
 #include <random>
 #include <span>
 #include <string>
@@ -308,4 +310,41 @@ TEST_CASE("sculpt OpenCL: without an OpenCL platform update() meshes on the CPU,
     s.add({10, 9, 11}, 4, 2);
     Worst worst;
     require_mesh_equals_extract(s, true, Tolerance{0}, worst);
+}
+
+// A Sculpt meshing on OpenCL, carried into a forked child: its device's objects belong to the
+// parent's runtime, whose threads the child lacks (meshing, or even releasing them, waited for
+// ever there). In the child it re-meshes on the CPU with a warning and is destroyed cleanly;
+// the mesh is extract's, as ever.
+TEST_CASE("sculpt: a Sculpt on OpenCL in a forked child re-meshes on the CPU", "[sculpt][opencl]") {
+    if (!have_device()) return;
+    std::vector<std::string> warnings;
+    SculptOptions options;
+    options.backend = Backend::OpenCL;
+    options.threads = 2;
+    options.log = [&](const std::string& m) { warnings.push_back(m); };
+    auto sculpt = std::make_unique<Sculpt>(voxmesh::make_sculpt_sphere(48, options));
+    sculpt->update();
+    REQUIRE(sculpt->backend() == Backend::OpenCL);
+    const std::string device = sculpt->device_name();
+    const std::string child = vmtest::output_of_child(
+        [&] {
+            sculpt->add({24, 24, 24}, 6, 1);
+            sculpt->update();
+            if (sculpt->backend() != Backend::Cpu) return std::string("still on ") + sculpt->device_name();
+            const Mesh mesh = sculpt->mesh();
+            voxmesh::Options cpu;
+            cpu.backend = Backend::Cpu;
+            cpu.iso = sculpt->options().iso;
+            if (mesh.indices != voxmesh::extract(sculpt->view(), cpu).indices) return std::string("another mesh");
+            sculpt.reset();
+            return warnings.size() == 1 ? warnings[0] : std::to_string(warnings.size()) + " warnings";
+        },
+        60);
+    CHECK(child == device + " was opened before this process was forked and cannot be used in the child; sculpt "
+                            "re-meshes on the CPU from now on");
+    sculpt->add({24, 24, 24}, 6, 1);  // the parent's device still works
+    sculpt->update();
+    CHECK(sculpt->backend() == Backend::OpenCL);
+    CHECK(warnings.empty());
 }

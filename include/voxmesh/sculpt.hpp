@@ -140,7 +140,8 @@ public:
 
     // ---- meshing
     // Re-meshes dirty blocks in parallel. Out of memory is an Error, and the blocks stay dirty
-    // for the next update().
+    // for the next update(). In a child forked after its OpenCL device was opened, the CPU
+    // re-meshes instead (with a warning): the device is the parent's runtime's.
     UpdateResult update();
     bool dirty() const;                   // edits not yet meshed
     std::size_t block_count() const;

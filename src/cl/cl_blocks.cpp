@@ -77,6 +77,7 @@ public:
     }
 
     const std::string& device_name() const override { return device_->info.name; }
+    bool left_in_parent() const override { return devices_left_in_parent(); }
 
     void mesh(std::span<const BlockBox> boxes,
               const std::function<void(std::size_t, const DeviceBlockMesh&)>& store) override {

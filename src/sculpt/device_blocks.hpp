@@ -39,6 +39,11 @@ public:
     // Throws Error on an OpenCL failure; blocks already stored stay valid.
     virtual void mesh(std::span<const BlockBox> boxes,
                       const std::function<void(std::size_t, const DeviceBlockMesh&)>& store) = 0;
+    // True in a child forked after the device was opened: its OpenCL objects belong to the
+    // parent's runtime, whose threads the child lacks. Neither meshing nor releasing them
+    // returns there (PoCL waits for its workers), so the mesher is dropped without its
+    // destructor.
+    virtual bool left_in_parent() const = 0;
 };
 
 // Test hooks: a smaller batch (staged samples per batch; 0 = the default) so that one

@@ -396,6 +396,19 @@ struct Sculpt::Impl {
         });
     }
 
+    // In a child forked after the device was opened, the CPU re-meshes from then on: the
+    // device's objects are the parent's runtime's, and even releasing them would not return.
+    void drop_device_left_in_parent() {
+        if (!device || !device->left_in_parent()) return;
+        warn(device->device_name() + " was opened before this process was forked and cannot be used in the child; "
+             "sculpt re-meshes on the CPU from now on");
+        (void)device.release();  // deliberately leaked (see DeviceBlockMesher::left_in_parent)
+    }
+
+    ~Impl() {
+        if (device && device->left_in_parent()) (void)device.release();
+    }
+
     // False after an OpenCL failure: the device is dropped (with a warning) and the caller
     // re-meshes on the CPU, now and from then on.
     bool remesh_on_device() {
@@ -429,6 +442,7 @@ struct Sculpt::Impl {
         if (jobs > 0) {
             was_nonempty.resize(jobs);
             for (std::size_t i = 0; i < jobs; ++i) was_nonempty[i] = !blocks[dirty_list[i]].indices.empty();
+            drop_device_left_in_parent();
             if (!device || no_surface || !remesh_on_device()) remesh_on_cpu();
             for (std::size_t i = 0; i < jobs; ++i) {
                 const std::uint32_t b = dirty_list[i];
