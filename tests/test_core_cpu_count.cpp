@@ -81,9 +81,14 @@ TEST_CASE("the usable CPUs follow the affinity mask", "[core][threads]") {
     cpu_set_t one;
     CPU_ZERO(&one);
     CPU_SET(first, &one);
+    const unsigned at_load = voxmesh::detail::resolve_threads(0);
     REQUIRE(sched_setaffinity(0, sizeof one, &one) == 0);
     const unsigned pinned = voxmesh::detail::usable_cpus();
+    const unsigned resolved_pinned = voxmesh::detail::resolve_threads(0);
     sched_setaffinity(0, sizeof all, &all);
     CHECK(pinned == 1);
+    // "All cores" was counted at load: a caller pinning its own thread (a render thread on one
+    // core) still gets every core the process has.
+    CHECK(resolved_pinned == at_load);
 }
 #endif

@@ -66,7 +66,7 @@ struct Options {
     double iso = 0;
     Backend backend = Backend::Auto;
     // CPU worker threads; 0 = all cores this process may use (its affinity mask, capped by a
-    // cgroup CPU quota), counted once per process. Copies to a discrete GPU run on as many; Hybrid's on
+    // cgroup CPU quota), counted when the library is loaded. Copies to a discrete GPU run on as many; Hybrid's on
     // the cores its CPU worker leaves (at least 2).
     unsigned threads = 0;
     bool normals = true;

@@ -275,4 +275,11 @@ unsigned resolve_threads(unsigned requested) {
     return usable;
 }
 
+namespace {
+// ... and counted when the library is loaded, before the program pins threads of its own (as
+// libgomp counts its threads): the affinity mask is the calling thread's, and a render
+// thread pinned to one core must not make every extract it calls single-threaded.
+[[maybe_unused]] const unsigned g_counted_at_load = resolve_threads(0);
+}  // namespace
+
 }  // namespace voxmesh::detail

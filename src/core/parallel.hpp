@@ -43,7 +43,7 @@ void run_workers(unsigned n, F&& f) {
 }
 
 // `requested`, or when it is 0 the CPUs this process may run on (its affinity mask, capped by
-// a cgroup CPU quota; cpu_count.hpp), counted at the first call.
+// a cgroup CPU quota; cpu_count.hpp), counted when the library is loaded.
 unsigned resolve_threads(unsigned requested);
 
 // Share `part` of [0, n) split into `parts` consecutive shares of near-equal size: the range
