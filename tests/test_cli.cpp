@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <sched.h>
 #include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
@@ -418,6 +419,17 @@ TEST_CASE("cli: devices and demo", "[cli]") {
     const Result d = run(s, "devices");
     CHECK(d.code == 0);
     CHECK(d.out.find("hardware threads") != std::string::npos);
+    // Pinned to one CPU (taskset, util-linux), the tool says it has one to use.
+    cpu_set_t allowed;
+    REQUIRE(sched_getaffinity(0, sizeof allowed, &allowed) == 0);
+    int first = 0;
+    while (!CPU_ISSET(first, &allowed)) ++first;
+    const Result pinned = vmtest::run_program(
+        "taskset", "-c " + std::to_string(first) + " " + vmtest::shell_quote(VOXMESH_CLI_PATH) + " devices",
+        s.dir.string());
+    INFO(pinned.out << pinned.err);
+    CHECK(pinned.code == 0);
+    CHECK(pinned.out.find(" 1 of them usable by this process") != std::string::npos);
     const Result demo = run(s, "demo");
     INFO(demo.out << demo.err);
     CHECK(demo.code == 0);
