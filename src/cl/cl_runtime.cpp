@@ -255,7 +255,10 @@ void Device::release_memory() {
     staging_.reset();
 }
 
-bool forked_since_discovery(const Registry& r) { return r.discovered && r.discovered_in != getpid(); }
+// Devices discovered (and perhaps opened) by the process this one was forked from.
+bool forked_since_discovery(const Registry& r) {
+    return r.discovered && r.discovered_in != getpid() && !r.devices.empty();
+}
 
 std::vector<std::shared_ptr<Device>> devices() {
     Registry& r = registry();
