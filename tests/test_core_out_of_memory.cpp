@@ -22,7 +22,6 @@
 
 #include <cstddef>
 #include <filesystem>
-#include <fstream>
 #include <functional>
 #include <new>
 #include <sstream>
@@ -45,16 +44,7 @@ constexpr bool kCapWorks = true;
 // VmData: the process's private writable memory, what RLIMIT_DATA caps. (RLIMIT_AS would
 // not do: glibc's per-thread malloc arenas reserve 64 MB of address space each, and a failed
 // allocation is retried in another arena, which grows into its reservation uncounted.)
-std::size_t data_bytes() {
-    std::ifstream status("/proc/self/status");
-    std::string key;
-    std::size_t kib = 0;
-    while (status >> key) {
-        if (key == "VmData:" && status >> kib) return kib * 1024;
-        status.ignore(1 << 20, '\n');
-    }
-    return 0;
-}
+std::size_t data_bytes() { return vmtest::proc_status_number("VmData:") * 1024; }
 
 // In a capped child: back to the hard limit, to retry what ran out.
 void lift_cap() {

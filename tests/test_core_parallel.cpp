@@ -8,7 +8,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <fstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -126,10 +125,7 @@ TEST_CASE("run_workers in a forked child starts threads of its own", "[core][par
 // leaves its worker to the caller: a run still runs every worker once, where the exception
 // used to escape mid-run and leave the started workers using the caller's finished frame.
 TEST_CASE("run_workers runs on the caller the workers whose threads cannot start", "[core][parallel]") {
-    std::ifstream status("/proc/self/status");
-    unsigned threads_here = 0;
-    for (std::string key; status >> key;)
-        if (key == "Threads:" && status >> threads_here) break;
+    const auto threads_here = static_cast<unsigned>(vmtest::proc_status_number("Threads:"));
     const unsigned n = threads_here + 8;  // more than the cache has idle: some must be started
     std::vector<std::atomic<int>> seen(n);
     std::atomic<unsigned> on_caller{0};

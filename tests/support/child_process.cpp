@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <fstream>
 
 namespace vmtest {
 
@@ -34,6 +35,16 @@ std::string output_of_child(const std::function<std::string()>& body, unsigned s
     if (WIFSIGNALED(status)) return "killed by signal " + std::to_string(WTERMSIG(status));
     if (WEXITSTATUS(status) != 0) return "exited with " + std::to_string(WEXITSTATUS(status));
     return out;
+}
+
+std::size_t proc_status_number(const std::string& key) {
+    std::ifstream status("/proc/self/status");
+    for (std::string word; status >> word;) {
+        std::size_t value = 0;
+        if (word == key) return status >> value ? value : 0;
+        status.ignore(1 << 20, '\n');
+    }
+    return 0;
 }
 
 }  // namespace vmtest

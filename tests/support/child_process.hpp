@@ -2,6 +2,7 @@
 // cap, or to check what a child of a process with running threads can do.
 #pragma once
 
+#include <cstddef>
 #include <functional>
 #include <string>
 
@@ -11,5 +12,8 @@ namespace vmtest {
 // why: "exception", "killed by signal N" (SIGALRM: still running after `seconds`, a hang)
 // or "exited with N". The child ends with _exit: no destructors, no atexit handlers.
 std::string output_of_child(const std::function<std::string()>& body, unsigned seconds = 120);
+
+// The number after `key` (e.g. "VmData:", in kB; "Threads:") in /proc/self/status; 0 when absent.
+std::size_t proc_status_number(const std::string& key);
 
 }  // namespace vmtest
