@@ -903,6 +903,10 @@ TEST_CASE("OpenCL extract_into gives extract()'s mesh in a reused mesh's storage
 // the CPU there, and OpenCL says why it cannot run.
 TEST_CASE("a forked child of a process using OpenCL meshes on the CPU and says why OpenCL cannot", "[opencl]") {
     if (!have_device()) return;
+    if (!vmtest::threads_after_fork_supported()) {
+        WARN("skipped under ThreadSanitizer: it dies rather than start threads in a forked child");
+        return;
+    }
     Grid g{{33, 30, 28}};
     const std::vector<float> v = sphere(g);
     const VolumeView view = view_of(v.data(), ScalarType::F32, g);

@@ -13,6 +13,11 @@ namespace vmtest {
 // or "exited with N". The child ends with _exit: no destructors, no atexit handlers.
 std::string output_of_child(const std::function<std::string()>& body, unsigned seconds = 120);
 
+// False under ThreadSanitizer, which dies rather than start a thread in a child forked from a
+// multi-threaded process (unless TSAN_OPTIONS=die_after_fork=0): tests of such children
+// return early there, with a WARN saying so.
+bool threads_after_fork_supported();
+
 // The number after `key` (e.g. "VmData:", in kB; "Threads:") in /proc/self/status; 0 when absent.
 std::size_t proc_status_number(const std::string& key);
 
