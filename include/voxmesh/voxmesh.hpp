@@ -66,8 +66,8 @@ struct Options {
     double iso = 0;
     Backend backend = Backend::Auto;
     // CPU worker threads; 0 = all cores this process may use (its affinity mask, capped by a
-    // cgroup CPU quota), counted when the library is loaded. Copies to a discrete GPU run on as many; Hybrid's on
-    // the cores its CPU worker leaves (at least 2).
+    // cgroup CPU quota), counted when the library is loaded. Copies to a discrete GPU run on as
+    // many; Hybrid's on the cores its CPU worker leaves (at least 2).
     unsigned threads = 0;
     bool normals = true;
     bool inside_below = false;  // flip: inside where value < iso (SDFs); winding and normals only
