@@ -222,10 +222,6 @@ std::string json_string(const std::string& s) {
     return out + "\"";
 }
 
-std::string dims_text(const std::array<std::size_t, 3>& d) {
-    return std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]);
-}
-
 std::string triple_text(const std::array<double, 3>& v) {
     return format_double(v[0]) + " " + format_double(v[1]) + " " + format_double(v[2]);
 }

@@ -6,6 +6,8 @@
 #include <voxmesh/io.hpp>
 #include <voxmesh/voxmesh.hpp>
 
+#include "core/dims_text.hpp"
+
 #include <CLI/CLI.hpp>
 
 #include <array>
@@ -96,7 +98,7 @@ std::string format_bytes(std::uint64_t bytes);
 std::string format_double(double v);  // shortest round-trip-ish text
 std::string format_ms(double seconds);
 std::string json_string(const std::string& s);
-std::string dims_text(const std::array<std::size_t, 3>& d);
+using voxmesh::detail::dims_text;  // "NXxNYxNZ"
 std::string triple_text(const std::array<double, 3>& v);
 std::string pieces_text(std::size_t pieces);  // "1 piece", "29 pieces"
 std::string device_type_name(DeviceType type);

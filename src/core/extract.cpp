@@ -1,4 +1,5 @@
 #include "cpu_engine.hpp"
+#include "dims_text.hpp"
 #include "float_extent.hpp"
 #include "opencl_hook.hpp"
 
@@ -90,8 +91,8 @@ Mesh run_engine(const VolumeView& volume, const Options& options, Stats& stats, 
         if (first < e.plane) detail::throw_non_finite(first);
         throw;
     } catch (const std::bad_alloc&) {
-        throw Error("out of memory meshing a " + std::to_string(volume.dims[0]) + "x" + std::to_string(volume.dims[1]) +
-                    "x" + std::to_string(volume.dims[2]) + " volume (the mesh and the engine's working memory)");
+        throw Error("out of memory meshing a " + detail::dims_text(volume.dims) +
+                    " volume (the mesh and the engine's working memory)");
     }
 }
 

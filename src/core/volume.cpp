@@ -1,5 +1,6 @@
 #include <voxmesh/voxmesh.hpp>
 
+#include "dims_text.hpp"
 #include "huge_pages.hpp"
 
 #include <cstdlib>
@@ -46,8 +47,7 @@ std::size_t checked_volume_bytes(std::array<std::size_t, 3> dims, ScalarType typ
     std::size_t bytes = scalar_size(type);
     for (std::size_t d : dims) {
         if (d != 0 && bytes > std::numeric_limits<std::size_t>::max() / d)
-            throw Error("volume dimensions " + std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" +
-                        std::to_string(dims[2]) + " overflow the addressable size");
+            throw Error("volume dimensions " + detail::dims_text(dims) + " overflow the addressable size");
         bytes *= d;
     }
     return bytes;

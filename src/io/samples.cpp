@@ -1,6 +1,7 @@
 #include "samples.hpp"
 
 #include "inflate.hpp"
+#include "core/dims_text.hpp"
 #include "input_file.hpp"
 
 #include <algorithm>
@@ -23,9 +24,7 @@ std::string where(const std::string& header_path, const SampleLayout& layout) {
     return " (data file of '" + header_path + "')";
 }
 
-std::string dims_text(std::array<std::size_t, 3> d) {
-    return std::to_string(d[0]) + "x" + std::to_string(d[1]) + "x" + std::to_string(d[2]);
-}
+using detail::dims_text;
 
 // Volume::allocate, its Error (out of memory) naming the file.
 Volume allocate_samples(const std::string& path, const SampleLayout& layout) {

@@ -16,6 +16,7 @@
 #include "block_mesher.hpp"
 #include "device_blocks.hpp"
 #include "core/cpu_engine.hpp"
+#include "core/dims_text.hpp"
 #include "core/out_of_memory.hpp"
 #include "core/parallel.hpp"
 #include "core/threshold.hpp"
@@ -732,8 +733,8 @@ std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarT
     // small block size makes it as large as the volume).
     auto impl = detail::out_of_memory_as_error(
         [&] {
-            return "sculpt: out of memory for a " + std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" +
-                   std::to_string(dims[2]) + " volume in " + std::to_string(count) + " blocks";
+            return "sculpt: out of memory for a " + detail::dims_text(dims) + " volume in " + std::to_string(count) +
+                   " blocks";
         },
         [&] {
             auto made = std::make_unique<Sculpt::Impl>();

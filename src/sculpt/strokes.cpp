@@ -3,6 +3,7 @@
 #include <voxmesh/sculpt.hpp>
 
 #include "core/out_of_memory.hpp"
+#include "core/dims_text.hpp"
 #include "core/parallel.hpp"
 
 #include <algorithm>
@@ -169,7 +170,7 @@ std::vector<ScriptDab> builtin_stroke_path(std::size_t n_dabs, std::array<std::s
     // sphere_model takes dims - 1: a 0 would wrap; fewer than 2 samples is no volume to sculpt.
     if (std::min({dims[0], dims[1], dims[2]}) < 2)
         throw Error("sculpt: the stroke path needs a volume of at least 2 samples per axis, got " +
-                    std::to_string(dims[0]) + "x" + std::to_string(dims[1]) + "x" + std::to_string(dims[2]));
+                    detail::dims_text(dims));
     const SphereModel m = sphere_model(dims);
     const double pi = std::numbers::pi;
     std::vector<ScriptDab> dabs(n_dabs);

@@ -10,6 +10,7 @@
 
 #include <voxmesh/voxelize.hpp>
 
+#include "core/dims_text.hpp"
 #include "core/float_extent.hpp"
 #include "core/mesh_arrays.hpp"
 #include "core/out_of_memory.hpp"
@@ -165,8 +166,7 @@ std::size_t grid_bytes(const Grid& g, std::size_t sample_bytes) {
 void check_grid_memory(const Grid& g, const VoxelizeOptions& options, std::size_t sample_bytes) {
     const std::size_t bytes = grid_bytes(g, sample_bytes), physical = physical_memory();
     if (bytes > physical)
-        throw Error("voxelize: the " + std::to_string(g.dims[0]) + "x" + std::to_string(g.dims[1]) + "x" +
-                    std::to_string(g.dims[2]) + " grid (resolution " + std::to_string(options.resolution) +
+        throw Error("voxelize: the " + detail::dims_text(g.dims) + " grid (resolution " + std::to_string(options.resolution) +
                     ", padding " + std::to_string(options.padding) + ") needs " + std::to_string(bytes) +
                     " bytes, more than the " + std::to_string(physical) +
                     " bytes of physical memory; use a lower resolution");
@@ -394,8 +394,7 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
     // Meshing back needs a sample inside: a flat model, or one thinner than a voxel everywhere,
     // would come back as an empty mesh with no word why.
     if (std::accumulate(inside_samples.begin(), inside_samples.end(), std::size_t{0}) == 0)
-        throw Error("voxelize: no sample of the " + std::to_string(nx) + "x" + std::to_string(ny) + "x" +
-                    std::to_string(nz) + " grid lies inside the mesh (it is flat, or thinner than a voxel of " +
+        throw Error("voxelize: no sample of the " + detail::dims_text(grid.dims) + " grid lies inside the mesh (it is flat, or thinner than a voxel of " +
                     std::to_string(grid.h) + " everywhere); raise the resolution");
     return volume;
 }
