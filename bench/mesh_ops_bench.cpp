@@ -8,7 +8,6 @@
 #include "core/components.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -22,9 +21,9 @@ namespace vmbench {
 namespace {
 
 double seconds_of(const std::function<void()>& run) {
-    const auto start = std::chrono::steady_clock::now();
+    const double start = now_s();
     run();
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return now_s() - start;
 }
 
 // The temporary directory, removed with what is in it however the run ends.

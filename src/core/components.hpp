@@ -22,8 +22,8 @@ MeshPieces mesh_pieces(const Mesh& mesh, unsigned workers);
 // `workers` threads.
 std::size_t count_mesh_pieces(const Mesh& mesh, const std::vector<std::uint8_t>& used, unsigned workers);
 
-// Threads for a pass over a mesh of `sides` triangle sides: one per 2^20 sides, at most the
-// machine's cores.
+// Threads for a pass over a mesh of `sides` triangle sides: one per 2^20 sides, at most
+// resolve_threads(0).
 unsigned workers_for_sides(std::size_t sides);
 
 // analyze_topology's work on `workers` threads (it picks the count from the mesh's size); the

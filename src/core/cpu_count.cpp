@@ -18,6 +18,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The tighter of two quotas, 0 meaning none.
+unsigned tighter(unsigned a, unsigned b) { return a == 0 ? b : b == 0 ? a : std::min(a, b); }
+
 // CPUs of `quota` over `period` microseconds, rounded up; 0 for no quota or nonsense.
 unsigned cpus_of(double quota, double period) {
     if (!(quota > 0) || !(period > 0)) return 0;
@@ -50,8 +53,7 @@ unsigned quota_in(const fs::path& dir, bool v2) {
 unsigned tightest_quota(const fs::path& top, const fs::path& relative, bool v2) {
     unsigned tightest = 0;
     for (fs::path dir = relative.empty() ? top : top / relative;;) {
-        const unsigned q = quota_in(dir, v2);
-        if (q > 0) tightest = tightest == 0 ? q : std::min(tightest, q);
+        tightest = tighter(tightest, quota_in(dir, v2));
         const fs::path up = dir.parent_path();
         if (dir == top || up == dir || up.native().size() < top.native().size()) break;
         dir = up;
@@ -65,9 +67,6 @@ unsigned cgroup_cpu_quota(const std::string& proc_self_cgroup, const std::string
     const fs::path root(cgroup_root);
     std::istringstream lines(proc_self_cgroup);
     unsigned tightest = 0;
-    const auto take = [&](unsigned q) {
-        if (q > 0) tightest = tightest == 0 ? q : std::min(tightest, q);
-    };
     // Lines "id:controllers:path": v2 is "0::path"; v1's CPU controller is listed as "cpu",
     // usually with "cpuacct", and mounted under that list's name.
     for (std::string line; std::getline(lines, line);) {
@@ -77,7 +76,7 @@ unsigned cgroup_cpu_quota(const std::string& proc_self_cgroup, const std::string
         const std::string path = line.substr(second + 1);
         const fs::path relative = fs::path(path).relative_path();
         if (line.compare(0, first, "0") == 0 && controllers.empty()) {
-            take(tightest_quota(root, relative, true));
+            tightest = tighter(tightest, tightest_quota(root, relative, true));
             continue;
         }
         std::istringstream names(controllers);
@@ -88,7 +87,7 @@ unsigned cgroup_cpu_quota(const std::string& proc_self_cgroup, const std::string
             const fs::path top = root / mount;
             std::error_code ec;
             if (!fs::is_directory(top, ec)) continue;
-            take(tightest_quota(top, relative, false));
+            tightest = tighter(tightest, tightest_quota(top, relative, false));
             break;
         }
     }
