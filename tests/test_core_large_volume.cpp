@@ -7,6 +7,7 @@
 
 #include "support/mesh_checks.hpp"
 #include "support/reference_mc.hpp"
+#include "support/sanitizers.hpp"
 
 #include <voxmesh/voxmesh.hpp>
 
@@ -76,11 +77,11 @@ void check_large_volume(voxmesh::ScalarType type) {
     REQUIRE(count > (std::size_t{1} << 32));
     REQUIRE(linear(kSample2to32[0], kSample2to32[1], kSample2to32[2]) == (std::size_t{1} << 32));
 
-#if defined(__SANITIZE_THREAD__)
-    // ThreadSanitizer shadows every byte read: tens of GB of shadow for these volumes.
-    WARN("skipped under ThreadSanitizer");
-    return;
-#endif
+    if (vmtest::kThreadSanitizer) {
+        // ThreadSanitizer shadows every byte read: tens of GB of shadow for these volumes.
+        WARN("skipped under ThreadSanitizer");
+        return;
+    }
     ZeroMapping mapping(count * sizeof(T));
     if (!mapping.data()) {
         WARN("skipped: no address space for a " << count * sizeof(T) << "-byte mapping");

@@ -5,6 +5,7 @@
 // same call with room to spare must return, so the cap is what made it fail.
 #include "support/child_process.hpp"
 #include "support/mesh_checks.hpp"
+#include "support/sanitizers.hpp"
 
 #include "core/atomic_file.hpp"
 
@@ -29,17 +30,8 @@
 
 namespace {
 
-#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
-constexpr bool kCapWorks = false;  // the sanitizers' allocators die rather than throw
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer)
-constexpr bool kCapWorks = false;
-#else
-constexpr bool kCapWorks = true;
-#endif
-#else
-constexpr bool kCapWorks = true;
-#endif
+// The sanitizers' allocators die rather than throw.
+constexpr bool kCapWorks = !vmtest::kAddressSanitizer && !vmtest::kThreadSanitizer;
 
 // VmData: the process's private writable memory, what RLIMIT_DATA caps. (RLIMIT_AS would
 // not do: glibc's per-thread malloc arenas reserve 64 MB of address space each, and a failed

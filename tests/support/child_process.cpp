@@ -1,4 +1,5 @@
 #include "child_process.hpp"
+#include "sanitizers.hpp"
 
 #include <sys/wait.h>
 #include <unistd.h>
@@ -37,19 +38,7 @@ std::string output_of_child(const std::function<std::string()>& body, unsigned s
     return out;
 }
 
-bool threads_after_fork_supported() {
-#if defined(__SANITIZE_THREAD__)
-    return false;
-#elif defined(__has_feature)
-#if __has_feature(thread_sanitizer)
-    return false;
-#else
-    return true;
-#endif
-#else
-    return true;
-#endif
-}
+bool threads_after_fork_supported() { return !kThreadSanitizer; }
 
 std::size_t proc_status_number(const std::string& key) {
     std::ifstream status("/proc/self/status");
