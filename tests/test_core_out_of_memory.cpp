@@ -1,8 +1,9 @@
 // Out of memory is a voxmesh::Error, never a std::bad_alloc, from extract, analyze_topology,
-// keep_largest_components, the volume and mesh readers, voxelize, make_field, the stroke-script
-// parser, and a Sculpt's construction, update and mesh. Each call runs in a forked child whose private writable memory is capped
-// (RLIMIT_DATA) a little above what it uses already, so that its large allocations fail; the
-// same call with room to spare must return, so the cap is what made it fail.
+// keep_largest_components, the volume and mesh readers, voxelize, make_field, the
+// stroke-script parser, and a Sculpt's construction, update and mesh. Each call runs in a
+// forked child whose private writable memory is capped (RLIMIT_DATA) a little above what it
+// uses already, so that its large allocations fail; the same call with room to spare must
+// return, so the cap is what made it fail.
 #include "support/child_process.hpp"
 #include "support/mesh_checks.hpp"
 #include "support/sanitizers.hpp"
