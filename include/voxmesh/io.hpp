@@ -9,7 +9,7 @@
 // memory-mapped (Volume::storage owns the mapping; MAP_PRIVATE, so writes through
 // Volume::data never reach the file; the file must not be truncated while the Volume
 // lives). Data in the other byte order, misaligned, or compressed is copied into a heap
-// block. A volume with a flipped axis (see Geometry) is reversed in place after loading;
+// block, as is a file that cannot be mapped (a filesystem without mmap). A volume with a flipped axis (see Geometry) is reversed in place after loading;
 // for a mapped one that writes every page, so it costs as much memory as a copy.
 //
 // Geometry: a Volume has spacing and origin but no orientation; sample (i,j,k) lies at

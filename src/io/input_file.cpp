@@ -3,6 +3,7 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
+#include <atomic>
 #include <cctype>
 #include <cerrno>
 #include <cstring>
@@ -62,14 +63,30 @@ void InputFile::read_exact(std::size_t offset, void* out, std::size_t bytes) con
     }
 }
 
+namespace {
+std::atomic<bool> g_refuse_mmap{false};  // refuse_mmap_for_testing
+}  // namespace
+
+void refuse_mmap_for_testing(bool refuse) { g_refuse_mmap.store(refuse); }
+
 std::shared_ptr<unsigned char> InputFile::map() const {
     if (size_ == 0) fail(path_, "file is empty");
     // NORESERVE: the private mapping is only copied where someone writes to it.
-    void* base = ::mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_NORESERVE, fd_, 0);
-    if (base == MAP_FAILED) fail(path_, std::string("cannot memory-map: ") + std::strerror(errno));
-    const std::size_t length = size_;
-    return std::shared_ptr<unsigned char>(static_cast<unsigned char*>(base),
-                                          [length](unsigned char* p) { ::munmap(p, length); });
+    void* base = g_refuse_mmap.load() ? MAP_FAILED
+                                      : ::mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_NORESERVE, fd_, 0);
+    if (base != MAP_FAILED) {
+        const std::size_t length = size_;
+        return std::shared_ptr<unsigned char>(static_cast<unsigned char*>(base),
+                                              [length](unsigned char* p) { ::munmap(p, length); });
+    }
+    // A filesystem without mmap (some FUSE and network mounts) or the process's map-count
+    // limit: read the file into memory instead, which is what a copy would cost anyway.
+    check_memory(path_, size_);
+    return out_of_memory_reading(path_, "file", [&] {
+        std::shared_ptr<unsigned char> copy(new unsigned char[size_], std::default_delete<unsigned char[]>());
+        read_exact(0, copy.get(), size_);
+        return copy;
+    });
 }
 
 MappedFile map_whole_file(const std::string& path) {

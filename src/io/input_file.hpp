@@ -16,6 +16,9 @@ namespace voxmesh::io {
 // Throws Error("'path': what").
 [[noreturn]] void fail(const std::string& path, const std::string& what);
 
+// Makes InputFile::map() behave as if mmap failed, so tests reach the read fallback.
+void refuse_mmap_for_testing(bool refuse);
+
 class InputFile {
 public:
     explicit InputFile(const std::string& path);
@@ -31,7 +34,8 @@ public:
     // Exactly `bytes` bytes into `out`; throws on a short read.
     void read_exact(std::size_t offset, void* out, std::size_t bytes) const;
     // The whole file, mapped private and writable (copy-on-write); the pointer owns the
-    // mapping. Throws for an empty file.
+    // mapping. Where the file cannot be mapped, a heap copy of it (at least 16-byte aligned).
+    // Throws for an empty file.
     std::shared_ptr<unsigned char> map() const;
 
 private:
