@@ -430,6 +430,20 @@ TEST_CASE("cli: devices and demo", "[cli]") {
     INFO(pinned.out << pinned.err);
     CHECK(pinned.code == 0);
     CHECK(pinned.out.find(" 1 of them usable by this process") != std::string::npos);
+    // Pinned, four threads asked for run on that one CPU, and the summary says so.
+    const std::string head = vmtest::shell_quote(data_file("headsq.nrrd"));
+    const Result mesh = vmtest::run_program(
+        "taskset", "-c " + std::to_string(first) + " " + vmtest::shell_quote(VOXMESH_CLI_PATH) + " mesh " + head +
+                       " -o " + vmtest::shell_quote(s.path("pinned.stl")) + " --backend cpu --threads 4",
+        s.dir.string());
+    INFO(mesh.out << mesh.err);
+    CHECK(mesh.code == 0);
+    CHECK(mesh.out.find("(4 threads asked for, run on 1 CPU)") != std::string::npos);
+    const Result json = vmtest::run_program(
+        "taskset", "-c " + std::to_string(first) + " " + vmtest::shell_quote(VOXMESH_CLI_PATH) + " mesh " + head +
+                       " -o " + vmtest::shell_quote(s.path("pinned.stl")) + " --backend cpu --threads 4 --json",
+        s.dir.string());
+    CHECK(json.out.find("\"threads\": 4, \"workers\": 1") != std::string::npos);
     const Result demo = run(s, "demo");
     INFO(demo.out << demo.err);
     CHECK(demo.code == 0);

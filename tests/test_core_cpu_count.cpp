@@ -6,6 +6,7 @@
 #include "core/parallel.hpp"
 #include "support/mesh_checks.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -92,3 +93,16 @@ TEST_CASE("the usable CPUs follow the affinity mask", "[core][threads]") {
     CHECK(resolved_pinned == at_load);
 }
 #endif
+
+TEST_CASE("Stats::workers: the threads asked for, capped at the CPUs this process may use", "[core][threads]") {
+    const vmtest::Dims dims{24, 24, 24};
+    const auto data = vmtest::sample_field<float>(dims, vmtest::sphere({11.5, 11.5, 11.5}, 8));
+    const unsigned usable = voxmesh::detail::resolve_threads(0);
+    for (const unsigned threads : {1u, 2u, 64u}) {
+        INFO(threads << " threads asked for, " << usable << " usable");
+        voxmesh::Stats stats;
+        (void)voxmesh::extract(vmtest::view_of(data, dims), vmtest::cpu_options(0.0, threads), stats);
+        CHECK(stats.threads == threads);
+        CHECK(stats.workers == std::min(threads, usable));
+    }
+}

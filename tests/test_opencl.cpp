@@ -5,6 +5,7 @@
 
 #include "core/case_tables.hpp"
 #include "core/opencl_hook.hpp"
+#include "core/parallel.hpp"
 #include "support/child_process.hpp"
 
 #include <algorithm>
@@ -457,6 +458,8 @@ TEST_CASE("Hybrid runs the CPU engine and OpenCL on one queue", "[opencl]") {
     Stats stats;
     require_same(cpu, run(v, o, Backend::Hybrid, &stats), v);
     CHECK(stats.backend == Backend::Hybrid);
+    CHECK(stats.threads >= 1);
+    CHECK(stats.workers == std::min(stats.threads, detail::resolve_threads(0)));
     REQUIRE(stats.devices.size() >= 2);
     std::size_t voxels = 0;
     for (const DeviceStats& d : stats.devices) {

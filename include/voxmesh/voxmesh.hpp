@@ -115,6 +115,9 @@ struct Stats {
     // Options::threads resolved (0 becomes the usable CPUs): the CPU slabs, which run on no more
     // threads than the process may use at once; 0 for the OpenCL engine alone.
     unsigned threads = 0;
+    // The most CPU threads that ran those slabs at once: `threads` capped at the CPUs this
+    // process may use (a volume too thin for that many slabs runs on fewer); 0 with no CPU work.
+    unsigned workers = 0;
     PassTimes times;
     std::vector<DeviceStats> devices;
     std::vector<std::string> warnings;  // also sent to Options::log

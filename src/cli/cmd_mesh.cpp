@@ -22,6 +22,14 @@ struct MeshArgs {
     CLI::Option* iso_option = nullptr;
 };
 
+// "2 threads", or "16 threads asked for, run on 2 CPUs" where the process may use fewer.
+std::string threads_text(const Stats& stats) {
+    const auto count = [](unsigned n) { return std::to_string(n) + (n == 1 ? " thread" : " threads"); };
+    if (stats.workers == 0 || stats.workers >= stats.threads) return count(stats.threads);
+    return count(stats.threads) + " asked for, run on " + std::to_string(stats.workers) +
+           (stats.workers == 1 ? " CPU" : " CPUs");
+}
+
 std::string devices_text(const Stats& stats) {
     if (stats.devices.empty()) return "cpu";
     std::string s;
@@ -46,7 +54,7 @@ void print_json(const MeshArgs& a, double iso, const std::string& iso_source, co
       << format_double(stats.times.classify) << ", \"scan\": " << format_double(stats.times.scan)
       << ", \"generate\": " << format_double(stats.times.generate) << ", \"total\": "
       << format_double(stats.times.total) << "}, \"backend\": " << json_string(backend_name(stats.backend))
-      << ", \"threads\": " << stats.threads << ", \"devices\": [";
+      << ", \"threads\": " << stats.threads << ", \"workers\": " << stats.workers << ", \"devices\": [";
     for (std::size_t i = 0; i < stats.devices.size(); ++i) {
         const DeviceStats& d = stats.devices[i];
         o << (i ? ", " : "") << "{\"name\": " << json_string(d.name) << ", \"chunks\": " << d.chunks
@@ -114,7 +122,7 @@ int run_mesh(const MeshArgs& a) {
     o << "; classify " << format_ms(stats.times.classify) << ", scan " << format_ms(stats.times.scan) << ", generate "
       << format_ms(stats.times.generate) << ", total " << format_ms(stats.times.total) << "; backend "
       << backend_name(stats.backend);
-    if (stats.threads) o << " (" << stats.threads << (stats.threads == 1 ? " thread)" : " threads)");
+    if (stats.threads) o << " (" << threads_text(stats) << ")";
     o << "; devices: " << devices_text(stats);
     std::cout << o.str() << "\n";
     return kExitOk;
