@@ -3,15 +3,20 @@
 #include <catch2/catch.hpp>
 
 #include "core/scratch.hpp"
+#include "support/child_process.hpp"
 #include "support/mesh_checks.hpp"
 #include "support/reference_mc.hpp"
 
 #include <voxmesh/voxmesh.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <future>
 #include <memory>
+#include <string>
+#include <thread>
 #include <vector>
 
 using namespace voxmesh::detail;
@@ -183,4 +188,33 @@ TEST_CASE("an extract's scratch is kept for the next one and release_scratch_mem
     }
     voxmesh::release_scratch_memory();
     CHECK(scratch_kept().blocks == 0);
+}
+
+// Another thread inside the pool (taking or giving back a block) when this one forks: the pool's
+// lock is held across fork(), so the fork waits for that thread to let go and the child's pool
+// is whole and unlocked; before, the child's first extract waited for ever on the lock.
+TEST_CASE("a child forked while another thread is inside the scratch pool can mesh", "[core][scratch]") {
+    if (!vmtest::threads_after_fork_supported()) {
+        WARN("skipped under ThreadSanitizer: it dies rather than start threads in a forked child");
+        return;
+    }
+    const vmtest::Dims dims{20, 20, 20};
+    const auto data = vmtest::sample_field<float>(dims, vmtest::sphere({9.5, 9.5, 9.5}, 6));
+    const voxmesh::Mesh expected = voxmesh::extract(vmtest::view_of(data, dims), vmtest::cpu_options(0.0, 2));
+    std::promise<void> locked;
+    std::thread holder([&] {
+        voxmesh::detail::with_scratch_pool_locked_for_testing([&] {
+            locked.set_value();
+            std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the fork waits for this
+        });
+    });
+    locked.get_future().wait();
+    const std::string child = vmtest::output_of_child(
+        [&] {
+            const voxmesh::Mesh mesh = voxmesh::extract(vmtest::view_of(data, dims), vmtest::cpu_options(0.0, 2));
+            return std::string(mesh.indices == expected.indices ? "same mesh" : "another mesh");
+        },
+        30);
+    holder.join();
+    CHECK(child == "same mesh");
 }

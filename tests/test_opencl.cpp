@@ -10,11 +10,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <cstdint>
 #include <limits>
 #include <numeric>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 using namespace voxmesh;
@@ -940,3 +942,51 @@ TEST_CASE("a forked child of a process using OpenCL meshes on the CPU and says w
           "the parent only after it forks");
     CHECK(run(view, Options{}, Backend::OpenCL).indices == on_device.indices);  // the parent's devices still work
 }
+
+#ifdef VOXMESH_HAS_OPENCL
+// Another thread inside the device registry when this one forks (listing devices, or caught
+// discovering them): the child must not wait for that thread's lock, which it will never see
+// let go of, and a half-built device list must not be used.
+TEST_CASE("a child forked while another thread holds the device registry does not hang", "[opencl]") {
+    if (!have_device()) return;
+    if (!vmtest::threads_after_fork_supported()) {
+        WARN("skipped under ThreadSanitizer: it dies rather than start threads in a forked child");
+        return;
+    }
+    Grid g{{20, 22, 18}};
+    const std::vector<float> v = sphere(g);
+    const VolumeView view = view_of(v.data(), ScalarType::F32, g);
+    const Mesh expected = run(view, Options{}, Backend::Cpu);
+    const std::size_t listed = list_devices().size();
+    for (const bool discovering : {false, true}) {
+        INFO((discovering ? "caught discovering" : "caught listing"));
+        std::promise<void> locked, forked;
+        std::thread holder([&] {
+            detail::opencl_with_registry_locked(discovering, [&] {
+                locked.set_value();
+                forked.get_future().wait();
+            });
+        });
+        locked.get_future().wait();
+        const std::string child = vmtest::output_of_child(
+            [&] {
+                if (!list_devices().empty()) return std::string("devices listed in the child");
+                Options o;
+                o.backend = Backend::Auto;
+                if (extract(view, o).indices != expected.indices) return std::string("Auto gave another mesh");
+                o.backend = Backend::OpenCL;
+                try {
+                    (void)extract(view, o);
+                    return std::string("OpenCL ran in the child");
+                } catch (const Error& e) {
+                    return std::string(e.what());
+                }
+            },
+            30);
+        forked.set_value();
+        holder.join();
+        CHECK(child.find("before this process was forked") != std::string::npos);
+        CHECK(list_devices().size() == listed);  // the parent's registry is as it was
+    }
+}
+#endif

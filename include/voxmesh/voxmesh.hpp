@@ -129,6 +129,7 @@ struct Stats {
 // it), and each still returns the canonical mesh.
 // In a child forked after the parent used OpenCL, the parent's devices are not listed (their
 // runtime's threads stayed in the parent): Auto meshes on the CPU, OpenCL throws an Error.
+// The child may fork while other threads are inside calls; its own calls still work.
 Mesh extract(const VolumeView& volume, const Options& options);
 Mesh extract(const VolumeView& volume, const Options& options, Stats& stats);
 

@@ -1218,6 +1218,10 @@ std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t
 
 void opencl_split_devices(bool split) { cl_engine::split_devices(split); }
 
+void opencl_with_registry_locked(bool as_discovery, const std::function<void()>& f) {
+    cl_engine::with_device_registry_locked_for_testing(as_discovery, f);
+}
+
 void opencl_build_program(const std::string& source, const std::string& options, int device) {
     const auto all = cl_engine::devices();
     if (device < 0 || static_cast<std::size_t>(device) >= all.size())

@@ -7,7 +7,10 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <new>
+#include <thread>
 
+#include <pthread.h>
 #include <unistd.h>
 
 namespace voxmesh::detail::cl_engine {
@@ -47,15 +50,77 @@ DeviceInfo describe(const cl::Device& device, const std::string& platform, const
 
 struct Registry {
     std::mutex mutex;
+    std::atomic<std::thread::id> holder{};  // who holds `mutex` (for the fork handlers)
     bool discovered = false;
     pid_t discovered_in = 0;  // the process that discovered them; another one is a forked child
+    bool discovering = false;  // `devices` is being rebuilt (under the lock)
+    bool forked_while_discovering = false;  // in a child: `devices` may be half built, unusable
     bool split = false;
     std::vector<std::shared_ptr<Device>> devices;
 };
 
+Registry& registry();
+
+// The registry's lock with its holder recorded.
+class RegistryLock {
+public:
+    explicit RegistryLock(Registry& r) : r_(r) {
+        r_.mutex.lock();
+        r_.holder.store(std::this_thread::get_id());
+    }
+    ~RegistryLock() {
+        r_.holder.store(std::thread::id{});
+        r_.mutex.unlock();
+    }
+    RegistryLock(const RegistryLock&) = delete;
+    RegistryLock& operator=(const RegistryLock&) = delete;
+
+private:
+    Registry& r_;
+};
+
+// fork(): unlike the thread cache's and the scratch pool's, this lock is not simply held across
+// the fork, because discovery holds it through driver calls that may fork themselves (a GPU
+// driver starting a helper) and would then wait on it for ever. It is taken only when free;
+// where another thread held it, the child makes a fresh one (that thread is not in the child),
+// and a discovery caught half done leaves the child no devices.
+bool g_locked_for_fork = false;  // written by the forking thread in the handlers only
+
+void registry_before_fork() {
+    Registry& r = registry();
+    // try_lock on a mutex this thread holds is undefined: a fork from inside discovery skips it.
+    g_locked_for_fork = r.holder.load() != std::this_thread::get_id() && r.mutex.try_lock();
+}
+
+void registry_after_fork_in_parent() {
+    if (g_locked_for_fork) registry().mutex.unlock();
+}
+
+void registry_after_fork_in_child() {
+    Registry& r = registry();
+    if (g_locked_for_fork) {
+        r.mutex.unlock();
+        return;
+    }
+    if (r.holder.load() == std::this_thread::get_id()) return;  // forked under its own lock
+    // The holder is not in this process. Its lock and, if it was discovering, the device list
+    // are left as they were (leaked, never used) and replaced.
+    new (&r.mutex) std::mutex;
+    r.holder.store(std::thread::id{});
+    if (r.discovering) {
+        new (&r.devices) std::vector<std::shared_ptr<Device>>;
+        r.discovering = false;
+        r.forked_while_discovering = true;
+    }
+}
+
 Registry& registry() {
-    static Registry r;
-    return r;
+    static Registry* r = [] {
+        auto* created = new Registry;  // never destroyed: a forked child may have leaked parts of it
+        pthread_atfork(registry_before_fork, registry_after_fork_in_parent, registry_after_fork_in_child);
+        return created;
+    }();
+    return *r;
 }
 
 // Sub-devices of one compute unit each (at most two), or none when the device cannot split.
@@ -257,25 +322,39 @@ void Device::release_memory() {
 
 // Devices discovered (and perhaps opened) by the process this one was forked from.
 bool forked_since_discovery(const Registry& r) {
-    return r.discovered && r.discovered_in != getpid() && !r.devices.empty();
+    return r.forked_while_discovering || (r.discovered && r.discovered_in != getpid() && !r.devices.empty());
+}
+
+// discover(r) under the lock, marked as under way for the fork handlers.
+void rediscover(Registry& r) {
+    r.discovering = true;
+    discover(r);
+    r.discovering = false;
+    r.discovered = true;
+    r.discovered_in = getpid();
 }
 
 std::vector<std::shared_ptr<Device>> devices() {
     Registry& r = registry();
-    std::lock_guard<std::mutex> lock(r.mutex);
+    const RegistryLock lock(r);
     if (forked_since_discovery(r)) return {};
-    if (!r.discovered) {
-        discover(r);
-        r.discovered = true;
-        r.discovered_in = getpid();
-    }
+    if (!r.discovered) rediscover(r);
     return r.devices;
 }
 
 bool devices_left_in_parent() {
     Registry& r = registry();
-    std::lock_guard<std::mutex> lock(r.mutex);
+    const RegistryLock lock(r);
     return forked_since_discovery(r);
+}
+
+void with_device_registry_locked_for_testing(bool as_discovery, const std::function<void()>& f) {
+    Registry& r = registry();
+    const RegistryLock lock(r);
+    const bool was = r.discovering;
+    r.discovering = as_discovery;
+    f();
+    r.discovering = was;
 }
 
 std::string why_no_devices() {
@@ -287,7 +366,7 @@ std::string why_no_devices() {
 
 void split_devices(bool split) {
     Registry& r = registry();
-    std::lock_guard<std::mutex> lock(r.mutex);
+    const RegistryLock lock(r);
     if (r.discovered && r.split == split) return;
     // PoCL 3.1 releasing a sub-device's context soon after meshing on it crashes later, in a
     // worker thread (POclReleaseEvent), while other devices build and run; finishing its queue
@@ -300,9 +379,7 @@ void split_devices(bool split) {
             retired_sub_devices->push_back(d);
         }
     r.split = split;
-    discover(r);
-    r.discovered = true;
-    r.discovered_in = getpid();
+    rediscover(r);
 }
 
 double event_seconds(const cl::Event& event) {

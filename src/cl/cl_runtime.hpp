@@ -8,6 +8,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -103,6 +104,8 @@ std::string why_no_devices();
 // Test hook: present each partitionable device as sub-devices of 1 compute unit each (at
 // most 2), i.e. several OpenCL devices on a machine that has one.
 void split_devices(bool split);
+// Test hook: runs f holding the registry's lock, marked as discovering if `as_discovery`.
+void with_device_registry_locked_for_testing(bool as_discovery, const std::function<void()>& f);
 
 // Exclusive prefix sum of n uints in `data`, in place, on d's queue (in order), and its
 // total copied to uint `total_at` of `totals` on the device: enqueued only, so that a caller

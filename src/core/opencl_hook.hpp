@@ -5,6 +5,7 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,9 @@ void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s =
 // test can count on each worker meshing something; chunks are otherwise pulled by
 // whichever worker is free.
 void opencl_deal_first_chunks(bool deal);
+// Runs f holding the device registry's lock, as a thread inside devices() would; with
+// `as_discovery`, as one caught discovering (the device list half built).
+void opencl_with_registry_locked(bool as_discovery, const std::function<void()>& f);
 // Builds an OpenCL C program on device `device` the way the engine builds its kernels:
 // a failure throws Error with the device name and the build log.
 void opencl_build_program(const std::string& source, const std::string& options, int device = 0);

@@ -4,7 +4,12 @@
 
 #include <algorithm>
 #include <deque>
+#include <functional>
 #include <mutex>
+
+#if defined(__unix__) || defined(__APPLE__)
+#include <pthread.h>
+#endif
 
 namespace voxmesh::detail {
 namespace {
@@ -62,6 +67,18 @@ public:
         return {kept_.size(), kept_bytes_};
     }
 
+    // Runs f with the pool's lock held (a test standing for a thread caught inside acquire()).
+    void while_locked(const std::function<void()>& f) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        f();
+    }
+
+    // fork(): the lock is held across it, so that the child's copy of the lists is whole and its
+    // lock free. Without that, a fork while another thread was inside acquire() or give_back()
+    // left the child's first extract waiting for ever. Nothing under the lock forks or waits.
+    void lock_for_fork() { mutex_.lock(); }
+    void unlock_after_fork() { mutex_.unlock(); }
+
     void release() {
         std::deque<Block> freed;
         std::lock_guard<std::mutex> lock(mutex_);
@@ -106,9 +123,20 @@ private:
     std::uint64_t requests_ = 0;  // acquire() calls so far
 };
 
+ScratchPool& pool();
+
+ScratchPool* make_pool() {
+    auto* created = new ScratchPool;
+#if defined(__unix__) || defined(__APPLE__)
+    pthread_atfork(+[] { pool().lock_for_fork(); }, +[] { pool().unlock_after_fork(); },
+                   +[] { pool().unlock_after_fork(); });
+#endif
+    return created;
+}
+
 // Never destroyed: blocks may be let go of by static objects' destructors at exit.
 ScratchPool& pool() {
-    static ScratchPool* instance = new ScratchPool;
+    static ScratchPool* instance = make_pool();
     return *instance;
 }
 
@@ -117,5 +145,6 @@ ScratchPool& pool() {
 std::shared_ptr<void> acquire_scratch(std::size_t bytes, Pages pages) { return pool().acquire(bytes, pages); }
 ScratchKept scratch_kept() { return pool().kept(); }
 void release_scratch() { pool().release(); }
+void with_scratch_pool_locked_for_testing(const std::function<void()>& f) { pool().while_locked(f); }
 
 }  // namespace voxmesh::detail

@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <new>
 #include <type_traits>
@@ -42,6 +43,9 @@ ScratchKept scratch_kept();
 
 // Frees every kept block.
 void release_scratch();
+
+// Test hook: runs f while holding the pool's lock, as a thread inside acquire_scratch would.
+void with_scratch_pool_locked_for_testing(const std::function<void()>& f);
 
 // n T's of scratch (acquire_scratch): uninitialised, so whoever fills it writes every field it
 // reads. T must need no constructor beyond its bytes and no destructor.
