@@ -211,6 +211,85 @@ TEST_CASE("cli: voxelize then mesh round trip on a real STL", "[cli]") {
     }
 }
 
+// "-" reads standard input in any format the tool reads, told from its first bytes: it is
+// copied to a temporary file (TMPDIR) that is gone when the command ends, however it ends.
+TEST_CASE("cli: every input format from standard input", "[cli]") {
+    Scratch s;
+    const std::string tmp = s.path("tmp");
+    fs::create_directories(tmp);
+    // `producer | voxmesh args`, the tool's temporaries in `tmp`.
+    const auto piped = [&](const std::string& producer, const std::string& args) {
+        const std::string line = producer + " | TMPDIR=" + quote(tmp) + " " + quote(VOXMESH_CLI_PATH) + " " + args;
+        return vmtest::run_program("sh", "-c " + quote(line), s.dir.string());
+    };
+    const auto cat = [&](const std::string& file) { return "cat " + quote(file); };
+
+    // Volumes: the same mesh as from the file, byte for byte.
+    const std::string head = data_file("headsq.nrrd");
+    REQUIRE(run(s, "mesh " + quote(head) + " -o " + quote(s.path("a.stl")) + " --iso 499.5").code == 0);
+    const Result m = piped(cat(head), "mesh - -o " + quote(s.path("b.stl")) + " --iso 499.5");
+    INFO(m.out << m.err);
+    REQUIRE(m.code == 0);
+    CHECK(m.out.rfind("standard input -> ", 0) == 0);
+    CHECK(iotest::read_file(s.path("a.stl")) == iotest::read_file(s.path("b.stl")));
+    const Result nii = piped(cat(data_file("mri_someones_anatomy.nii.gz")), "info -");
+    CHECK(nii.code == 0);
+    CHECK(nii.out.find("file:      standard input") != std::string::npos);
+    CHECK(nii.out.find("57x67x56") != std::string::npos);
+    const std::string mha = s.write("v.mha", "ObjectType = Image\nNDims = 3\nDimSize = 4 3 2\nElementType = MET_UCHAR\n"
+                                             "ElementDataFile = LOCAL\n" + std::string(24, '\x07'));
+    const Result meta = piped(cat(mha), "info -");
+    CHECK(meta.code == 0);
+    CHECK(meta.out.find("4x3x2") != std::string::npos);
+    CHECK(meta.out.find("range:     7 .. 7") != std::string::npos);
+    const Result raw = piped("head -c 24 /dev/zero", "info - --dims 2 3 4 --type u8");
+    CHECK(raw.code == 0);
+    CHECK(raw.out.find("2x3x4") != std::string::npos);
+
+    // Models: STL (binary), PLY and OBJ as the tool writes them.
+    for (const char* ext : {".ply", ".obj"})
+        REQUIRE(run(s, "mesh " + quote(head) + " -o " + quote(s.path(std::string("a") + ext)) + " --iso 499.5").code == 0);
+    for (const char* name : {"a.stl", "a.ply", "a.obj"}) {
+        INFO(name);
+        const Result info = piped(cat(s.path(name)), "info -");
+        CHECK(info.code == 0);
+        CHECK(info.out.find("triangles: 57698") != std::string::npos);
+    }
+    const std::string torus = data_file("torus.stl");
+    REQUIRE(run(s, "voxelize " + quote(torus) + " -o " + quote(s.path("t1.nrrd")) + " --resolution 24").code == 0);
+    CHECK(piped(cat(torus), "voxelize - -o " + quote(s.path("t2.nrrd")) + " --resolution 24").code == 0);
+    CHECK(iotest::read_file(s.path("t1.nrrd")) == iotest::read_file(s.path("t2.nrrd")));
+    const Result sculpt = piped("printf 'add 10 10 5 3 1\\n'", "sculpt " + quote(torus) + " --resolution 24 --strokes - -o " +
+                                                                  quote(s.path("s.ply")));
+    CHECK(sculpt.code == 0);
+    CHECK(sculpt.out.find("1 dabs re-meshed") != std::string::npos);
+
+    // Refused, naming standard input, never the temporary copy.
+    const struct {
+        std::string producer, args, names;
+    } refused[] = {
+        {"echo hello", "info -", "not a volume (NRRD, NIfTI-1, MetaImage .mha) or a model"},
+        {"echo hello", "mesh - -o " + quote(s.path("x.stl")), "not a volume"},
+        {"printf ''", "voxelize - -o " + quote(s.path("x.nrrd")) + " --resolution 8", "is empty"},
+        {"head -c 2000 " + quote(head), "mesh - -o " + quote(s.path("x.stl")), "ends early"},
+        {"printf 'NRRD0004\\ntype: uint8\\ndimension: 3\\nsizes: 4 4 4\\nencoding: raw\\ndata file: v.raw\\n\\n'",
+         "info -", "separate data file ('v.raw')"},
+        {cat(torus), "sculpt - --resolution 16 --strokes - -o " + quote(s.path("x.ply")), "cannot both be standard input"},
+        {"printf 'bogus 1 2\\n'", "sculpt " + quote(torus) + " --resolution 16 --strokes - -o " + quote(s.path("x.ply")),
+         "standard input:1: unknown op 'bogus'"},
+    };
+    for (const auto& r : refused) {
+        const Result bad = piped(r.producer, r.args);
+        INFO(r.producer << " | voxmesh " << r.args << ": " << bad.err);
+        CHECK(bad.code == 2);
+        CHECK(bad.err.find(r.names) != std::string::npos);
+        CHECK(bad.err.find("standard input") != std::string::npos);
+        CHECK(bad.err.find("voxmesh-stdin") == std::string::npos);
+    }
+    CHECK_FALSE(fs::exists(s.path("x.stl")));
+    CHECK(fs::is_empty(tmp));  // no copy of standard input left behind
+}
+
 TEST_CASE("cli: info reports an axis stored in the negative direction", "[cli]") {
     Scratch s;
     const std::vector<float> samples(4 * 3 * 2, 1.f);

@@ -1,6 +1,7 @@
 // voxmesh info FILE [raw flags]: for a volume, the header first (no samples loaded), then the
 // value range; for a model (.stl, .ply, .obj), its size, bounds, topology, area and volume.
 #include "common.hpp"
+#include "stdin_input.hpp"
 
 #include <algorithm>
 #include <array>
@@ -31,8 +32,9 @@ std::string flipped_axes(const std::array<bool, 3>& flipped) {
 // What voxelize needs to know before it is run on a model: whether it is closed (every edge
 // in two triangles), how large it is, and whether its triangles face outward (a positive
 // enclosed volume).
-int run_model_info(const std::string& path) {
-    const Mesh m = about_file(path, [&] { return read_mesh(path); });
+int run_model_info(const InputPath& input) {
+    const std::string& path = input.path();
+    const Mesh m = input.read([&] { return read_mesh(path); });
     const MeshTopology t = analyze_topology(m);
     // Bounds of the surface, as voxelize grids it: vertices no triangle uses are left out
     // (and counted), except in a point cloud, where every vertex is all there is.
@@ -63,7 +65,7 @@ int run_model_info(const std::string& path) {
                    p[0][2] * (p[1][0] * p[2][1] - p[1][1] * p[2][0])) / 6;
     }
     const std::string ext = lower_extension(path);
-    std::cout << "file:      " << path << "\n"
+    std::cout << "file:      " << input.display() << "\n"
               << "format:    " << ext.substr(1) << " mesh" << (ext == ".stl" ? " (vertices welded by position)" : "")
               << "\n"
               << "triangles: " << m.triangle_count() << "\n"
@@ -88,17 +90,19 @@ int run_model_info(const std::string& path) {
 }
 
 int run_info(const InfoArgs& a) {
-    check_input_file(a.input);
-    const bool is_raw = is_raw_path(a.input);
+    if (a.input != "-") check_input_file(a.input);
+    // "-": standard input, in a format told from its content, or raw samples with the flags.
+    const InputPath input(a.input, a.input == "-" && a.raw.any_given() ? InputKind::Raw : InputKind::VolumeOrModel);
+    const std::string& path = input.path();
+    const bool is_raw = is_raw_path(path);
     if (!is_raw && a.raw.any_given())
-        throw BadInput("'" + a.input + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
-    if (is_model_path(a.input)) return run_model_info(a.input);
-    const RawLayout layout = is_raw ? raw_layout(a.input, a.raw) : RawLayout{};
-    const VolumeInfo info =
-        about_file(a.input, [&] { return is_raw ? read_raw_info(a.input, layout) : read_volume_info(a.input); });
+        throw BadInput("'" + input.display() + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
+    if (is_model_path(path)) return run_model_info(input);
+    const RawLayout layout = is_raw ? raw_layout(input.display(), a.raw) : RawLayout{};
+    const VolumeInfo info = input.read([&] { return is_raw ? read_raw_info(path, layout) : read_volume_info(path); });
 
     const std::size_t samples = info.dims[0] * info.dims[1] * info.dims[2];
-    std::cout << "file:      " << a.input << "\n"
+    std::cout << "file:      " << input.display() << "\n"
               << "format:    " << info.format << " (" << info.encoding << ", "
               << (info.big_endian ? "big" : "little") << " endian)\n"
               << "dims:      " << dims_text(info.dims) << " (" << samples << " samples)\n"
@@ -112,14 +116,14 @@ int run_info(const InfoArgs& a) {
                   << " (stored in the negative direction; reversed on load, origin is the minimum corner)\n";
     if (info.rotation_dropped)
         std::cout << "rotation:  dropped (the direction matrix is not axis-aligned; spacing and origin as above)\n";
-    if (!info.data_file.empty() && info.data_file != a.input) std::cout << "data file: " << info.data_file << "\n";
+    if (!info.data_file.empty() && info.data_file != path) std::cout << "data file: " << info.data_file << "\n";
     if (info.value_scale != 1 || info.value_offset != 0)
         std::cout << "scaling:   physical = stored * " << format_double(info.value_scale) << " + "
                   << format_double(info.value_offset) << " (not applied; values below are stored values)\n";
     std::cout.flush();
 
     // The value range needs the samples (memory-mapped where the reader can).
-    const Volume v = about_file(a.input, [&] { return is_raw ? read_raw(a.input, layout) : read_volume(a.input); });
+    const Volume v = input.read([&] { return is_raw ? read_raw(path, layout) : read_volume(path); });
     const ValueRange r = value_range(v.view());
     std::cout << "range:     " << format_double(r.min) << " .. " << format_double(r.max);
     if (r.nonfinite) std::cout << " (" << r.nonfinite << " NaN or infinite samples)";
@@ -134,7 +138,8 @@ Command add_info(CLI::App& app) {
     CLI::App* sub = app.add_subcommand(
         "info", "Print a volume file's dims, type, spacing, origin, value range, size; or a model's size and topology");
     sub->add_option("FILE", a->input,
-                    "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, or .raw with --dims --type; model: .stl, .ply, .obj")
+                    "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, or .raw with --dims --type; model: .stl, .ply, .obj; "
+                    "-: standard input (the format told from its content, or raw with --dims --type)")
         ->required();
     add_raw_flags(sub, a->raw);
     return {sub, [a] { return run_info(*a); }};

@@ -1,6 +1,7 @@
 // voxmesh mesh INPUT -o OUTPUT [--iso V] [--backend ...] [--threads N] [--device I]
 //   [--no-normals] [--inside-below] [--largest N] [--json] [raw flags]
 #include "common.hpp"
+#include "stdin_input.hpp"
 
 #include <iostream>
 #include <memory>
@@ -100,7 +101,7 @@ int run_mesh(const MeshArgs& a) {
     if (a.largest > 0) mesh = keep_largest_components(mesh, a.largest);
     const MeshTopology topo = analyze_topology(mesh);
     if (mesh.triangle_count() == 0)
-        std::cerr << "voxmesh: warning: no surface at iso " << format_double(iso) << " in '" << a.input
+        std::cerr << "voxmesh: warning: no surface at iso " << format_double(iso) << " in '" << input_name(a.input)
                   << "'; writing an empty mesh\n";
     about_file(a.output, [&] { write_mesh(a.output, mesh); });
 
@@ -109,7 +110,7 @@ int run_mesh(const MeshArgs& a) {
         return kExitOk;
     }
     std::ostringstream o;
-    o << a.input << " -> " << a.output << ": " << mesh.vertex_count() << " vertices, " << mesh.triangle_count()
+    o << input_name(a.input) << " -> " << a.output << ": " << mesh.vertex_count() << " vertices, " << mesh.triangle_count()
       << " triangles in " << pieces_text(topo.components);
     if (a.largest > 0)
         o << " (the " << (a.largest == 1 ? "largest" : std::to_string(a.largest) + " largest") << "; "
@@ -133,7 +134,7 @@ int run_mesh(const MeshArgs& a) {
 Command add_mesh(CLI::App& app) {
     auto a = std::make_shared<MeshArgs>();
     CLI::App* sub = app.add_subcommand("mesh", "Extract the iso-surface of a volume file into a mesh file");
-    sub->add_option("INPUT", a->input, "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, or .raw with --dims --type (- for raw samples on stdin)")
+    sub->add_option("INPUT", a->input, "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, or .raw with --dims --type (-: standard input, a format told from its content, or raw samples with --dims --type)")
         ->required();
     sub->add_option("-o,--output", a->output, "mesh file: .stl (binary), .ply (binary) or .obj")->required();
     a->iso_option = sub->add_option("--iso", a->iso, "iso value (default: midpoint of the value range)");

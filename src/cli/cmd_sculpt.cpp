@@ -3,6 +3,7 @@
 // The paper's loop: voxelize a model, apply brush dabs, re-mesh only what each dab touched.
 // Without strokes, the paper's pipeline in one step: the model voxelized and meshed again.
 #include "common.hpp"
+#include "stdin_input.hpp"
 
 #include <voxmesh/sculpt.hpp>
 
@@ -29,11 +30,17 @@ struct SculptArgs {
 
 int run_sculpt(const SculptArgs& a) {
     check_output_path(a.output, {".stl", ".ply", ".obj"});
-    check_input_file(a.input);
-    if (!a.strokes.empty()) check_input_file(a.strokes);
-    check_model_extension(a.input, "sculpt");
+    if (a.input == "-" && a.strokes == "-") throw BadInput("the model and --strokes cannot both be standard input");
+    if (a.input != "-") {
+        check_input_file(a.input);
+        check_model_extension(a.input, "sculpt");
+    }
+    if (!a.strokes.empty() && a.strokes != "-") check_input_file(a.strokes);
     std::vector<ScriptDab> dabs;
-    if (!a.strokes.empty()) dabs = about_file(a.strokes, [&] { return read_stroke_script(a.strokes); });
+    if (!a.strokes.empty()) {
+        const InputPath strokes(a.strokes, InputKind::Text);
+        dabs = strokes.read([&] { return read_stroke_script(strokes.path()); });
+    }
 
     SculptOptions options;
     options.threads = a.threads;
@@ -41,8 +48,8 @@ int run_sculpt(const SculptArgs& a) {
     options.device = a.device;
     options.log = [](const std::string& message) { std::cerr << "voxmesh: warning: " << message << "\n"; };
     const auto t0 = std::chrono::steady_clock::now();
-    const Mesh model = about_file(a.input, [&] { return read_mesh(a.input); });
-    Sculpt sculpt = about_file(a.input, [&] { return Sculpt::from_mesh(model, a.resolution, options); });
+    const Mesh model = load_model(a.input, "sculpt");
+    Sculpt sculpt = about_file(input_name(a.input), [&] { return Sculpt::from_mesh(model, a.resolution, options); });
     const UpdateResult first = sculpt.update();
     const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -61,7 +68,7 @@ int run_sculpt(const SculptArgs& a) {
     const LatencySummary s = summarize_latencies(update_ms);
     const MeshTopology topo = analyze_topology(mesh);
     const auto dims = sculpt.view().dims;
-    std::printf("%s -> %s: %s volume, voxelized and meshed in %s (%zu blocks); ", a.input.c_str(), a.output.c_str(),
+    std::printf("%s -> %s: %s volume, voxelized and meshed in %s (%zu blocks); ", input_name(a.input).c_str(), a.output.c_str(),
                 dims_text(dims).c_str(), format_ms(load_s).c_str(), first.remeshed);
     if (dabs.empty())
         std::printf("no strokes; ");
@@ -80,10 +87,10 @@ Command add_sculpt(CLI::App& app) {
     auto a = std::make_shared<SculptArgs>();
     CLI::App* sub = app.add_subcommand(
         "sculpt", "Voxelize a closed model (STL, PLY, OBJ), apply a stroke script if given (re-meshing only what each dab changed), write the mesh");
-    sub->add_option("MODEL", a->input, "closed triangle mesh (.stl, .ply or .obj)")->required();
+    sub->add_option("MODEL", a->input, "closed triangle mesh (.stl, .ply or .obj; -: standard input)")->required();
     sub->add_option("--strokes", a->strokes,
                     "stroke script: one dab per line 'op x y z radius strength', op add|subtract|smooth|set, "
-                    "'#' comments; coordinates in samples, or model units after a line 'units world'. Without it, "
+                    "'#' comments; coordinates in samples, or model units after a line 'units world' (-: standard input). Without it, "
                     "the model is voxelized and meshed again as it is");
     sub->add_option("-o,--output", a->output, "mesh file to write (.stl, .ply or .obj)")->required();
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (8..2048)")

@@ -1,5 +1,6 @@
 // voxmesh voxelize MODEL.stl|.ply|.obj -o VOLUME.nrrd --resolution N [--padding P] [--field occupancy|distance]
 #include "common.hpp"
+#include "stdin_input.hpp"
 
 #include <voxmesh/voxelize.hpp>
 
@@ -20,21 +21,19 @@ struct VoxelizeArgs {
 
 int run_voxelize(const VoxelizeArgs& a) {
     check_output_path(a.output, {".nrrd"});
-    check_input_file(a.input);
-    check_model_extension(a.input, "voxelize");
-    const Mesh model = about_file(a.input, [&] { return read_mesh(a.input); });
+    const Mesh model = load_model(a.input, "voxelize");
 
     VoxelizeOptions options;
     options.resolution = a.resolution;
     options.padding = a.padding;
     options.field = a.field == "occupancy" ? VoxelField::Occupancy : VoxelField::Distance;
     const auto t0 = std::chrono::steady_clock::now();
-    const Volume volume = about_file(a.input, [&] { return voxelize(model, options); });
+    const Volume volume = about_file(input_name(a.input), [&] { return voxelize(model, options); });
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     about_file(a.output, [&] { write_nrrd(a.output, volume.view()); });
 
     const bool distance = options.field == VoxelField::Distance;
-    std::cout << a.input << " -> " << a.output << ": " << model.triangle_count() << " triangles, "
+    std::cout << input_name(a.input) << " -> " << a.output << ": " << model.triangle_count() << " triangles, "
               << dims_text(volume.dims) << " " << scalar_name(volume.type) << " "
               << (distance ? "signed distance (positive inside)" : "occupancy (255 inside)") << ", spacing "
               << format_double(volume.spacing[0]) << ", origin " << triple_text(volume.origin) << ", "
@@ -48,7 +47,7 @@ int run_voxelize(const VoxelizeArgs& a) {
 Command add_voxelize(CLI::App& app) {
     auto a = std::make_shared<VoxelizeArgs>();
     CLI::App* sub = app.add_subcommand("voxelize", "Turn a closed model (STL, PLY, OBJ) into a volume (surface and interior)");
-    sub->add_option("MODEL", a->input, "closed triangle mesh (.stl binary or ASCII, .ply, .obj)")->required();
+    sub->add_option("MODEL", a->input, "closed triangle mesh (.stl binary or ASCII, .ply, .obj; -: standard input)")->required();
     sub->add_option("-o,--output", a->output, "volume file to write (.nrrd)")->required();
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (2..4096)")
         ->required()

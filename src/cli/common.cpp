@@ -1,4 +1,5 @@
 #include "common.hpp"
+#include "stdin_input.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -132,32 +133,42 @@ RawLayout raw_layout(const std::string& path, const RawFlags& raw) {
     return layout;
 }
 
-Volume load_volume(const std::string& path, const RawFlags& raw) {
-    const bool from_stdin = path == "-";  // raw samples piped in: the flags say what they are
-    if (!from_stdin) check_input_file(path);
-    const bool is_raw = from_stdin || is_raw_path(path);
-    if (!is_raw && raw.any_given())
-        throw BadInput("'" + path + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
-    VolumeInfo info;
-    const std::string name = from_stdin ? "standard input" : path;
-    Volume v = about_file(name, [&] {
-        if (from_stdin) return read_raw(std::cin, name, raw_layout(name, raw));
-        return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path, info);
-    });
-    // A Volume has no orientation: say so when the file's direction matrix is thrown away,
-    // since the mesh then lies in index-aligned axes, not where other tools put it.
-    if (info.rotation_dropped)
-        std::cerr << "voxmesh: warning: '" << path
-                  << "': the direction matrix is not axis-aligned; its rotation is dropped and the mesh is in the "
-                     "volume's index axes (spacing and origin as written)\n";
+namespace {
+
+// `v`, or BadInput naming `name` when it holds NaN or infinite samples.
+Volume finite_samples(Volume v, const std::string& name) {
     if (v.type == ScalarType::F32 || v.type == ScalarType::F64) {
         const ValueRange r = value_range(v.view());
         if (r.nonfinite)
-            throw BadInput("'" + path + "': " + std::to_string(r.nonfinite) + " samples are NaN or infinite (first at " +
+            throw BadInput("'" + name + "': " + std::to_string(r.nonfinite) + " samples are NaN or infinite (first at " +
                            std::to_string(r.first_nonfinite[0]) + ", " + std::to_string(r.first_nonfinite[1]) + ", " +
                            std::to_string(r.first_nonfinite[2]) + ")");
     }
     return v;
+}
+
+}  // namespace
+
+Volume load_volume(const std::string& arg, const RawFlags& raw) {
+    if (arg == "-" && raw.any_given()) {  // raw samples piped in: the flags say what they are
+        return finite_samples(about_file(kStdinName, [&] { return read_raw(std::cin, kStdinName, raw_layout(kStdinName, raw)); }),
+                              kStdinName);
+    }
+    if (arg != "-") check_input_file(arg);
+    const InputPath input(arg, InputKind::Volume);  // "-": a file format, told from its content
+    const std::string& path = input.path();
+    const bool is_raw = is_raw_path(path);
+    if (!is_raw && raw.any_given())
+        throw BadInput("'" + input.display() + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
+    VolumeInfo info;
+    Volume v = input.read([&] { return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path, info); });
+    // A Volume has no orientation: say so when the file's direction matrix is thrown away,
+    // since the mesh then lies in index-aligned axes, not where other tools put it.
+    if (info.rotation_dropped)
+        std::cerr << "voxmesh: warning: '" << input.display()
+                  << "': the direction matrix is not axis-aligned; its rotation is dropped and the mesh is in the "
+                     "volume's index axes (spacing and origin as written)\n";
+    return finite_samples(std::move(v), input.display());
 }
 
 ValueRange value_range(const VolumeView& v) {

@@ -2,6 +2,7 @@
 // Exit codes: 0 success, 2 bad input or usage (message on stderr), 1 internal failure.
 #include "common.hpp"
 #include "core/exit_signals.hpp"
+#include "stdin_input.hpp"
 
 #include <csignal>
 #include <exception>
@@ -11,9 +12,13 @@
 
 int main(int argc, char** argv) {
     using namespace voxmesh::cli;
-    // Interrupted while writing an output: nothing half-written is left behind.
+    // Interrupted while writing an output: nothing half-written is left behind, nor the copy
+    // of standard input.
     for (const int sig : {SIGINT, SIGTERM, SIGHUP})
-        voxmesh::detail::handle_signal_unless_ignored(sig, voxmesh::detail::remove_partial_outputs_and_die);
+        voxmesh::detail::handle_signal_unless_ignored(sig, [](int s) {
+            remove_stdin_spool();
+            voxmesh::detail::remove_partial_outputs_and_die(s);
+        });
     pin_pocl_workers();
     CLI::App app{"voxmesh " VOXMESH_VERSION_STRING
                  ": marching cubes on every compute device (CPU threads, OpenCL), STL voxelization"};

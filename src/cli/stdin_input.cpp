@@ -1,0 +1,243 @@
+#include "stdin_input.hpp"
+
+#include "io/readers.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+namespace voxmesh::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::size_t kHeadBytes = 64 * 1024;  // enough for any header the sniffing reads
+
+bool starts_with(const std::string& s, const std::string& prefix) { return s.compare(0, prefix.size(), prefix) == 0; }
+
+// The first word of the first line that is not blank and not a '#' comment ("" if none).
+std::string first_word(const std::string& head, bool hash_comments) {
+    std::istringstream lines(head);
+    std::string line;
+    while (std::getline(lines, line)) {
+        const std::size_t at = line.find_first_not_of(" \t\r");
+        if (at == std::string::npos || (hash_comments && line[at] == '#')) continue;
+        const std::size_t end = line.find_first_of(" \t\r=", at);
+        return line.substr(at, end == std::string::npos ? std::string::npos : end - at);
+    }
+    return {};
+}
+
+bool is_metaimage_key(const std::string& word) {
+    static const char* const keys[] = {"ObjectType",     "ObjectSubType",   "NDims",           "DimSize",
+                                       "ElementType",    "ElementSpacing",  "ElementDataFile", "BinaryData",
+                                       "BinaryDataByteOrderMSB", "ElementByteOrderMSB", "CompressedData",
+                                       "TransformMatrix", "Offset",         "Position",        "Comment",
+                                       "HeaderSize",     "AnatomicalOrientation", "CenterOfRotation"};
+    return std::any_of(std::begin(keys), std::end(keys), [&](const char* k) { return word == k; });
+}
+
+bool is_obj_keyword(const std::string& word) {
+    static const char* const keys[] = {"v", "vt", "vn", "vp", "f", "l", "p", "o", "g", "s", "mtllib", "usemtl"};
+    return std::any_of(std::begin(keys), std::end(keys), [&](const char* k) { return word == k; });
+}
+
+// A binary STL: 80 header bytes, a little-endian triangle count, 50 bytes per triangle.
+bool is_binary_stl(const std::string& head, std::size_t size) {
+    if (head.size() < 84 || size < 84) return false;
+    std::uint32_t count = 0;
+    for (int i = 3; i >= 0; --i) count = count << 8 | static_cast<unsigned char>(head[80 + static_cast<std::size_t>(i)]);
+    return (size - 84) % 50 == 0 && (size - 84) / 50 == count;
+}
+
+std::string kind_text(InputKind kind) {
+    switch (kind) {
+        case InputKind::Volume: return "a volume (NRRD, NIfTI-1, MetaImage .mha; raw samples with --dims and --type)";
+        case InputKind::Model: return "a model (STL, PLY, OBJ)";
+        case InputKind::VolumeOrModel: return "a volume (NRRD, NIfTI-1, MetaImage .mha) or a model (STL, PLY, OBJ)";
+        case InputKind::Raw: return "raw samples";
+        case InputKind::Text: return "text";
+    }
+    return "";
+}
+
+// Copies all of file descriptor `in` into `path`; false with errno set on failure.
+bool copy_all(int in, const std::string& path, std::size_t& copied) {
+    const int out = ::open(path.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);  // made by make_temp_file
+    if (out < 0) return false;
+    std::vector<char> buffer(1 << 20);
+    copied = 0;
+    for (;;) {
+        const ssize_t got = ::read(in, buffer.data(), buffer.size());
+        if (got < 0 && errno == EINTR) continue;
+        if (got < 0) break;
+        if (got == 0) return ::close(out) == 0;
+        for (ssize_t done = 0; done < got;) {
+            const ssize_t put = ::write(out, buffer.data() + done, static_cast<std::size_t>(got - done));
+            if (put < 0 && errno == EINTR) continue;
+            if (put < 0) {
+                const int err = errno;
+                ::close(out);
+                errno = err;
+                return false;
+            }
+            done += put;
+        }
+        copied += static_cast<std::size_t>(got);
+    }
+    const int err = errno;
+    ::close(out);
+    errno = err;
+    return false;
+}
+
+std::string read_head(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::string head(kHeadBytes, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(in.gcount()));
+    return head;
+}
+
+}  // namespace
+
+std::string sniff_format(const std::string& head, std::size_t size, InputKind kind) {
+    if (kind == InputKind::Raw) return ".raw";
+    if (kind == InputKind::Text) return ".txt";
+    const bool volume = kind != InputKind::Model, model = kind != InputKind::Volume;
+    if (volume) {
+        if (starts_with(head, "NRRD000")) return ".nrrd";
+        if (head.size() >= 2 && static_cast<unsigned char>(head[0]) == 0x1f && static_cast<unsigned char>(head[1]) == 0x8b)
+            return ".nii.gz";
+        if (head.size() >= 348 && head.compare(344, 4, std::string("n+1\0", 4)) == 0) return ".nii";
+    }
+    if (model) {
+        if (starts_with(head, "ply\n") || starts_with(head, "ply\r\n")) return ".ply";
+        if (is_binary_stl(head, size)) return ".stl";
+        if (first_word(head, false) == "solid") return ".stl";
+    }
+    if (volume && is_metaimage_key(first_word(head, false))) return ".mha";
+    if (model && is_obj_keyword(first_word(head, true))) return ".obj";
+    return {};
+}
+
+namespace {
+
+// The spooled files, for remove_stdin_spool() to find from a signal handler: fixed buffers and
+// lock-free flags, as remove_partial_outputs() keeps the outputs' temporaries.
+struct SpoolSlot {
+    std::atomic<bool> ready{false};
+    char path[4096];
+};
+SpoolSlot g_spool_slots[2];  // the copy as it is written, and under its format's name
+static_assert(std::atomic<bool>::is_always_lock_free);
+
+void list_spool(int slot, const std::string& path) {
+    if (path.size() >= sizeof(SpoolSlot::path)) return;
+    g_spool_slots[slot].ready.store(false, std::memory_order_release);
+    std::memcpy(g_spool_slots[slot].path, path.c_str(), path.size() + 1);
+    g_spool_slots[slot].ready.store(true, std::memory_order_release);
+}
+
+void unlist_spool(int slot) { g_spool_slots[slot].ready.store(false, std::memory_order_release); }
+
+// A new empty file from `pattern` (XXXXXX before `suffix`), its path; BadInput on failure.
+std::string make_temp_file(const std::string& suffix) {
+    std::string pattern = (fs::temp_directory_path() / "voxmesh-stdin-XXXXXX").string() + suffix;
+    const int fd = ::mkostemps(pattern.data(), static_cast<int>(suffix.size()), O_CLOEXEC);
+    if (fd < 0)
+        throw BadInput(std::string("cannot make a temporary file for ") + kStdinName + " in '" +
+                       fs::temp_directory_path().string() + "': " + std::strerror(errno));
+    ::close(fd);
+    return pattern;
+}
+
+}  // namespace
+
+void remove_stdin_spool() noexcept {
+    for (SpoolSlot& slot : g_spool_slots)
+        if (slot.ready.load(std::memory_order_acquire)) ::unlink(slot.path);
+}
+
+InputPath::InputPath(const std::string& arg, InputKind kind) : path_(arg), display_(arg) {
+    if (arg != "-") return;
+    display_ = kStdinName;
+    if (::isatty(STDIN_FILENO))
+        throw BadInput(std::string(kStdinName) + " is a terminal: pipe or redirect " + kind_text(kind) + " into it");
+    // Copied first, then named: the format is told from the content.
+    const std::string spooled = make_temp_file("");
+    list_spool(0, spooled);
+    path_ = spooled;
+    spooled_ = true;  // from here the destructor's to remove, so the constructor cleans up on throw
+    try {
+        std::size_t size = 0;
+        if (!copy_all(STDIN_FILENO, spooled, size))
+            throw BadInput(std::string("cannot copy ") + kStdinName + " to '" + spooled + "': " + std::strerror(errno));
+        if (size == 0) throw BadInput(std::string("'") + kStdinName + "': is empty");
+        const std::string ext = sniff_format(read_head(spooled), size, kind);
+        if (ext.empty())
+            throw BadInput(std::string("'") + kStdinName + "': not " + kind_text(kind) + " by its first bytes");
+        const std::string named = make_temp_file(ext);
+        list_spool(1, named);
+        if (::rename(spooled.c_str(), named.c_str()) != 0) {
+            const int err = errno;
+            ::unlink(named.c_str());
+            unlist_spool(1);
+            throw BadInput(std::string("cannot rename the copy of ") + kStdinName + ": " + std::strerror(err));
+        }
+        unlist_spool(0);
+        path_ = named;
+        // A header whose samples are in a file of their own names it beside itself; beside the
+        // spooled copy there is nothing.
+        if (ext == ".nrrd" || ext == ".mha") {
+            const std::string data = read([&] {
+                return (ext == ".nrrd" ? io::read_nrrd_header(path_) : io::read_metaimage_header(path_)).layout.data_path;
+            });
+            if (data != path_)
+                throw BadInput(std::string("'") + kStdinName + "': the header names a separate data file ('" +
+                               fs::path(data).filename().string() +
+                               "'), which cannot be found from standard input; give the header's path instead");
+        }
+    } catch (...) {
+        remove_spool();
+        throw;
+    }
+}
+
+InputPath::~InputPath() { remove_spool(); }
+
+void InputPath::remove_spool() noexcept {
+    if (!spooled_) return;
+    ::unlink(path_.c_str());  // a mapped Volume keeps its pages after the file is gone
+    unlist_spool(0);
+    unlist_spool(1);
+    spooled_ = false;
+}
+
+std::string InputPath::shown(std::string text) const {
+    if (!spooled_) return text;
+    for (std::size_t at = text.find(path_); at != std::string::npos; at = text.find(path_, at + display_.size()))
+        text.replace(at, path_.size(), display_);
+    return text;
+}
+
+Mesh load_model(const std::string& arg, const std::string& command) {
+    if (arg != "-") {
+        check_input_file(arg);
+        check_model_extension(arg, command);
+    }
+    const InputPath input(arg, InputKind::Model);
+    return input.read([&] { return read_mesh(input.path()); });
+}
+
+}  // namespace voxmesh::cli

@@ -1,0 +1,66 @@
+// An input named "-": standard input copied to a temporary file (in TMPDIR), named with the
+// format its first bytes show, so that the readers (which map files and seek in them) read it as any
+// file. Messages call it "standard input", not the temporary file.
+#pragma once
+
+#include "common.hpp"
+
+#include <string>
+
+namespace voxmesh::cli {
+
+inline constexpr const char* kStdinName = "standard input";
+
+// How messages name an input argument.
+inline std::string input_name(const std::string& arg) { return arg == "-" ? kStdinName : arg; }
+
+// What an input may be: the format is told from the content, among these (Raw: headerless
+// samples, described by flags, and Text, a stroke script: taken as they are).
+enum class InputKind { Volume, Model, VolumeOrModel, Raw, Text };
+
+// The extension of the format the first bytes (`head`) of a file of `size` bytes show, or ""
+// when none of `kind`: ".nrrd", ".nii.gz", ".nii", ".mha" (volumes), ".ply", ".stl", ".obj"
+// (models).
+std::string sniff_format(const std::string& head, std::size_t size, InputKind kind);
+
+class InputPath {
+public:
+    // `arg` as given; "-" reads all of standard input now (BadInput when it is a terminal,
+    // empty, not of `kind`, or cannot be spooled).
+    InputPath(const std::string& arg, InputKind kind);
+    ~InputPath();
+    InputPath(const InputPath&) = delete;
+    InputPath& operator=(const InputPath&) = delete;
+
+    const std::string& path() const { return path_; }        // for the readers
+    const std::string& display() const { return display_; }  // for messages
+    // `text` with the spooled file's path (if any) named as standard input.
+    std::string shown(std::string text) const;
+
+    // about_file for this input: an Error from f becomes BadInput naming display().
+    template <class F>
+    auto read(F&& f) const -> decltype(f()) {
+        try {
+            return f();
+        } catch (const voxmesh::Error& e) {
+            const std::string what = shown(e.what());
+            throw BadInput(what.find(display_) != std::string::npos ? what : "'" + display_ + "': " + what);
+        }
+    }
+
+private:
+    void remove_spool() noexcept;
+
+    bool spooled_ = false;  // path_ is the copy of standard input, removed with this object
+    std::string path_, display_;
+};
+
+// Removes the copy of standard input being made or read, for the CLI's signal handler.
+// Async-signal-safe.
+void remove_stdin_spool() noexcept;
+
+// The model `arg` names (a .stl, .ply or .obj file, or "-"), read for `command`; BadInput
+// naming it when it cannot be.
+Mesh load_model(const std::string& arg, const std::string& command);
+
+}  // namespace voxmesh::cli
