@@ -290,6 +290,50 @@ TEST_CASE("cli: every input format from standard input", "[cli]") {
     CHECK(fs::is_empty(tmp));  // no copy of standard input left behind
 }
 
+// "-o -" writes the output to standard output (the report goes to standard error): the same
+// bytes as the file, so commands chain.
+TEST_CASE("cli: outputs to standard output", "[cli]") {
+    Scratch s;
+    const std::string head = quote(data_file("headsq.nrrd")), torus = quote(data_file("torus.stl"));
+    for (const char* format : {"stl", "ply", "obj"}) {
+        INFO(format);
+        const std::string file = s.path(std::string("f.") + format);
+        REQUIRE(run(s, "mesh " + head + " -o " + quote(file) + " --iso 499.5").code == 0);
+        const Result piped = run(s, "mesh " + head + " -o - --format " + format + " --iso 499.5");
+        INFO(piped.err);
+        REQUIRE(piped.code == 0);
+        CHECK(piped.err.find(" -> standard output: 29057 vertices") != std::string::npos);
+        CHECK(piped.out == iotest::read_file(file));
+    }
+    REQUIRE(run(s, "voxelize " + torus + " -o " + quote(s.path("t.nrrd")) + " --resolution 24").code == 0);
+    const Result volume = run(s, "voxelize " + torus + " -o - --resolution 24");
+    CHECK(volume.code == 0);
+    CHECK(volume.out == iotest::read_file(s.path("t.nrrd")));
+    REQUIRE(run(s, "sculpt " + torus + " --resolution 24 -o " + quote(s.path("sc.ply"))).code == 0);
+    const Result sculpted = run(s, "sculpt " + torus + " --resolution 24 -o - --format ply");
+    CHECK(sculpted.code == 0);
+    CHECK(sculpted.out == iotest::read_file(s.path("sc.ply")));
+
+    // Chained: voxelize | mesh | info.
+    const std::string cli = quote(VOXMESH_CLI_PATH);
+    const Result chain = vmtest::run_program(
+        "sh", "-c " + quote(cli + " voxelize " + torus + " -o - --resolution 24 | " + cli + " mesh - -o - --format stl | " +
+                            cli + " info -"),
+        s.dir.string());
+    INFO(chain.err);
+    CHECK(chain.code == 0);
+    CHECK(chain.out.find("closed 2-manifold, euler 0") != std::string::npos);
+
+    // --format only with -o -, and -o - only with it.
+    const Result no_format = run(s, "mesh " + head + " -o -");
+    CHECK(no_format.code == 2);
+    CHECK(no_format.err.find("needs --format") != std::string::npos);
+    const Result stray = run(s, "mesh " + head + " -o " + quote(s.path("x.stl")) + " --format ply");
+    CHECK(stray.code == 2);
+    CHECK(stray.err.find("--format applies only to -o -") != std::string::npos);
+    CHECK_FALSE(fs::exists(s.path("x.stl")));
+}
+
 TEST_CASE("cli: info reports an axis stored in the negative direction", "[cli]") {
     Scratch s;
     const std::vector<float> samples(4 * 3 * 2, 1.f);

@@ -12,7 +12,7 @@ namespace voxmesh::cli {
 namespace {
 
 struct MeshArgs {
-    std::string input, output;
+    std::string input, output, format;
     double iso = 0;
     std::string backend = "auto";
     unsigned threads = 0;
@@ -66,11 +66,11 @@ void print_json(const MeshArgs& a, double iso, const std::string& iso_source, co
     o << "], \"warnings\": [";
     for (std::size_t i = 0; i < stats.warnings.size(); ++i) o << (i ? ", " : "") << json_string(stats.warnings[i]);
     o << "]}";
-    std::cout << o.str() << "\n";
+    report_stream(a.output) << o.str() << "\n";
 }
 
 int run_mesh(const MeshArgs& a) {
-    check_output_path(a.output, {".stl", ".ply", ".obj"});
+    check_mesh_output(a.output, a.format);
     if (is_model_path(a.input)) {  // the paper's pipeline in two steps: say which
         check_input_file(a.input);
         throw BadInput("'" + a.input + "': a model, not a volume: voxelize it first (voxmesh voxelize " + a.input +
@@ -103,14 +103,14 @@ int run_mesh(const MeshArgs& a) {
     if (mesh.triangle_count() == 0)
         std::cerr << "voxmesh: warning: no surface at iso " << format_double(iso) << " in '" << input_name(a.input)
                   << "'; writing an empty mesh\n";
-    about_file(a.output, [&] { write_mesh(a.output, mesh); });
+    write_mesh_output(a.output, a.format, mesh);
 
     if (a.json) {
         print_json(a, iso, iso_source, mesh, topo, extracted_triangles, stats);
         return kExitOk;
     }
     std::ostringstream o;
-    o << input_name(a.input) << " -> " << a.output << ": " << mesh.vertex_count() << " vertices, " << mesh.triangle_count()
+    o << input_name(a.input) << " -> " << output_name(a.output) << ": " << mesh.vertex_count() << " vertices, " << mesh.triangle_count()
       << " triangles in " << pieces_text(topo.components);
     if (a.largest > 0)
         o << " (the " << (a.largest == 1 ? "largest" : std::to_string(a.largest) + " largest") << "; "
@@ -125,7 +125,7 @@ int run_mesh(const MeshArgs& a) {
       << backend_name(stats.backend);
     if (stats.threads) o << " (" << threads_text(stats) << ")";
     o << "; devices: " << devices_text(stats);
-    std::cout << o.str() << "\n";
+    report_stream(a.output) << o.str() << "\n";
     return kExitOk;
 }
 
@@ -136,7 +136,9 @@ Command add_mesh(CLI::App& app) {
     CLI::App* sub = app.add_subcommand("mesh", "Extract the iso-surface of a volume file into a mesh file");
     sub->add_option("INPUT", a->input, "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, or .raw with --dims --type (-: standard input, a format told from its content, or raw samples with --dims --type)")
         ->required();
-    sub->add_option("-o,--output", a->output, "mesh file: .stl (binary), .ply (binary) or .obj")->required();
+    sub->add_option("-o,--output", a->output, "mesh file: .stl (binary), .ply (binary) or .obj; -: standard output (with --format)")
+        ->required();
+    add_mesh_format_option(sub, a->format);
     a->iso_option = sub->add_option("--iso", a->iso, "iso value (default: midpoint of the value range)");
     sub->add_option("--backend", a->backend, "auto, cpu, opencl or hybrid (default auto)")
         ->check(CLI::IsMember({"auto", "cpu", "opencl", "hybrid"}));

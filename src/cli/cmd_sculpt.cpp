@@ -19,7 +19,7 @@ namespace voxmesh::cli {
 namespace {
 
 struct SculptArgs {
-    std::string input, strokes, output;
+    std::string input, strokes, output, format;
     std::size_t resolution = 0;
     unsigned threads = 0;
     std::string backend = "cpu";
@@ -29,7 +29,8 @@ struct SculptArgs {
 };
 
 int run_sculpt(const SculptArgs& a) {
-    check_output_path(a.output, {".stl", ".ply", ".obj"});
+    check_mesh_output(a.output, a.format);
+    std::FILE* const report = report_file(a.output);
     if (a.input == "-" && a.strokes == "-") throw BadInput("the model and --strokes cannot both be standard input");
     if (a.input != "-") {
         check_input_file(a.input);
@@ -58,25 +59,26 @@ int run_sculpt(const SculptArgs& a) {
     run_strokes(sculpt, dabs, [&](const StrokeFrame& f) {
         update_ms.push_back(1e3 * f.update_seconds);
         if (a.frames)
-            std::printf("frame %zu: edit %.2f ms, update %.2f ms, %zu blocks re-meshed\n", f.frame, 1e3 * f.edit_seconds,
+            std::fprintf(report, "frame %zu: edit %.2f ms, update %.2f ms, %zu blocks re-meshed\n", f.frame, 1e3 * f.edit_seconds,
                         1e3 * f.update_seconds, f.blocks_remeshed);
     });
     Mesh mesh = sculpt.mesh();
     if (a.largest > 0) mesh = keep_largest_components(mesh, a.largest);  // e.g. without the crumbs a brush left
-    about_file(a.output, [&] { write_mesh(a.output, mesh); });
+    write_mesh_output(a.output, a.format, mesh);
 
     const LatencySummary s = summarize_latencies(update_ms);
     const MeshTopology topo = analyze_topology(mesh);
     const auto dims = sculpt.view().dims;
-    std::printf("%s -> %s: %s volume, voxelized and meshed in %s (%zu blocks); ", input_name(a.input).c_str(), a.output.c_str(),
+    std::fprintf(report, "%s -> %s: %s volume, voxelized and meshed in %s (%zu blocks); ", input_name(a.input).c_str(),
+                 output_name(a.output).c_str(),
                 dims_text(dims).c_str(), format_ms(load_s).c_str(), first.remeshed);
     if (dabs.empty())
-        std::printf("no strokes; ");
+        std::fprintf(report, "no strokes; ");
     else
-        std::printf("%zu dabs re-meshed on %s, update p50 %.2f ms, p95 %.2f ms, p99 %.2f ms, max %.2f ms; ", dabs.size(),
+        std::fprintf(report, "%zu dabs re-meshed on %s, update p50 %.2f ms, p95 %.2f ms, p99 %.2f ms, max %.2f ms; ", dabs.size(),
                     sculpt.device_name().c_str(), s.p50, s.p95, s.p99, s.max);
     const std::string shape = topo.closed() ? "closed (euler " + std::to_string(topo.euler) + ")" : "open";
-    std::printf("%zu vertices, %zu triangles in %s, %s\n", mesh.vertex_count(), mesh.triangle_count(),
+    std::fprintf(report, "%zu vertices, %zu triangles in %s, %s\n", mesh.vertex_count(), mesh.triangle_count(),
                 pieces_text(topo.components).c_str(), shape.c_str());
     return kExitOk;
 }
@@ -92,7 +94,9 @@ Command add_sculpt(CLI::App& app) {
                     "stroke script: one dab per line 'op x y z radius strength', op add|subtract|smooth|set, "
                     "'#' comments; coordinates in samples, or model units after a line 'units world' (-: standard input). Without it, "
                     "the model is voxelized and meshed again as it is");
-    sub->add_option("-o,--output", a->output, "mesh file to write (.stl, .ply or .obj)")->required();
+    sub->add_option("-o,--output", a->output, "mesh file to write (.stl, .ply or .obj; -: standard output, with --format)")
+        ->required();
+    add_mesh_format_option(sub, a->format);
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (8..2048)")
         ->required()
         ->check(CLI::Range(std::size_t(8), std::size_t(2048)));

@@ -2,6 +2,8 @@
 #include "common.hpp"
 #include "stdin_input.hpp"
 
+#include "core/write_to_stream.hpp"
+
 #include <voxmesh/voxelize.hpp>
 
 #include <chrono>
@@ -30,14 +32,19 @@ int run_voxelize(const VoxelizeArgs& a) {
     const auto t0 = std::chrono::steady_clock::now();
     const Volume volume = about_file(input_name(a.input), [&] { return voxelize(model, options); });
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    about_file(a.output, [&] { write_nrrd(a.output, volume.view()); });
+    if (is_stdout(a.output)) {
+        std::cout.flush();
+        about_file(output_name(a.output), [&] { detail::write_nrrd_to(stdout, volume.view(), {}, output_name(a.output)); });
+    } else {
+        about_file(a.output, [&] { write_nrrd(a.output, volume.view()); });
+    }
 
     const bool distance = options.field == VoxelField::Distance;
-    std::cout << input_name(a.input) << " -> " << a.output << ": " << model.triangle_count() << " triangles, "
+    report_stream(a.output) << input_name(a.input) << " -> " << output_name(a.output) << ": " << model.triangle_count() << " triangles, "
               << dims_text(volume.dims) << " " << scalar_name(volume.type) << " "
               << (distance ? "signed distance (positive inside)" : "occupancy (255 inside)") << ", spacing "
               << format_double(volume.spacing[0]) << ", origin " << triple_text(volume.origin) << ", "
-              << format_ms(seconds) << "; mesh it back with: voxmesh mesh " << a.output << " -o OUT.stl --iso "
+              << format_ms(seconds) << "; mesh it back with: voxmesh mesh " << (is_stdout(a.output) ? "VOLUME.nrrd" : a.output) << " -o OUT.stl --iso "
               << (distance ? "0" : "127.5") << "\n";
     return kExitOk;
 }
@@ -48,7 +55,7 @@ Command add_voxelize(CLI::App& app) {
     auto a = std::make_shared<VoxelizeArgs>();
     CLI::App* sub = app.add_subcommand("voxelize", "Turn a closed model (STL, PLY, OBJ) into a volume (surface and interior)");
     sub->add_option("MODEL", a->input, "closed triangle mesh (.stl binary or ASCII, .ply, .obj; -: standard input)")->required();
-    sub->add_option("-o,--output", a->output, "volume file to write (.nrrd)")->required();
+    sub->add_option("-o,--output", a->output, "volume file to write (.nrrd; -: standard output)")->required();
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (2..4096)")
         ->required()
         ->check(CLI::Range(std::size_t(2), std::size_t(4096)));

@@ -1,6 +1,8 @@
 #include "common.hpp"
 #include "stdin_input.hpp"
 
+#include "core/write_to_stream.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -10,6 +12,8 @@
 #include <iostream>
 #include <limits>
 #include <system_error>
+
+#include <unistd.h>
 
 namespace voxmesh::cli {
 
@@ -103,6 +107,12 @@ void check_model_extension(const std::string& path, const std::string& command) 
 }
 
 void check_output_path(const std::string& path, const std::vector<std::string>& extensions) {
+    if (is_stdout(path)) {
+        // Binary meshes and volumes would fill the screen with noise.
+        if (::isatty(STDOUT_FILENO))
+            throw BadInput("-o -: standard output is a terminal; redirect or pipe it, or give -o FILE");
+        return;
+    }
     const std::string ext = lower_extension(path);
     if (std::find(extensions.begin(), extensions.end(), ext) == extensions.end()) {
         std::string list;
@@ -115,6 +125,30 @@ void check_output_path(const std::string& path, const std::vector<std::string>& 
     if (dir.empty()) dir = ".";
     if (!fs::is_directory(dir, ec))
         throw BadInput("'" + path + "': output directory '" + dir.string() + "' does not exist");
+}
+
+std::ostream& report_stream(const std::string& output) { return is_stdout(output) ? std::cerr : std::cout; }
+
+void add_mesh_format_option(CLI::App* sub, std::string& format) {
+    sub->add_option("--format", format, "stl, ply or obj: the format with -o - (standard output)")
+        ->check(CLI::IsMember({"stl", "ply", "obj"}));
+}
+
+void check_mesh_output(const std::string& output, const std::string& format) {
+    check_output_path(output, {".stl", ".ply", ".obj"});
+    if (is_stdout(output) && format.empty()) throw BadInput("-o - (standard output) needs --format stl, ply or obj");
+    if (!is_stdout(output) && !format.empty())
+        throw BadInput("--format applies only to -o - (standard output); '" + output +
+                       "' is written in the format its extension names");
+}
+
+void write_mesh_output(const std::string& output, const std::string& format, const Mesh& mesh) {
+    if (!is_stdout(output)) {
+        about_file(output, [&] { write_mesh(output, mesh); });
+        return;
+    }
+    std::cout.flush();  // nothing of ours is buffered ahead of the mesh
+    about_file("standard output", [&] { detail::write_mesh_to(stdout, mesh, "." + format, "standard output"); });
 }
 
 RawLayout raw_layout(const std::string& path, const RawFlags& raw) {

@@ -12,7 +12,9 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdio>
 #include <functional>
+#include <ostream>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -81,7 +83,22 @@ void check_input_file(const std::string& path);
 bool is_model_path(const std::string& path);
 void check_model_extension(const std::string& path, const std::string& command);
 // The output's extension is one of `extensions` and its directory exists; else BadInput.
+// "-" is standard output, which must not be a terminal.
 void check_output_path(const std::string& path, const std::vector<std::string>& extensions);
+
+// -o -: the output goes to standard output, and what a command reports to standard error.
+inline bool is_stdout(const std::string& output) { return output == "-"; }
+inline std::FILE* report_file(const std::string& output) { return is_stdout(output) ? stderr : stdout; }
+std::ostream& report_stream(const std::string& output);
+// How messages name an output.
+inline std::string output_name(const std::string& output) { return is_stdout(output) ? "standard output" : output; }
+
+// --format for a mesh written to standard output: the format -o's extension gives otherwise.
+void add_mesh_format_option(CLI::App* sub, std::string& format);
+// check_output_path for a mesh, and --format given exactly when the output is standard output.
+void check_mesh_output(const std::string& output, const std::string& format);
+// The mesh to `output` (a file, atomically, or standard output in `format`); BadInput naming it.
+void write_mesh_output(const std::string& output, const std::string& format, const Mesh& mesh);
 
 // Reads a volume file (raw with the flags, else by extension) and rejects NaN/inf samples.
 Volume load_volume(const std::string& path, const RawFlags& raw);

@@ -1,4 +1,5 @@
 #include "atomic_file.hpp"
+#include "write_to_stream.hpp"
 #include "mesh_arrays.hpp"
 #include "parallel.hpp"
 
@@ -173,20 +174,37 @@ void write_obj(std::FILE* f, const Mesh& mesh) {
                 [&](std::string& out, std::size_t t) { append_face(out, &mesh.indices[3 * t], normals); });
 }
 
-}  // namespace
+using Writer = void (*)(std::FILE*, const Mesh&);
 
-void write_mesh(const std::string& path, const Mesh& mesh) {
-    const std::string ext = lower_extension(path);
-    void (*writer)(std::FILE*, const Mesh&) = nullptr;
+// The writer of format `ext`, once `mesh` is known to be writable; Error naming `name` if not.
+Writer checked_writer(const std::string& ext, const Mesh& mesh, const std::string& name) {
+    Writer writer = nullptr;
     if (ext == ".stl") writer = write_stl;
     else if (ext == ".ply") writer = write_ply;
     else if (ext == ".obj") writer = write_obj;
-    else throw Error("cannot write '" + path + "': unknown mesh format '" + ext + "' (use .stl, .ply or .obj)");
+    else throw Error("cannot write '" + name + "': unknown mesh format '" + ext + "' (use .stl, .ply or .obj)");
     detail::check_mesh_arrays(mesh);
     // "nan" and "inf" in a mesh file: most readers (ours included) refuse them.
-    detail::check_finite_vertices(mesh.positions, "cannot write '" + path + "': ", "coordinate");
-    detail::check_finite_vertices(mesh.normals, "cannot write '" + path + "': ", "normal");
+    detail::check_finite_vertices(mesh.positions, "cannot write '" + name + "': ", "coordinate");
+    detail::check_finite_vertices(mesh.normals, "cannot write '" + name + "': ", "normal");
+    return writer;
+}
+
+}  // namespace
+
+void write_mesh(const std::string& path, const Mesh& mesh) {
+    const Writer writer = checked_writer(lower_extension(path), mesh, path);
     detail::write_file_atomically(path, [&](std::FILE* f) { writer(f, mesh); });
+}
+
+void detail::write_mesh_to(std::FILE* file, const Mesh& mesh, const std::string& format, const std::string& name) {
+    const Writer writer = checked_writer(format, mesh, name);
+    try {
+        writer(file, mesh);
+        if (std::fflush(file) != 0) throw Error(std::string("write failed: ") + std::strerror(errno));
+    } catch (const Error& e) {
+        throw Error("cannot write '" + name + "': " + e.what());
+    }
 }
 
 }  // namespace voxmesh

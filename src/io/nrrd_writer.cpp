@@ -1,13 +1,16 @@
 // write_nrrd: a NRRD0004 header (raw encoding, host byte order) followed by the samples,
 // written through a temporary file so a failure never leaves a partial output.
 #include "core/atomic_file.hpp"
+#include "core/write_to_stream.hpp"
 #include "core/float_extent.hpp"
 #include "header_text.hpp"
 
 #include <voxmesh/io.hpp>
 
 #include <bit>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 
 namespace voxmesh {
 
@@ -27,12 +30,10 @@ const char* nrrd_type(ScalarType type) {
     throw Error("unknown scalar type");
 }
 
-}  // namespace
-
-void write_nrrd(const std::string& path, const VolumeView& volume,
-                const std::map<std::string, std::string>& key_values) {
-    auto refuse = [&](const std::string& why) { throw Error("cannot write '" + path + "': " + why); };
-    std::size_t bytes = 0;
+// The header write_nrrd writes for `volume`, after its checks (Error naming `name`).
+std::string checked_header(const VolumeView& volume, const std::map<std::string, std::string>& key_values,
+                           const std::string& name, std::size_t& bytes) {
+    auto refuse = [&](const std::string& why) { throw Error("cannot write '" + name + "': " + why); };
     try {
         bytes = checked_volume_bytes(volume.dims, volume.type);
     } catch (const Error& e) {
@@ -80,10 +81,32 @@ void write_nrrd(const std::string& path, const VolumeView& volume,
         refuse("the key/value lines make a header of " + std::to_string(header.size()) +
                " bytes, more than the " + std::to_string(io::kMaxNrrdHeader) + " NRRD readers here read");
 
+    return header;
+}
+
+}  // namespace
+
+void write_nrrd(const std::string& path, const VolumeView& volume,
+                const std::map<std::string, std::string>& key_values) {
+    std::size_t bytes = 0;
+    const std::string header = checked_header(volume, key_values, path, bytes);
     detail::write_file_atomically(path, [&](std::FILE* file) {
         detail::write_bytes(file, header.data(), header.size());
         detail::write_bytes(file, volume.data, bytes);
     });
+}
+
+void detail::write_nrrd_to(std::FILE* file, const VolumeView& volume,
+                           const std::map<std::string, std::string>& key_values, const std::string& name) {
+    std::size_t bytes = 0;
+    const std::string header = checked_header(volume, key_values, name, bytes);
+    try {
+        write_bytes(file, header.data(), header.size());
+        write_bytes(file, volume.data, bytes);
+        if (std::fflush(file) != 0) throw Error(std::string("write failed: ") + std::strerror(errno));
+    } catch (const Error& e) {
+        throw Error("cannot write '" + name + "': " + e.what());
+    }
 }
 
 }  // namespace voxmesh
