@@ -9,10 +9,13 @@
 #include "support/child_process.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
-#include <future>
 #include <cstdint>
+#include <future>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <random>
 #include <string>
@@ -988,5 +991,33 @@ TEST_CASE("a child forked while another thread holds the device registry does no
         CHECK(child.find("before this process was forked") != std::string::npos);
         CHECK(list_devices().size() == listed);  // the parent's registry is as it was
     }
+}
+
+// Two threads forking at once: each must take back only what its own fork took of the
+// registry, or one fork leaves the parent's registry locked for good.
+TEST_CASE("threads forking at once leave the device registry usable", "[opencl]") {
+    if (!have_device()) return;
+    if (!vmtest::threads_after_fork_supported()) {
+        WARN("skipped under ThreadSanitizer: it dies rather than start threads in a forked child");
+        return;
+    }
+    const std::size_t listed = list_devices().size();
+    std::atomic<int> children_without_devices{0};
+    const auto forker = [&] {
+        for (int i = 0; i < 25; ++i)
+            if (vmtest::output_of_child([] { return std::to_string(list_devices().size()); }, 30) == "0")
+                ++children_without_devices;
+    };
+    std::thread a(forker), b(forker);
+    for (int i = 0; i < 200; ++i) (void)list_devices();  // the parent's own callers, meanwhile
+    a.join();
+    b.join();
+    CHECK(children_without_devices == 50);
+    // On a thread of its own: a lock left held would hang there, not here.
+    const auto after = std::make_shared<std::promise<std::size_t>>();
+    auto listed_after = after->get_future();
+    std::thread([after] { after->set_value(list_devices().size()); }).detach();
+    REQUIRE(listed_after.wait_for(std::chrono::seconds(30)) == std::future_status::ready);
+    CHECK(listed_after.get() == listed);
 }
 #endif

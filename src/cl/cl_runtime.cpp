@@ -84,7 +84,7 @@ private:
 // driver starting a helper) and would then wait on it for ever. It is taken only when free;
 // where another thread held it, the child makes a fresh one (that thread is not in the child),
 // and a discovery caught half done leaves the child no devices.
-bool g_locked_for_fork = false;  // written by the forking thread in the handlers only
+thread_local bool g_locked_for_fork = false;  // per forking thread: two may fork at once
 
 void registry_before_fork() {
     Registry& r = registry();
