@@ -242,6 +242,14 @@ TEST_CASE("cli: every input format from standard input", "[cli]") {
     CHECK(meta.code == 0);
     CHECK(meta.out.find("4x3x2") != std::string::npos);
     CHECK(meta.out.find("range:     7 .. 7") != std::string::npos);
+    const Result nii_plain = piped("gunzip -c " + quote(data_file("mri_someones_anatomy.nii.gz")), "info -");
+    CHECK(nii_plain.code == 0);
+    CHECK(nii_plain.out.find("57x67x56") != std::string::npos);
+    const std::string ascii_stl = s.write("t.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                                                   "vertex 0 1 0\nendloop\nendfacet\nendsolid t\n");
+    const Result ascii = piped(cat(ascii_stl), "info -");
+    CHECK(ascii.code == 0);
+    CHECK(ascii.out.find("triangles: 1\n") != std::string::npos);
     const Result raw = piped("head -c 24 /dev/zero", "info - --dims 2 3 4 --type u8");
     CHECK(raw.code == 0);
     CHECK(raw.out.find("2x3x4") != std::string::npos);
