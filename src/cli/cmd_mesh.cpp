@@ -147,7 +147,7 @@ Command add_mesh(CLI::App& app) {
     sub->add_flag("--no-normals", a->no_normals, "do not compute vertex normals");
     sub->add_flag("--inside-below", a->inside_below, "values below iso are inside (SDFs): flips winding and normals");
     add_largest_option(sub, a->largest, "drops the specks of noise around a CT's surface");
-    sub->add_flag("--json", a->json, "print the summary as JSON");
+    sub->add_flag("--json", a->json, "print the summary as JSON (on standard error with -o -)");
     add_raw_flags(sub, a->raw);
     return {sub, [a] { return run_mesh(*a); }};
 }
