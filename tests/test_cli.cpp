@@ -7,6 +7,7 @@
 #include "support/io_scratch.hpp"
 #include "support/mesh_checks.hpp"
 #include "support/run_program.hpp"
+#include "support/sanitizers.hpp"
 
 #include <voxmesh/io.hpp>
 
@@ -529,6 +530,30 @@ TEST_CASE("cli: killed at any moment, mesh leaves the whole output or none, neve
         }
     }
     CHECK(killed > 0);  // 20 ms is too early for any machine to have finished
+}
+
+// Memory running out during the work (here a cap on the process's data, `ulimit -d`) is not
+// bad input: exit code 1, with a message saying what ran out, and nothing written.
+TEST_CASE("cli: running out of memory exits 1, not as bad input", "[cli][memory]") {
+    if (vmtest::kAddressSanitizer || vmtest::kThreadSanitizer) {
+        WARN("skipped under a sanitizer: its allocator reports running out and dies, it throws nothing");
+        return;
+    }
+    Scratch s;
+    const std::string vol = s.path("big.nrrd");
+    // A 700-sample grid of the torus: about 470 MB of f32 samples, over a 150 MB cap.
+    const std::string line = "ulimit -d 150000 && " + quote(VOXMESH_CLI_PATH) + " voxelize " +
+                             quote(data_file("torus.stl")) + " -o " + quote(vol) + " --resolution 700";
+    const Result r = vmtest::run_program("sh", "-c " + quote(line), s.dir.string());
+    INFO(r.out << r.err);
+    CHECK(r.code == 1);
+    CHECK(r.err.find("voxmesh: error: ") != std::string::npos);
+    CHECK(r.err.find("cannot allocate") != std::string::npos);
+    CHECK_FALSE(fs::exists(vol));
+    // Under the same cap a grid that fits is voxelized: the size, not the cap alone, failed.
+    const std::string fits = "ulimit -d 150000 && " + quote(VOXMESH_CLI_PATH) + " voxelize " +
+                             quote(data_file("torus.stl")) + " -o " + quote(vol) + " --resolution 64";
+    CHECK(vmtest::run_program("sh", "-c " + quote(fits), s.dir.string()).code == 0);
 }
 
 TEST_CASE("cli: voxelize refuses a grid larger than physical memory", "[cli]") {

@@ -1,4 +1,4 @@
-// Out of memory is a voxmesh::Error, never a std::bad_alloc, from extract, analyze_topology,
+// Out of memory is a voxmesh::OutOfMemoryError (an Error), never a std::bad_alloc, from extract, analyze_topology,
 // keep_largest_components, the volume and mesh readers, voxelize, make_field, the
 // stroke-script parser, and a Sculpt's construction, update and mesh. Each call runs in a
 // forked child whose private writable memory is capped (RLIMIT_DATA) a little above what it
@@ -48,7 +48,8 @@ void lift_cap() {
 }
 
 // What `call` did in a child process capped at its data bytes + `headroom`: "returned",
-// "Error: <message>", "bad_alloc" or "other exception" (or why the child said nothing).
+// "OutOfMemoryError: <message>", "Error: <message>" (another Error), "bad_alloc" or "other
+// exception" (or why the child said nothing).
 std::string outcome_when_capped(std::size_t headroom, const std::function<void()>& call) {
     return vmtest::output_of_child([&] {
         rlimit cap{};
@@ -60,6 +61,9 @@ std::string outcome_when_capped(std::size_t headroom, const std::function<void()
             call();
             lift_cap();
             return std::string("returned");
+        } catch (const voxmesh::OutOfMemoryError& e) {
+            lift_cap();
+            return "OutOfMemoryError: " + std::string(e.what());
         } catch (const voxmesh::Error& e) {
             lift_cap();
             return "Error: " + std::string(e.what());
@@ -98,14 +102,14 @@ bool starts_with(const std::string& text, const std::string& prefix) { return te
 
 constexpr std::size_t kTight = std::size_t{2} << 20, kRoomy = std::size_t{2} << 30;
 
-// `call` returns with room to spare, and with `tight` bytes of room throws an Error starting
-// `expected`.
+// `call` returns with room to spare, and with `tight` bytes of room throws an OutOfMemoryError
+// starting `expected`.
 void check_out_of_memory_is_error(const std::function<void()>& call, const std::string& expected,
                                   std::size_t tight = kTight) {
     CHECK(outcome_when_capped(kRoomy, call) == "returned");
     const std::string outcome = outcome_when_capped(tight, call);
     INFO(outcome);
-    CHECK(starts_with(outcome, "Error: " + expected));
+    CHECK(starts_with(outcome, "OutOfMemoryError: " + expected));
 }
 
 }  // namespace
@@ -165,7 +169,7 @@ TEST_CASE("a write that runs out of memory says so and leaves nothing", "[core][
     try {
         voxmesh::detail::write_file_atomically(path, [](std::FILE*) { throw std::bad_alloc(); });
         FAIL("no error");
-    } catch (const voxmesh::Error& e) {
+    } catch (const voxmesh::OutOfMemoryError& e) {
         CHECK(std::string(e.what()) == "cannot write '" + path + "': out of memory");
     }
     CHECK(dir.entries().empty());
@@ -219,7 +223,7 @@ TEST_CASE("out of memory is an Error naming the file from the volume readers", "
             const std::string outcome = outcome_when_capped(room, [&] { (void)voxmesh::read_volume(path); });
             INFO(outcome);
             // The files are sound: an Error here is the cap's doing.
-            const bool error = starts_with(outcome, "Error: '" + path + "': ");
+            const bool error = starts_with(outcome, "OutOfMemoryError: '" + path + "': ");
             CHECK((outcome == "returned" || error));
             ran_out = ran_out || error;
             returned = returned || outcome == "returned";

@@ -22,6 +22,13 @@ namespace voxmesh {
 struct Error : std::runtime_error {
     using std::runtime_error::runtime_error;
 };
+// An Error where memory ran out during a call (an allocation failed); its message says what
+// was being done. Unlike the input's faults it may pass with more memory, smaller inputs or
+// later. A check made before allocating (a file's samples larger than the memory available)
+// is a plain Error.
+struct OutOfMemoryError : Error {
+    using Error::Error;
+};
 
 enum class ScalarType { U8, I8, U16, I16, U32, I32, F32, F64 };
 std::size_t scalar_size(ScalarType type);

@@ -23,7 +23,7 @@ namespace voxmesh::cli {
 
 enum ExitCode : int {
     kExitOk = 0,
-    kExitInternal = 1,  // a bug or resource failure (out of memory, ...)
+    kExitInternal = 1,  // a bug or resource failure (out of memory during a call, ...)
     kExitBadInput = 2,  // bad input file, bad flag combination, unusable output path
 };
 
@@ -48,14 +48,21 @@ Command add_sculpt(CLI::App& app);
 // Before any OpenCL call: pin PoCL's worker threads where that is safe (pocl_threads.cpp).
 void pin_pocl_workers();
 
-// Runs f; a voxmesh::Error it throws becomes BadInput whose message names `path`.
+// `message` naming `path`, prefixed with it where it does not already.
+inline std::string naming(const std::string& path, const std::string& message) {
+    return message.find(path) != std::string::npos ? message : "'" + path + "': " + message;
+}
+
+// Runs f; a voxmesh::Error it throws becomes BadInput whose message names `path`, except
+// running out of memory, which stays an OutOfMemoryError (exit code 1).
 template <class F>
 auto about_file(const std::string& path, F&& f) -> decltype(f()) {
     try {
         return f();
+    } catch (const voxmesh::OutOfMemoryError& e) {
+        throw voxmesh::OutOfMemoryError(naming(path, e.what()));
     } catch (const voxmesh::Error& e) {
-        const std::string what = e.what();
-        throw BadInput(what.find(path) != std::string::npos ? what : "'" + path + "': " + what);
+        throw BadInput(naming(path, e.what()));
     }
 }
 

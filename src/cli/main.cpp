@@ -1,5 +1,6 @@
 // voxmesh: mesh volumes, voxelize and sculpt STL models, inspect files and devices, run the demo.
-// Exit codes: 0 success, 2 bad input or usage (message on stderr), 1 internal failure.
+// Exit codes: 0 success, 2 bad input or usage (message on stderr), 1 internal failure (out of
+// memory during the work included).
 #include "common.hpp"
 #include "core/exit_signals.hpp"
 #include "stdin_input.hpp"
@@ -43,6 +44,9 @@ int main(int argc, char** argv) {
     } catch (const BadInput& e) {
         std::cerr << "voxmesh: error: " << e.what() << "\n";
         return kExitBadInput;
+    } catch (const voxmesh::OutOfMemoryError& e) {
+        std::cerr << "voxmesh: error: " << e.what() << "\n";
+        return kExitInternal;
     } catch (const voxmesh::Error& e) {
         std::cerr << "voxmesh: error: " << e.what() << "\n";
         return kExitBadInput;

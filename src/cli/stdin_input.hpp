@@ -37,14 +37,15 @@ public:
     // `text` with the spooled file's path (if any) named as standard input.
     std::string shown(std::string text) const;
 
-    // about_file for this input: an Error from f becomes BadInput naming display().
+    // about_file for this input, naming display() (not the temporary copy).
     template <class F>
     auto read(F&& f) const -> decltype(f()) {
         try {
             return f();
+        } catch (const voxmesh::OutOfMemoryError& e) {
+            throw voxmesh::OutOfMemoryError(naming(display_, shown(e.what())));
         } catch (const voxmesh::Error& e) {
-            const std::string what = shown(e.what());
-            throw BadInput(what.find(display_) != std::string::npos ? what : "'" + display_ + "': " + what);
+            throw BadInput(naming(display_, shown(e.what())));
         }
     }
 

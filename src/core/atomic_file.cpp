@@ -142,8 +142,9 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     } catch (const std::exception& e) {
         std::fclose(file);
         ::unlink(temp.c_str());
-        const bool out_of_memory = dynamic_cast<const std::bad_alloc*>(&e) != nullptr;
-        throw Error("cannot write '" + path + "': " + (out_of_memory ? "out of memory" : e.what()));
+        if (dynamic_cast<const std::bad_alloc*>(&e) || dynamic_cast<const OutOfMemoryError*>(&e))
+            throw OutOfMemoryError("cannot write '" + path + "': out of memory");
+        throw Error("cannot write '" + path + "': " + e.what());
     }
     if (std::fclose(file) != 0) {
         ::unlink(temp.c_str());

@@ -91,7 +91,7 @@ Mesh run_engine(const VolumeView& volume, const Options& options, Stats& stats, 
         if (first < e.plane) detail::throw_non_finite(first);
         throw;
     } catch (const std::bad_alloc&) {
-        throw Error("out of memory meshing a " + detail::dims_text(volume.dims) +
+        throw OutOfMemoryError("out of memory meshing a " + detail::dims_text(volume.dims) +
                     " volume (the mesh and the engine's working memory)");
     }
 }

@@ -1,7 +1,8 @@
 #include "atomic_file.hpp"
-#include "write_to_stream.hpp"
 #include "mesh_arrays.hpp"
+#include "out_of_memory.hpp"
 #include "parallel.hpp"
+#include "write_to_stream.hpp"
 
 #include <voxmesh/voxmesh.hpp>
 
@@ -200,10 +201,10 @@ void write_mesh(const std::string& path, const Mesh& mesh) {
 void detail::write_mesh_to(std::FILE* file, const Mesh& mesh, const std::string& format, const std::string& name) {
     const Writer writer = checked_writer(format, mesh, name);
     try {
-        writer(file, mesh);
+        detail::out_of_memory_as_error([] { return std::string("out of memory"); }, [&] { writer(file, mesh); });
         if (std::fflush(file) != 0) throw Error(std::string("write failed: ") + std::strerror(errno));
     } catch (const Error& e) {
-        throw Error("cannot write '" + name + "': " + e.what());
+        detail::rethrow_with_message(e, "cannot write '" + name + "': " + e.what());
     }
 }
 

@@ -62,7 +62,7 @@ Volume Volume::allocate(ScalarType type, std::array<std::size_t, 3> dims) {
         // each on the fill and a TLB miss per row there.
         v.storage = detail::allocate_zeroed(bytes);
     } catch (const std::bad_alloc&) {
-        throw Error("cannot allocate " + std::to_string(bytes) + " bytes for a volume");
+        throw OutOfMemoryError("cannot allocate " + std::to_string(bytes) + " bytes for a volume");
     }
     v.type = type;
     v.dims = dims;

@@ -1,8 +1,9 @@
 // write_nrrd: a NRRD0004 header (raw encoding, host byte order) followed by the samples,
 // written through a temporary file so a failure never leaves a partial output.
 #include "core/atomic_file.hpp"
-#include "core/write_to_stream.hpp"
 #include "core/float_extent.hpp"
+#include "core/out_of_memory.hpp"
+#include "core/write_to_stream.hpp"
 #include "header_text.hpp"
 
 #include <voxmesh/io.hpp>
@@ -105,7 +106,7 @@ void detail::write_nrrd_to(std::FILE* file, const VolumeView& volume,
         write_bytes(file, volume.data, bytes);
         if (std::fflush(file) != 0) throw Error(std::string("write failed: ") + std::strerror(errno));
     } catch (const Error& e) {
-        throw Error("cannot write '" + name + "': " + e.what());
+        detail::rethrow_with_message(e, "cannot write '" + name + "': " + e.what());
     }
 }
 

@@ -2,6 +2,7 @@
 
 #include "inflate.hpp"
 #include "core/dims_text.hpp"
+#include "core/out_of_memory.hpp"
 #include "input_file.hpp"
 
 #include <algorithm>
@@ -31,7 +32,7 @@ Volume allocate_samples(const std::string& path, const SampleLayout& layout) {
     try {
         return Volume::allocate(layout.type, layout.dims);
     } catch (const Error& e) {
-        fail(path, e.what());
+        detail::rethrow_with_message(e, "'" + path + "': " + e.what());
     }
 }
 
@@ -90,7 +91,7 @@ InputFile open_data(const std::string& header_path, const SampleLayout& layout) 
     try {
         return InputFile(layout.data_path);
     } catch (const Error& e) {
-        throw Error(e.what() + where(header_path, layout));
+        detail::rethrow_with_message(e, e.what() + where(header_path, layout));
     }
 }
 

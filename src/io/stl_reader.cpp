@@ -1,6 +1,7 @@
 // read_stl: binary when the size is exactly 84 + 50 * count (the "solid" prefix proves
 // nothing: binary headers often start with it), otherwise ASCII. Vertices are welded by
 // exact float position.
+#include "core/out_of_memory.hpp"
 #include "header_text.hpp"
 #include "input_file.hpp"
 #include "samples.hpp"
@@ -177,7 +178,7 @@ Mesh read_stl_file(const std::string& path) {
     try {
         read_ascii(path, text, mesh);
     } catch (const Error& e) {
-        throw Error(std::string(e.what()) + " (" + binary_problem + ")");
+        detail::rethrow_with_message(e, std::string(e.what()) + " (" + binary_problem + ")");
     }
     if (mesh.indices.empty()) fail(path, "ASCII STL with no triangles");
     return mesh;
