@@ -122,12 +122,13 @@ struct Stats {
     // Options::threads resolved (0 becomes the usable CPUs): the CPU slabs, which run on no more
     // threads than the process may use at once; 0 for the OpenCL engine alone.
     unsigned threads = 0;
-    // The most CPU threads that ran those slabs at once: `threads` capped at the CPUs this
-    // process may use (a volume too thin for that many slabs runs on fewer); 0 with no CPU work.
-    unsigned workers = 0;
     PassTimes times;
     std::vector<DeviceStats> devices;
     std::vector<std::string> warnings;  // also sent to Options::log
+    // The most CPU threads that ran the slabs at once: `threads` capped at the CPUs this
+    // process may use (a volume too thin for that many slabs runs on fewer); 0 with no CPU work.
+    // (Last, so that the fields before it keep their places for code built against 0.1.0.)
+    unsigned workers = 0;
 };
 
 // The iso-surface of `volume` at options.iso, as the canonical mesh.
