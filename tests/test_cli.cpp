@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -297,6 +298,32 @@ TEST_CASE("cli: every input format from standard input", "[cli]") {
     }
     CHECK_FALSE(fs::exists(s.path("x.stl")));
     CHECK(fs::is_empty(tmp));  // no copy of standard input left behind
+}
+
+// Killed while it copies standard input (a pipe still open, more to come), the tool removes
+// the copy: a signal handler, not a destructor, is what runs then.
+TEST_CASE("cli: killed while reading standard input, no copy of it is left", "[cli]") {
+    Scratch s;
+    const std::string tmp = s.path("tmp");
+    fs::create_directories(tmp);
+    int pipe_fds[2];
+    REQUIRE(::pipe2(pipe_fds, O_CLOEXEC) == 0);
+    const vmtest::StartedProgram run =
+        vmtest::start_program(VOXMESH_CLI_PATH, {"info", "-"}, s.dir.string(), pipe_fds[0], {"TMPDIR=" + tmp});
+    ::close(pipe_fds[0]);
+    REQUIRE(::write(pipe_fds[1], "NRRD0004\n", 9) == 9);
+    bool copying = false;  // the copy appears once the tool has started reading
+    for (int i = 0; i < 2000 && !copying; ++i) {
+        copying = !fs::is_empty(tmp);
+        if (!copying) ::usleep(5000);
+    }
+    CHECK(copying);
+    ::kill(run.pid, SIGTERM);
+    const int status = vmtest::wait_program(run);
+    ::close(pipe_fds[1]);
+    CHECK(WIFSIGNALED(status));
+    CHECK(WTERMSIG(status) == SIGTERM);
+    CHECK(fs::is_empty(tmp));
 }
 
 // "-o -" writes the output to standard output (the report goes to standard error): the same

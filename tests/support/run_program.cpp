@@ -35,7 +35,7 @@ ProgramResult run_program(const std::string& program, const std::string& args, c
 }
 
 StartedProgram start_program(const std::string& program, const std::vector<std::string>& args,
-                             const std::string& scratch_dir) {
+                             const std::string& scratch_dir, int stdin_fd, const std::vector<std::string>& env) {
     StartedProgram started;
     started.out_path = scratch_dir + "/stdout.txt";
     started.err_path = scratch_dir + "/stderr.txt";
@@ -49,6 +49,12 @@ StartedProgram start_program(const std::string& program, const std::vector<std::
     posix_spawn_file_actions_init(&files);
     posix_spawn_file_actions_addopen(&files, 1, started.out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_addopen(&files, 2, started.err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (stdin_fd >= 0) posix_spawn_file_actions_adddup2(&files, stdin_fd, 0);
+    std::vector<std::string> env_text(env);
+    for (char** e = environ; *e; ++e) env_text.emplace_back(*e);  // earlier entries win in getenv
+    std::vector<char*> envp;
+    for (std::string& e : env_text) envp.push_back(e.data());
+    envp.push_back(nullptr);
     posix_spawnattr_t attr;
     posix_spawnattr_init(&attr);
     sigset_t defaults, none;
@@ -58,7 +64,7 @@ StartedProgram start_program(const std::string& program, const std::vector<std::
     posix_spawnattr_setsigdefault(&attr, &defaults);
     posix_spawnattr_setsigmask(&attr, &none);
     posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGDEF | POSIX_SPAWN_SETSIGMASK);
-    const int rc = posix_spawn(&started.pid, program.c_str(), &files, &attr, argv.data(), environ);
+    const int rc = posix_spawn(&started.pid, program.c_str(), &files, &attr, argv.data(), envp.data());
     posix_spawnattr_destroy(&attr);
     posix_spawn_file_actions_destroy(&files);
     if (rc != 0) throw std::runtime_error("cannot start " + program);

@@ -24,12 +24,15 @@ ProgramResult run_program(const std::string& program, const std::string& args, c
 // A program started in the background, to be signalled while it runs. It gets the default
 // action for SIGINT, SIGTERM and SIGHUP whatever this process has (a shell's `cmd &` would
 // start it with SIGINT ignored); stdout and stderr go to `out_path` and `err_path`.
+// `stdin_fd` (if >= 0) becomes its standard input; `env` adds NAME=value entries to this
+// process's environment for it.
 struct StartedProgram {
     pid_t pid = -1;
     std::string out_path, err_path;
 };
 StartedProgram start_program(const std::string& program, const std::vector<std::string>& args,
-                             const std::string& scratch_dir);
+                             const std::string& scratch_dir, int stdin_fd = -1,
+                             const std::vector<std::string>& env = {});
 
 // Polls the program's stderr until it contains `text` (true) or the program exits or
 // `timeout_s` passes (false).
