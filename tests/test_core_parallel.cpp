@@ -107,10 +107,7 @@ TEST_CASE("run_workers wakes a sleeping worker off the caller's CPU and keeps it
 // A child of a process whose cache holds threads has none of them (fork copies only the
 // thread that called it): its runs start threads of their own instead of waiting for ever.
 TEST_CASE("run_workers in a forked child starts threads of its own", "[core][parallel]") {
-    if (!vmtest::threads_after_fork_supported()) {
-        WARN("skipped under ThreadSanitizer: it dies rather than start threads in a forked child");
-        return;
-    }
+    if (!vmtest::threads_after_fork_or_warn()) return;
     run_workers(4, [](unsigned) {});  // threads in the cache, idle
     const std::string child = vmtest::output_of_child(
         [] {

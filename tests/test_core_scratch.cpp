@@ -194,10 +194,7 @@ TEST_CASE("an extract's scratch is kept for the next one and release_scratch_mem
 // lock is held across fork(), so the fork waits for that thread to let go and the child's pool
 // is whole and unlocked; before, the child's first extract waited for ever on the lock.
 TEST_CASE("a child forked while another thread is inside the scratch pool can mesh", "[core][scratch]") {
-    if (!vmtest::threads_after_fork_supported()) {
-        WARN("skipped under ThreadSanitizer: it dies rather than start threads in a forked child");
-        return;
-    }
+    if (!vmtest::threads_after_fork_or_warn()) return;
     const vmtest::Dims dims{20, 20, 20};
     const auto data = vmtest::sample_field<float>(dims, vmtest::sphere({9.5, 9.5, 9.5}, 6));
     const voxmesh::Mesh expected = voxmesh::extract(vmtest::view_of(data, dims), vmtest::cpu_options(0.0, 2));

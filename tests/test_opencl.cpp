@@ -906,39 +906,37 @@ TEST_CASE("OpenCL extract_into gives extract()'s mesh in a reused mesh's storage
     }
 }
 
+// In a forked child: that it lists no devices, Auto meshes `expected` on the CPU, and then
+// what OpenCL says (its Error's text), or what went wrong instead.
+std::string what_a_forked_child_meshes(const VolumeView& view, const Mesh& expected) {
+    if (!list_devices().empty() || opencl_available()) return "devices listed in the child";
+    Options o;
+    o.backend = Backend::Auto;
+    Stats stats;
+    const Mesh mesh = extract(view, o, stats);
+    if (stats.backend != Backend::Cpu || mesh.indices != expected.indices || mesh.positions != expected.positions)
+        return "Auto gave another mesh or backend";
+    o.backend = Backend::OpenCL;
+    try {
+        (void)extract(view, o);
+        return "OpenCL ran in the child";
+    } catch (const Error& e) {
+        return e.what();
+    }
+}
+
 // A child forked after the parent opened its OpenCL devices has none: PoCL's worker threads
 // stayed in the parent, and a kernel run in the child waited for them for ever. Auto meshes on
 // the CPU there, and OpenCL says why it cannot run.
 TEST_CASE("a forked child of a process using OpenCL meshes on the CPU and says why OpenCL cannot", "[opencl]") {
     if (!have_device()) return;
-    if (!vmtest::threads_after_fork_supported()) {
-        WARN("skipped under ThreadSanitizer: it dies rather than start threads in a forked child");
-        return;
-    }
+    if (!vmtest::threads_after_fork_or_warn()) return;
     Grid g{{33, 30, 28}};
     const std::vector<float> v = sphere(g);
     const VolumeView view = view_of(v.data(), ScalarType::F32, g);
     const Mesh on_device = run(view, Options{}, Backend::OpenCL);  // the devices opened here
     const Mesh expected = run(view, Options{}, Backend::Cpu);
-    const std::string child = vmtest::output_of_child(
-        [&] {
-            if (!list_devices().empty() || opencl_available()) return std::string("devices listed in the child");
-            Options o;
-            o.backend = Backend::Auto;
-            Stats stats;
-            const Mesh mesh = extract(view, o, stats);
-            if (stats.backend != Backend::Cpu || mesh.indices != expected.indices ||
-                mesh.positions != expected.positions)
-                return std::string("Auto gave another mesh or backend");
-            o.backend = Backend::OpenCL;
-            try {
-                (void)extract(view, o);
-                return std::string("OpenCL ran in the child");
-            } catch (const Error& e) {
-                return std::string(e.what());
-            }
-        },
-        60);
+    const std::string child = vmtest::output_of_child([&] { return what_a_forked_child_meshes(view, expected); }, 60);
     CHECK(child ==
           "the OpenCL devices were opened before this process was forked, and a forked child cannot use them (the "
           "OpenCL runtime's threads stay in the parent); use Backend::Cpu or Backend::Auto in the child, or OpenCL in "
@@ -952,10 +950,7 @@ TEST_CASE("a forked child of a process using OpenCL meshes on the CPU and says w
 // let go of, and a half-built device list must not be used.
 TEST_CASE("a child forked while another thread holds the device registry does not hang", "[opencl]") {
     if (!have_device()) return;
-    if (!vmtest::threads_after_fork_supported()) {
-        WARN("skipped under ThreadSanitizer: it dies rather than start threads in a forked child");
-        return;
-    }
+    if (!vmtest::threads_after_fork_or_warn()) return;
     Grid g{{20, 22, 18}};
     const std::vector<float> v = sphere(g);
     const VolumeView view = view_of(v.data(), ScalarType::F32, g);
@@ -971,21 +966,8 @@ TEST_CASE("a child forked while another thread holds the device registry does no
             });
         });
         locked.get_future().wait();
-        const std::string child = vmtest::output_of_child(
-            [&] {
-                if (!list_devices().empty()) return std::string("devices listed in the child");
-                Options o;
-                o.backend = Backend::Auto;
-                if (extract(view, o).indices != expected.indices) return std::string("Auto gave another mesh");
-                o.backend = Backend::OpenCL;
-                try {
-                    (void)extract(view, o);
-                    return std::string("OpenCL ran in the child");
-                } catch (const Error& e) {
-                    return std::string(e.what());
-                }
-            },
-            30);
+        const std::string child =
+            vmtest::output_of_child([&] { return what_a_forked_child_meshes(view, expected); }, 30);
         forked.set_value();
         holder.join();
         CHECK(child.find("before this process was forked") != std::string::npos);
@@ -997,10 +979,7 @@ TEST_CASE("a child forked while another thread holds the device registry does no
 // registry, or one fork leaves the parent's registry locked for good.
 TEST_CASE("threads forking at once leave the device registry usable", "[opencl]") {
     if (!have_device()) return;
-    if (!vmtest::threads_after_fork_supported()) {
-        WARN("skipped under ThreadSanitizer: it dies rather than start threads in a forked child");
-        return;
-    }
+    if (!vmtest::threads_after_fork_or_warn()) return;
     const std::size_t listed = list_devices().size();
     std::atomic<int> children_without_devices{0};
     const auto forker = [&] {

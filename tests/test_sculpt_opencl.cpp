@@ -318,10 +318,7 @@ TEST_CASE("sculpt OpenCL: without an OpenCL platform update() meshes on the CPU,
 // the mesh is extract's, as ever.
 TEST_CASE("sculpt: a Sculpt on OpenCL in a forked child re-meshes on the CPU", "[sculpt][opencl]") {
     if (!have_device()) return;
-    if (!vmtest::threads_after_fork_supported()) {
-        WARN("skipped under ThreadSanitizer: it dies rather than start threads in a forked child");
-        return;
-    }
+    if (!vmtest::threads_after_fork_or_warn()) return;
     std::vector<std::string> warnings;
     SculptOptions options;
     options.backend = Backend::OpenCL;
