@@ -142,7 +142,7 @@ Command add_mesh(CLI::App& app) {
     a->iso_option = sub->add_option("--iso", a->iso, "iso value (default: midpoint of the value range)");
     sub->add_option("--backend", a->backend, "auto, cpu, opencl or hybrid (default auto)")
         ->check(CLI::IsMember({"auto", "cpu", "opencl", "hybrid"}));
-    sub->add_option("--threads", a->threads, "CPU worker threads (default: all cores)");
+    sub->add_option("--threads", a->threads, "CPU worker threads (default: every CPU this process may use)");
     sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(CLI::NonNegativeNumber);
     sub->add_flag("--no-normals", a->no_normals, "do not compute vertex normals");
     sub->add_flag("--inside-below", a->inside_below, "values below iso are inside (SDFs): flips winding and normals");

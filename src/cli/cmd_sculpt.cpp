@@ -105,7 +105,7 @@ Command add_sculpt(CLI::App& app) {
                     "is none) or auto (a GPU when there is one); default cpu")
         ->check(CLI::IsMember({"auto", "cpu", "opencl"}));
     sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(CLI::NonNegativeNumber);
-    sub->add_option("--threads", a->threads, "CPU threads (default: all cores)");
+    sub->add_option("--threads", a->threads, "CPU threads (default: every CPU this process may use)");
     sub->add_flag("--frames", a->frames, "print every frame's edit and update time");
     add_largest_option(sub, a->largest, "drops what a brush cut off or left floating");
     return {sub, [a] { return run_sculpt(*a); }};
