@@ -9,8 +9,9 @@
 // memory-mapped (Volume::storage owns the mapping; MAP_PRIVATE, so writes through
 // Volume::data never reach the file; the file must not be truncated while the Volume
 // lives). Data in the other byte order, misaligned, or compressed is copied into a heap
-// block, as is a file that cannot be mapped (a filesystem without mmap). A volume with a flipped axis (see Geometry) is reversed in place after loading;
-// for a mapped one that writes every page, so it costs as much memory as a copy.
+// block, as is a file that cannot be mapped (a filesystem without mmap). A volume with a
+// flipped axis (see Geometry) is reversed in place after loading; for a mapped one that
+// writes every page, so it costs as much memory as a copy.
 //
 // Geometry: a Volume has spacing and origin but no orientation; sample (i,j,k) lies at
 // origin + (i,j,k) * spacing in the file's own world frame (NIfTI: RAS+, not converted to

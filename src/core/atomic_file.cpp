@@ -19,58 +19,62 @@ void write_bytes(std::FILE* file, const void* data, std::size_t bytes) {
 
 namespace {
 
-// The temporaries being written, for remove_partial_outputs() to find from a signal handler:
-// fixed slots, lock-free flags, no allocation. More writes at once than slots go unlisted.
+// The temporaries listed, for remove_partial_outputs() to find from a signal handler: fixed
+// slots, lock-free flags, no allocation. More temporaries at once than slots go unlisted.
 struct InFlight {
-    std::atomic<bool> taken{false};  // the slot belongs to a write
+    std::atomic<bool> taken{false};  // the slot belongs to a ListedTemporary
     std::atomic<bool> ready{false};  // `path` is complete and names its temporary
     char path[4096];
 };
 InFlight g_in_flight[16];
 static_assert(std::atomic<bool>::is_always_lock_free);
 
-// Lists one temporary's name in a free slot for as long as it lives.
-class Listed {
-public:
-    Listed() = default;
-    ~Listed() { clear(); }
-    Listed(const Listed&) = delete;
-    Listed& operator=(const Listed&) = delete;
+// "cannot write 'name': ..." for what a write threw; running out of memory stays an
+// OutOfMemoryError.
+[[noreturn]] void throw_write_failure(const std::string& name, const std::exception& e) {
+    if (dynamic_cast<const std::bad_alloc*>(&e) || dynamic_cast<const OutOfMemoryError*>(&e))
+        throw OutOfMemoryError("cannot write '" + name + "': out of memory");
+    throw Error("cannot write '" + name + "': " + e.what());
+}
 
-    // Lists `temp` (replacing a name listed before): called before the file is created, so
-    // that no signal between its creation and its listing can leave it behind.
-    void list(const std::string& temp) {
-        if (temp.size() >= sizeof(InFlight::path)) return clear();
-        if (!slot_) {
-            for (InFlight& slot : g_in_flight) {
-                bool expected = false;
-                if (slot.taken.compare_exchange_strong(expected, true)) {
-                    slot_ = &slot;
-                    break;
-                }
+}  // namespace
+
+ListedTemporary::~ListedTemporary() { unlist(); }
+
+void ListedTemporary::list(const std::string& temp) {
+    if (temp.size() >= sizeof(InFlight::path)) return unlist();
+    auto* slot = static_cast<InFlight*>(slot_);
+    if (!slot) {
+        for (InFlight& candidate : g_in_flight) {
+            bool expected = false;
+            if (candidate.taken.compare_exchange_strong(expected, true)) {
+                slot = &candidate;
+                break;
             }
-            if (!slot_) return;
         }
-        slot_->ready.store(false, std::memory_order_release);
-        std::memcpy(slot_->path, temp.c_str(), temp.size() + 1);
-        slot_->ready.store(true, std::memory_order_release);
+        if (!slot) return;
+        slot_ = slot;
     }
+    slot->ready.store(false, std::memory_order_release);
+    std::memcpy(slot->path, temp.c_str(), temp.size() + 1);
+    slot->ready.store(true, std::memory_order_release);
+}
 
-private:
-    void clear() {
-        if (!slot_) return;
-        slot_->ready.store(false, std::memory_order_release);
-        slot_->taken.store(false, std::memory_order_release);
-        slot_ = nullptr;
-    }
-    InFlight* slot_ = nullptr;
-};
+void ListedTemporary::unlist() {
+    auto* slot = static_cast<InFlight*>(slot_);
+    if (!slot) return;
+    slot->ready.store(false, std::memory_order_release);
+    slot->taken.store(false, std::memory_order_release);
+    slot_ = nullptr;
+}
+
+namespace {
 
 // A new temporary next to the target, created as any new file is (0666 less the umask):
 // mkstemp makes it 0600, and a fixed chmod afterwards would ignore the umask. pid and a
 // counter make the name unique; one left by a crashed process of the same pid is skipped
 // (a signal while its name is listed would remove it: it is a leftover temporary too).
-int create_temp(const std::filesystem::path& dir, const std::string& filename, std::string& temp, Listed& listed) {
+int create_temp(const std::filesystem::path& dir, const std::string& filename, std::string& temp, ListedTemporary& listed) {
     static std::atomic<unsigned> counter{0};
     for (int attempt = 0; attempt < 1000; ++attempt) {
         // Built with append: gcc 12 gives a false -Wrestrict on operator+ chains here.
@@ -120,7 +124,7 @@ void write_file_atomically(const std::string& path, const std::function<void(std
 
     std::string temp;
     // Listed while it exists; a signal after the rename unlinks a name that is gone.
-    Listed listed;
+    ListedTemporary listed;
     const int fd = create_temp(dir, target.filename().string(), temp, listed);
     if (fd < 0) throw Error("cannot write '" + path + "': " + std::strerror(errno));
     // A file replaced keeps its permissions (as `>` would), not the umask's: a private output
@@ -142,9 +146,7 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     } catch (const std::exception& e) {
         std::fclose(file);
         ::unlink(temp.c_str());
-        if (dynamic_cast<const std::bad_alloc*>(&e) || dynamic_cast<const OutOfMemoryError*>(&e))
-            throw OutOfMemoryError("cannot write '" + path + "': out of memory");
-        throw Error("cannot write '" + path + "': " + e.what());
+        throw_write_failure(path, e);
     }
     if (std::fclose(file) != 0) {
         ::unlink(temp.c_str());
@@ -154,6 +156,15 @@ void write_file_atomically(const std::string& path, const std::function<void(std
         const int err = errno;
         ::unlink(temp.c_str());
         throw Error("cannot write '" + path + "': " + std::strerror(err));
+    }
+}
+
+void write_to_stream(std::FILE* file, const std::string& name, const std::function<void(std::FILE*)>& write) {
+    try {
+        write(file);
+        if (std::fflush(file) != 0 || std::ferror(file)) throw Error(std::string("write failed: ") + std::strerror(errno));
+    } catch (const std::exception& e) {
+        throw_write_failure(name, e);
     }
 }
 

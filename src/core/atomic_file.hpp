@@ -1,5 +1,6 @@
 // Writes a file through a temporary in the same directory and renames it into place, so a
-// failure never leaves a partial or empty output behind.
+// failure never leaves a partial or empty output behind; the temporaries are listed for a
+// signal handler to remove (remove_partial_outputs).
 #pragma once
 
 #include <cstdio>
@@ -18,6 +19,28 @@ void write_file_atomically(const std::string& path, const std::function<void(std
 // The directory a write of `path` puts its temporary in: `path`'s own, or "."; throws Error
 // (naming `path`) when `path` is a directory or that directory does not exist.
 std::filesystem::path target_directory(const std::string& path);
+
+// Calls write(FILE*) on a stream the caller opened (standard output), then flushes it; throws
+// Error as write_file_atomically does, naming `name`. What was written stays written.
+void write_to_stream(std::FILE* file, const std::string& name, const std::function<void(std::FILE*)>& write);
+
+// A temporary file's name listed for remove_partial_outputs() (a signal handler's cleanup)
+// for as long as this object lives or until unlist().
+class ListedTemporary {
+public:
+    ListedTemporary() = default;
+    ~ListedTemporary();
+    ListedTemporary(const ListedTemporary&) = delete;
+    ListedTemporary& operator=(const ListedTemporary&) = delete;
+
+    // Lists `temp`, replacing a name listed before. Call it before the file is created where
+    // the name is known first, so that no signal in between can leave the file behind.
+    void list(const std::string& temp);
+    void unlist();
+
+private:
+    void* slot_ = nullptr;  // a slot of atomic_file.cpp's fixed table
+};
 
 // fwrite that throws Error on a short write.
 void write_bytes(std::FILE* file, const void* data, std::size_t bytes);

@@ -1,6 +1,5 @@
 #include "atomic_file.hpp"
 #include "mesh_arrays.hpp"
-#include "out_of_memory.hpp"
 #include "parallel.hpp"
 #include "write_to_stream.hpp"
 
@@ -218,12 +217,7 @@ void write_mesh(const std::string& path, const Mesh& mesh) {
 
 void detail::write_mesh_to(std::FILE* file, const Mesh& mesh, const std::string& format, const std::string& name) {
     const Writer writer = checked_writer(format, mesh, name);
-    try {
-        detail::out_of_memory_as_error([] { return std::string("out of memory"); }, [&] { writer(file, mesh); });
-        if (std::fflush(file) != 0) throw Error(std::string("write failed: ") + std::strerror(errno));
-    } catch (const Error& e) {
-        detail::rethrow_with_message(e, "cannot write '" + name + "': " + e.what());
-    }
+    detail::write_to_stream(file, name, [&](std::FILE* f) { writer(f, mesh); });
 }
 
 }  // namespace voxmesh

@@ -2,16 +2,14 @@
 // written through a temporary file so a failure never leaves a partial output.
 #include "core/atomic_file.hpp"
 #include "core/float_extent.hpp"
-#include "core/out_of_memory.hpp"
 #include "core/write_to_stream.hpp"
 #include "header_text.hpp"
 
 #include <voxmesh/io.hpp>
 
 #include <bit>
-#include <cerrno>
 #include <cmath>
-#include <cstring>
+#include <functional>
 
 namespace voxmesh {
 
@@ -31,10 +29,12 @@ const char* nrrd_type(ScalarType type) {
     throw Error("unknown scalar type");
 }
 
-// The header write_nrrd writes for `volume`, after its checks (Error naming `name`).
-std::string checked_header(const VolumeView& volume, const std::map<std::string, std::string>& key_values,
-                           const std::string& name, std::size_t& bytes) {
+// What write_nrrd writes for `volume` (its header, then the samples), after its checks (Error
+// naming `name`).
+std::function<void(std::FILE*)> checked_nrrd(const VolumeView& volume, const std::map<std::string, std::string>& key_values,
+                                             const std::string& name) {
     auto refuse = [&](const std::string& why) { throw Error("cannot write '" + name + "': " + why); };
+    std::size_t bytes = 0;
     try {
         bytes = checked_volume_bytes(volume.dims, volume.type);
     } catch (const Error& e) {
@@ -82,32 +82,22 @@ std::string checked_header(const VolumeView& volume, const std::map<std::string,
         refuse("the key/value lines make a header of " + std::to_string(header.size()) +
                " bytes, more than the " + std::to_string(io::kMaxNrrdHeader) + " NRRD readers here read");
 
-    return header;
+    return [header, data = volume.data, bytes](std::FILE* file) {
+        detail::write_bytes(file, header.data(), header.size());
+        detail::write_bytes(file, data, bytes);
+    };
 }
 
 }  // namespace
 
 void write_nrrd(const std::string& path, const VolumeView& volume,
                 const std::map<std::string, std::string>& key_values) {
-    std::size_t bytes = 0;
-    const std::string header = checked_header(volume, key_values, path, bytes);
-    detail::write_file_atomically(path, [&](std::FILE* file) {
-        detail::write_bytes(file, header.data(), header.size());
-        detail::write_bytes(file, volume.data, bytes);
-    });
+    detail::write_file_atomically(path, checked_nrrd(volume, key_values, path));
 }
 
 void detail::write_nrrd_to(std::FILE* file, const VolumeView& volume,
                            const std::map<std::string, std::string>& key_values, const std::string& name) {
-    std::size_t bytes = 0;
-    const std::string header = checked_header(volume, key_values, name, bytes);
-    try {
-        write_bytes(file, header.data(), header.size());
-        write_bytes(file, volume.data, bytes);
-        if (std::fflush(file) != 0) throw Error(std::string("write failed: ") + std::strerror(errno));
-    } catch (const Error& e) {
-        detail::rethrow_with_message(e, "cannot write '" + name + "': " + e.what());
-    }
+    write_to_stream(file, name, checked_nrrd(volume, key_values, name));
 }
 
 }  // namespace voxmesh
