@@ -166,7 +166,8 @@ void write_mesh(const std::string& path, const Mesh& mesh);
 
 // Removes the temporary files of writes in progress (write_mesh, write_nrrd), for a program's
 // SIGINT / SIGTERM handler to call before the program dies, so that an interrupted write
-// leaves nothing behind. Async-signal-safe. The voxmesh command line tool does this.
+// leaves nothing behind. Async-signal-safe. The voxmesh command line tool does this (its
+// copy of standard input is listed among them).
 void remove_partial_outputs() noexcept;
 
 // Topology summary: closed means every edge is in exactly two triangles.

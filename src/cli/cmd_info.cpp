@@ -90,7 +90,6 @@ int run_model_info(const InputPath& input) {
 }
 
 int run_info(const InfoArgs& a) {
-    if (a.input != "-") check_input_file(a.input);
     // "-": standard input, in a format told from its content, or raw samples with the flags.
     const InputPath input(a.input, a.input == "-" && a.raw.any_given() ? InputKind::Raw : InputKind::VolumeOrModel);
     const std::string& path = input.path();

@@ -32,11 +32,10 @@ int run_sculpt(const SculptArgs& a) {
     check_mesh_output(a.output, a.format);
     std::FILE* const report = report_file(a.output);
     if (a.input == "-" && a.strokes == "-") throw BadInput("the model and --strokes cannot both be standard input");
-    if (a.input != "-") {
+    if (a.input != "-") {  // checked before the strokes are read (load_model reads it after)
         check_input_file(a.input);
         check_model_extension(a.input, "sculpt");
     }
-    if (!a.strokes.empty() && a.strokes != "-") check_input_file(a.strokes);
     std::vector<ScriptDab> dabs;
     if (!a.strokes.empty()) {
         const InputPath strokes(a.strokes, InputKind::Text);

@@ -2,8 +2,6 @@
 #include "common.hpp"
 #include "stdin_input.hpp"
 
-#include "core/write_to_stream.hpp"
-
 #include <voxmesh/voxelize.hpp>
 
 #include <chrono>
@@ -32,12 +30,7 @@ int run_voxelize(const VoxelizeArgs& a) {
     const auto t0 = std::chrono::steady_clock::now();
     const Volume volume = about_file(input_name(a.input), [&] { return voxelize(model, options); });
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (is_stdout(a.output)) {
-        std::cout.flush();
-        about_file(output_name(a.output), [&] { detail::write_nrrd_to(stdout, volume.view(), {}, output_name(a.output)); });
-    } else {
-        about_file(a.output, [&] { write_nrrd(a.output, volume.view()); });
-    }
+    write_volume_output(a.output, volume.view());
 
     const bool distance = options.field == VoxelField::Distance;
     report_stream(a.output) << input_name(a.input) << " -> " << output_name(a.output) << ": " << model.triangle_count() << " triangles, "

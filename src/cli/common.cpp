@@ -143,12 +143,21 @@ void check_mesh_output(const std::string& output, const std::string& format) {
 }
 
 void write_mesh_output(const std::string& output, const std::string& format, const Mesh& mesh) {
-    if (!is_stdout(output)) {
-        about_file(output, [&] { write_mesh(output, mesh); });
-        return;
-    }
-    std::cout.flush();  // nothing of ours is buffered ahead of the mesh
-    about_file("standard output", [&] { detail::write_mesh_to(stdout, mesh, "." + format, "standard output"); });
+    const std::string name = output_name(output);
+    about_file(name, [&] {
+        if (!is_stdout(output)) return write_mesh(output, mesh);
+        std::cout.flush();  // nothing of ours is buffered ahead of the mesh
+        detail::write_mesh_to(stdout, mesh, "." + format, name);
+    });
+}
+
+void write_volume_output(const std::string& output, const VolumeView& volume) {
+    const std::string name = output_name(output);
+    about_file(name, [&] {
+        if (!is_stdout(output)) return write_nrrd(output, volume);
+        std::cout.flush();
+        detail::write_nrrd_to(stdout, volume, {}, name);
+    });
 }
 
 RawLayout raw_layout(const std::string& path, const RawFlags& raw) {
@@ -188,7 +197,6 @@ Volume load_volume(const std::string& arg, const RawFlags& raw) {
         return finite_samples(about_file(kStdinName, [&] { return read_raw(std::cin, kStdinName, raw_layout(kStdinName, raw)); }),
                               kStdinName);
     }
-    if (arg != "-") check_input_file(arg);
     const InputPath input(arg, InputKind::Volume);  // "-": a file format, told from its content
     const std::string& path = input.path();
     const bool is_raw = is_raw_path(path);

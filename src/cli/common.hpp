@@ -106,6 +106,8 @@ void add_mesh_format_option(CLI::App* sub, std::string& format);
 void check_mesh_output(const std::string& output, const std::string& format);
 // The mesh to `output` (a file, atomically, or standard output in `format`); BadInput naming it.
 void write_mesh_output(const std::string& output, const std::string& format, const Mesh& mesh);
+// The volume to `output` as NRRD (a file, atomically, or standard output); BadInput naming it.
+void write_volume_output(const std::string& output, const VolumeView& volume);
 
 // Reads a volume file (raw with the flags, else by extension) and rejects NaN/inf samples.
 Volume load_volume(const std::string& path, const RawFlags& raw);

@@ -3,7 +3,6 @@
 // memory during the work included).
 #include "common.hpp"
 #include "core/exit_signals.hpp"
-#include "stdin_input.hpp"
 
 #include <csignal>
 #include <exception>
@@ -14,12 +13,9 @@
 int main(int argc, char** argv) {
     using namespace voxmesh::cli;
     // Interrupted while writing an output: nothing half-written is left behind, nor the copy
-    // of standard input.
+    // of standard input (stdin_input.hpp lists it with the outputs' temporaries).
     for (const int sig : {SIGINT, SIGTERM, SIGHUP})
-        voxmesh::detail::handle_signal_unless_ignored(sig, [](int s) {
-            remove_stdin_spool();
-            voxmesh::detail::remove_partial_outputs_and_die(s);
-        });
+        voxmesh::detail::handle_signal_unless_ignored(sig, voxmesh::detail::remove_partial_outputs_and_die);
     pin_pocl_workers();
     CLI::App app{"voxmesh " VOXMESH_VERSION_STRING
                  ": marching cubes on every compute device (CPU threads, OpenCL), STL voxelization"};

@@ -3,7 +3,6 @@
 #include "io/readers.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cerrno>
 #include <cstdint>
 #include <cstdlib>
@@ -133,24 +132,6 @@ std::string sniff_format(const std::string& head, std::size_t size, InputKind ki
 
 namespace {
 
-// The spooled files, for remove_stdin_spool() to find from a signal handler: fixed buffers and
-// lock-free flags, as remove_partial_outputs() keeps the outputs' temporaries.
-struct SpoolSlot {
-    std::atomic<bool> ready{false};
-    char path[4096];
-};
-SpoolSlot g_spool_slots[2];  // the copy as it is written, and under its format's name
-static_assert(std::atomic<bool>::is_always_lock_free);
-
-void list_spool(int slot, const std::string& path) {
-    if (path.size() >= sizeof(SpoolSlot::path)) return;
-    g_spool_slots[slot].ready.store(false, std::memory_order_release);
-    std::memcpy(g_spool_slots[slot].path, path.c_str(), path.size() + 1);
-    g_spool_slots[slot].ready.store(true, std::memory_order_release);
-}
-
-void unlist_spool(int slot) { g_spool_slots[slot].ready.store(false, std::memory_order_release); }
-
 // A new empty file from `pattern` (XXXXXX before `suffix`), its path; BadInput on failure.
 std::string make_temp_file(const std::string& suffix) {
     std::string pattern = (fs::temp_directory_path() / "voxmesh-stdin-XXXXXX").string() + suffix;
@@ -164,19 +145,17 @@ std::string make_temp_file(const std::string& suffix) {
 
 }  // namespace
 
-void remove_stdin_spool() noexcept {
-    for (SpoolSlot& slot : g_spool_slots)
-        if (slot.ready.load(std::memory_order_acquire)) ::unlink(slot.path);
-}
-
 InputPath::InputPath(const std::string& arg, InputKind kind) : path_(arg), display_(arg) {
-    if (arg != "-") return;
+    if (arg != "-") {
+        check_input_file(arg);
+        return;
+    }
     display_ = kStdinName;
     if (::isatty(STDIN_FILENO))
         throw BadInput(std::string(kStdinName) + " is a terminal: pipe or redirect " + kind_text(kind) + " into it");
     // Copied first, then named: the format is told from the content.
     const std::string spooled = make_temp_file("");
-    list_spool(0, spooled);
+    copy_listed_.list(spooled);
     path_ = spooled;
     spooled_ = true;  // from here the destructor's to remove, so the constructor cleans up on throw
     try {
@@ -188,14 +167,14 @@ InputPath::InputPath(const std::string& arg, InputKind kind) : path_(arg), displ
         if (ext.empty())
             throw BadInput(std::string("'") + kStdinName + "': not " + kind_text(kind) + " by its first bytes");
         const std::string named = make_temp_file(ext);
-        list_spool(1, named);
+        named_listed_.list(named);
         if (::rename(spooled.c_str(), named.c_str()) != 0) {
             const int err = errno;
             ::unlink(named.c_str());
-            unlist_spool(1);
+            named_listed_.unlist();
             throw BadInput(std::string("cannot rename the copy of ") + kStdinName + ": " + std::strerror(err));
         }
-        unlist_spool(0);
+        copy_listed_.unlist();
         path_ = named;
         // A header whose samples are in a file of their own names it beside itself; beside the
         // spooled copy there is nothing.
@@ -219,8 +198,8 @@ InputPath::~InputPath() { remove_spool(); }
 void InputPath::remove_spool() noexcept {
     if (!spooled_) return;
     ::unlink(path_.c_str());  // a mapped Volume keeps its pages after the file is gone
-    unlist_spool(0);
-    unlist_spool(1);
+    copy_listed_.unlist();
+    named_listed_.unlist();
     spooled_ = false;
 }
 
@@ -232,11 +211,8 @@ std::string InputPath::shown(std::string text) const {
 }
 
 Mesh load_model(const std::string& arg, const std::string& command) {
-    if (arg != "-") {
-        check_input_file(arg);
-        check_model_extension(arg, command);
-    }
     const InputPath input(arg, InputKind::Model);
+    if (arg != "-") check_model_extension(arg, command);
     return input.read([&] { return read_mesh(input.path()); });
 }
 

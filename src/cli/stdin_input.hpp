@@ -1,9 +1,13 @@
 // An input named "-": standard input copied to a temporary file (in TMPDIR), named with the
-// format its first bytes show, so that the readers (which map files and seek in them) read it as any
-// file. Messages call it "standard input", not the temporary file.
+// format its first bytes show, so that the readers (which map files and seek in them) read it
+// as any file. Messages call it "standard input", not the temporary file. The copy is listed
+// with the outputs' temporaries, so remove_partial_outputs() in a signal handler removes it.
 #pragma once
 
 #include "common.hpp"
+
+#include "core/atomic_file.hpp"
+#include "core/out_of_memory.hpp"
 
 #include <string>
 
@@ -25,8 +29,9 @@ std::string sniff_format(const std::string& head, std::size_t size, InputKind ki
 
 class InputPath {
 public:
-    // `arg` as given; "-" reads all of standard input now (BadInput when it is a terminal,
-    // empty, not of `kind`, or cannot be spooled).
+    // `arg` as given, checked to be a readable non-empty file (check_input_file); "-" reads all
+    // of standard input now (BadInput when it is a terminal, empty, not of `kind`, or cannot be
+    // spooled).
     InputPath(const std::string& arg, InputKind kind);
     ~InputPath();
     InputPath(const InputPath&) = delete;
@@ -40,13 +45,13 @@ public:
     // about_file for this input, naming display() (not the temporary copy).
     template <class F>
     auto read(F&& f) const -> decltype(f()) {
-        try {
-            return f();
-        } catch (const voxmesh::OutOfMemoryError& e) {
-            throw voxmesh::OutOfMemoryError(naming(display_, shown(e.what())));
-        } catch (const voxmesh::Error& e) {
-            throw BadInput(naming(display_, shown(e.what())));
-        }
+        return about_file(display_, [&] {
+            try {
+                return f();
+            } catch (const voxmesh::Error& e) {
+                detail::rethrow_with_message(e, shown(e.what()));
+            }
+        });
     }
 
 private:
@@ -54,11 +59,10 @@ private:
 
     bool spooled_ = false;  // path_ is the copy of standard input, removed with this object
     std::string path_, display_;
+    // The copy under its first name and under its format's, listed for the signal handler's
+    // remove_partial_outputs() while they exist.
+    detail::ListedTemporary copy_listed_, named_listed_;
 };
-
-// Removes the copy of standard input being made or read, for the CLI's signal handler.
-// Async-signal-safe.
-void remove_stdin_spool() noexcept;
 
 // The model `arg` names (a .stl, .ply or .obj file, or "-"), read for `command`; BadInput
 // naming it when it cannot be.
