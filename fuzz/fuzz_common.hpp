@@ -1,6 +1,8 @@
-// What every fuzz target shares. The readers take paths (they map files and open detached
-// data files), so each input is written to a file in a private scratch directory and read
-// back through the public API: the whole path is fuzzed, not just the header parser.
+// What every fuzz target shares. Each input is written to a file in a private scratch
+// directory and read back through the public API (the readers map files and open detached
+// data files): the whole path is fuzzed, not just the header parser. The readers also take
+// the same bytes from memory (*_from_memory), which must give the same result or the same
+// Error, word for word.
 #pragma once
 
 #include <voxmesh/io.hpp>
@@ -10,7 +12,9 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
+#include <optional>
 #include <string>
 
 namespace fuzz {
@@ -55,16 +59,47 @@ inline void touch(const voxmesh::Volume& v) {
     sink = sum;
 }
 
-// Reads a volume file both ways; voxmesh::Error is the expected outcome for bad input, and
-// anything else (another exception, a crash, a sanitizer report) is a finding.
-inline void read_volume_file(const std::string& path) {
+// f()'s Error message, or nothing when it returned.
+template <class F>
+std::optional<std::string> error_of(F&& f) {
     try {
-        const voxmesh::VolumeInfo info = voxmesh::read_volume_info(path);
-        const voxmesh::Volume v = voxmesh::read_volume(path);
-        if (v.dims != info.dims || v.type != info.type) std::abort();  // info and load must agree
-        touch(v);
-    } catch (const voxmesh::Error&) {
+        f();
+        return std::nullopt;
+    } catch (const voxmesh::Error& e) {
+        return std::string(e.what());
     }
+}
+
+// The file's outcome and the memory's must agree: both fail with one message, or both read.
+// Only memory refuses a header naming a separate data file.
+inline void check_same_outcome(const std::optional<std::string>& file, const std::optional<std::string>& memory) {
+    if (memory && memory->find("separate data file") != std::string::npos) return;
+    if (file != memory) std::abort();
+}
+
+inline bool same_volume(const voxmesh::Volume& a, const voxmesh::Volume& b) {
+    return a.type == b.type && a.dims == b.dims && a.spacing == b.spacing && a.origin == b.origin &&
+           std::memcmp(a.data, b.data, a.byte_size()) == 0;
+}
+
+// Reads a volume input (written to scratch_dir()/name) with read_volume_info and read_volume,
+// and from memory; voxmesh::Error is the expected outcome for bad input, and anything else
+// (another exception, a crash, a sanitizer report, the two ways disagreeing) is a finding.
+inline void read_volume_input(const char* name, const std::uint8_t* data, std::size_t size) {
+    const std::string path = input_file(name, data, size);
+    voxmesh::VolumeInfo info, memory_info;
+    voxmesh::Volume v, memory_v;
+    const auto info_error = error_of([&] { info = voxmesh::read_volume_info(path); });
+    const auto memory_info_error =
+        error_of([&] { memory_info = voxmesh::read_volume_info_from_memory(data, size, path); });
+    const auto error = error_of([&] { v = voxmesh::read_volume(path); });
+    const auto memory_error = error_of([&] { memory_v = voxmesh::read_volume_from_memory(data, size, path); });
+    check_same_outcome(info_error, memory_info_error);
+    check_same_outcome(error, memory_error);
+    if (error) return;
+    touch(v);
+    if (!info_error && (v.dims != info.dims || v.type != info.type)) std::abort();  // info and load must agree
+    if (!memory_error && !same_volume(v, memory_v)) std::abort();
 }
 
 // What a mesh reader returns must be a well-formed mesh: whole triples, normals for every
@@ -80,16 +115,21 @@ inline void check_mesh(const voxmesh::Mesh& mesh) {
         if (!std::isfinite(v)) std::abort();
 }
 
-// Reads `data` as a mesh file named `name` (its extension picks the reader): a well-formed
-// mesh (at least one triangle where `faces_required`) or an Error, nothing else.
+// Reads `data` as a mesh file named `name` (its extension picks the reader), and from memory:
+// a well-formed mesh (at least one triangle where `faces_required`) or an Error, nothing else,
+// and the same either way.
 inline void read_mesh_input(const char* name, const std::uint8_t* data, std::size_t size, bool faces_required) {
     const std::string path = input_file(name, data, size);
-    try {
-        const voxmesh::Mesh mesh = voxmesh::read_mesh(path);
-        check_mesh(mesh);
-        if (faces_required && mesh.indices.empty()) std::abort();
-    } catch (const voxmesh::Error&) {
-    }
+    voxmesh::Mesh mesh, memory_mesh;
+    const auto error = error_of([&] { mesh = voxmesh::read_mesh(path); });
+    const auto memory_error = error_of([&] { memory_mesh = voxmesh::read_mesh_from_memory(data, size, path); });
+    check_same_outcome(error, memory_error);
+    if (error) return;
+    check_mesh(mesh);
+    if (faces_required && mesh.indices.empty()) std::abort();
+    if (mesh.positions != memory_mesh.positions || mesh.normals != memory_mesh.normals ||
+        mesh.indices != memory_mesh.indices)
+        std::abort();
 }
 
 // extract() of a volume the library made (a sculpt's, voxelize's), on the CPU engine and one

@@ -1,7 +1,8 @@
-// libFuzzer target: read_volume / read_volume_info on a .mha file.
+// libFuzzer target: read_volume / read_volume_info on a .mha file, and the *_from_memory
+// readers on the same bytes, which must agree with them.
 #include "fuzz_common.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    fuzz::read_volume_file(fuzz::input_file("input.mha", data, size));
+    fuzz::read_volume_input("input.mha", data, size);
     return 0;
 }

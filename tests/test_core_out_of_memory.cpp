@@ -24,10 +24,12 @@
 
 #include <cstddef>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <new>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -160,6 +162,36 @@ TEST_CASE("out of memory is an Error from the mesh readers and voxelize", "[io][
         vo.threads = 1;
         check_out_of_memory_is_error([&] { (void)voxmesh::voxelize(mesh, vo); },
                                      "voxelize: out of memory for a mesh of " + std::to_string(mesh.vertex_count()));
+    }
+}
+
+TEST_CASE("out of memory is an Error from reading and writing meshes in memory", "[io][memory]") {
+    // About 400 000 triangles: each format's arrays and bytes are well past the 4 MB that the
+    // set-up may leave free plus the cap's 2 MB of room.
+    const voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Sphere, 256);
+    const voxmesh::Mesh mesh = voxmesh::extract(field.volume.view(), vmtest::cpu_options(field.iso, 1));
+    REQUIRE(mesh.triangle_count() > 350000);
+    // All read before the checks, in one allocation each: memory freed between them would be
+    // malloc's to hand out again, past any cap.
+    const char* const names[] = {"sphere.stl", "sphere.ply", "sphere.obj"};
+    vmtest::TempDir dir;
+    std::vector<std::vector<unsigned char>> files;
+    for (const char* name : names) {
+        const std::string path = dir.file(name);
+        voxmesh::write_mesh(path, mesh);
+        std::ifstream in(path, std::ios::binary);
+        std::vector<unsigned char>& bytes = files.emplace_back(std::filesystem::file_size(path));
+        in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    }
+    if (!cap_can_be_tight(std::size_t{4} << 20)) return;
+    for (std::size_t f = 0; f < files.size(); ++f) {
+        const std::string name = names[f];
+        INFO(name);
+        check_out_of_memory_is_error(
+            [&] { (void)voxmesh::read_mesh_from_memory(files[f].data(), files[f].size(), name); },
+            "'" + name + "': out of memory reading the mesh");
+        check_out_of_memory_is_error([&] { (void)voxmesh::write_mesh_to_memory(mesh, name); },
+                                     "cannot write '" + name + "': out of memory");
     }
 }
 

@@ -47,6 +47,7 @@
 #include <iosfwd>
 #include <map>
 #include <string>
+#include <vector>
 
 namespace voxmesh {
 
@@ -110,6 +111,9 @@ VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout);
 // samples placed beyond the float range, which read_volume would refuse to read back.
 void write_nrrd(const std::string& path, const VolumeView& volume,
                 const std::map<std::string, std::string>& key_values = {});
+// The bytes write_nrrd would write, in memory; `name` names the output in errors.
+std::vector<unsigned char> write_nrrd_to_memory(const VolumeView& volume, const std::string& name,
+                                                const std::map<std::string, std::string>& key_values = {});
 
 // STL, binary or ASCII (binary when 84 + 50*n == file size, whatever the header says),
 // welded by exact float position (-0 and +0 are one position): positions and indices
@@ -141,5 +145,18 @@ Mesh read_ply(const std::string& path);
 Mesh read_obj(const std::string& path);
 // read_stl, read_ply or read_obj, chosen by the extension (.stl, .ply, .obj; any case).
 Mesh read_mesh(const std::string& path);
+
+// Reading from memory: the readers above over `size` bytes at `data` (a download, a blob from
+// a database, a file read whole), with no file involved. `name` stands for the file's path: its
+// extension picks the format as read_volume's and read_mesh's does ("scan.nii.gz", "part.stl"),
+// and errors start with 'name':. The same checks apply, with `size` as the file's size. The
+// bytes are only read, and not used after the call: a Volume holds its own copy of the samples
+// (never a view of `data`). A header that names a separate data file (.nhdr or .mhd with
+// 'data file' / ElementDataFile) is an Error, as there is no directory to look in.
+Volume read_volume_from_memory(const void* data, std::size_t size, const std::string& name);
+Volume read_volume_from_memory(const void* data, std::size_t size, const std::string& name, VolumeInfo& info);
+VolumeInfo read_volume_info_from_memory(const void* data, std::size_t size, const std::string& name);
+Volume read_raw_from_memory(const void* data, std::size_t size, const std::string& name, const RawLayout& layout);
+Mesh read_mesh_from_memory(const void* data, std::size_t size, const std::string& name);
 
 }  // namespace voxmesh

@@ -163,6 +163,9 @@ void release_scratch_memory();
 // A symbolic link at `path` is written through (the file it names is replaced, the link
 // kept), and a file replaced keeps its permission bits, as a shell's `>` would do.
 void write_mesh(const std::string& path, const Mesh& mesh);
+// The bytes write_mesh would write, in memory, for a service to send or store without a file:
+// `name` stands for the path ("part.stl"; its extension picks the format, errors name it).
+std::vector<unsigned char> write_mesh_to_memory(const Mesh& mesh, const std::string& name);
 
 // Removes the temporary files of writes in progress (write_mesh, write_nrrd), for a program's
 // SIGINT / SIGTERM handler to call before the program dies, so that an interrupted write

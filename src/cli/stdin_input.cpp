@@ -180,7 +180,8 @@ InputPath::InputPath(const std::string& arg, InputKind kind) : path_(arg), displ
         // spooled copy there is nothing.
         if (ext == ".nrrd" || ext == ".mha") {
             const std::string data = read([&] {
-                return (ext == ".nrrd" ? io::read_nrrd_header(path_) : io::read_metaimage_header(path_)).layout.data_path;
+                const io::InputFile file(path_);
+                return (ext == ".nrrd" ? io::read_nrrd_header(file) : io::read_metaimage_header(file)).layout.data_path;
             });
             if (data != path_)
                 throw BadInput(std::string("'") + kStdinName + "': the header names a separate data file ('" +

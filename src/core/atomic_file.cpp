@@ -168,6 +168,62 @@ void write_to_stream(std::FILE* file, const std::string& name, const std::functi
     }
 }
 
+namespace {
+
+// Where a memory stream's writes go. stdio is C, so nothing may be thrown through it: a
+// failed append fails the write, and running out of memory is remembered for the caller.
+struct MemorySink {
+    std::vector<unsigned char> bytes;
+    bool out_of_memory = false;
+};
+
+ssize_t append_to_sink(void* cookie, const char* data, std::size_t size) {
+    auto* sink = static_cast<MemorySink*>(cookie);
+    try {
+        sink->bytes.insert(sink->bytes.end(), data, data + size);
+        return static_cast<ssize_t>(size);
+    } catch (const std::bad_alloc&) {
+        sink->out_of_memory = true;
+        errno = ENOMEM;
+    } catch (...) {  // length_error: more than a vector holds
+        errno = EFBIG;
+    }
+    return 0;  // fopencookie's "nothing written, an error"
+}
+
+}  // namespace
+
+std::vector<unsigned char> write_to_memory(const std::string& name, const std::function<void(std::FILE*)>& write,
+                                           std::size_t expected_bytes) {
+    const auto out_of_memory = [&] { return OutOfMemoryError("cannot write '" + name + "': out of memory"); };
+    MemorySink sink;
+    try {
+        sink.bytes.reserve(expected_bytes);
+    } catch (const std::bad_alloc&) {
+        throw out_of_memory();
+    }
+    cookie_io_functions_t io{};
+    io.write = append_to_sink;
+    std::FILE* file = ::fopencookie(&sink, "w", io);
+    if (!file) throw out_of_memory();  // its only failure
+    try {
+        write_to_stream(file, name, write);
+    } catch (const Error&) {
+        std::fclose(file);
+        if (sink.out_of_memory) throw out_of_memory();
+        throw;
+    }
+    if (std::fclose(file) != 0) throw Error("cannot write '" + name + "': " + std::strerror(errno));
+    // Grown by doubling (a size not known before): up to half of it spare, given back.
+    if (sink.bytes.capacity() - sink.bytes.size() > sink.bytes.size() / 8) {
+        try {
+            sink.bytes.shrink_to_fit();
+        } catch (const std::bad_alloc&) {  // keeps the spare room: still the right bytes
+        }
+    }
+    return std::move(sink.bytes);
+}
+
 }  // namespace voxmesh::detail
 
 namespace voxmesh {

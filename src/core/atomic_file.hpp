@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace voxmesh::detail {
 
@@ -23,6 +24,13 @@ std::filesystem::path target_directory(const std::string& path);
 // Calls write(FILE*) on a stream the caller opened (standard output), then flushes it; throws
 // Error as write_file_atomically does, naming `name`. What was written stays written.
 void write_to_stream(std::FILE* file, const std::string& name, const std::function<void(std::FILE*)>& write);
+
+// Calls write(FILE*) on a stream into memory and returns what it wrote; throws Error as
+// write_file_atomically does, naming `name` (running out of memory an OutOfMemoryError).
+// `expected_bytes`, where the writer knows its size, is reserved at once: no growing copies,
+// and the result holds no spare capacity.
+std::vector<unsigned char> write_to_memory(const std::string& name, const std::function<void(std::FILE*)>& write,
+                                           std::size_t expected_bytes = 0);
 
 // A temporary file's name listed for remove_partial_outputs() (a signal handler's cleanup)
 // for as long as this object lives or until unlist().

@@ -64,14 +64,25 @@ void write_stl(std::FILE* f, const Mesh& mesh) {
     write_bytes(f, buffer.data(), buffer.size());
 }
 
-void write_ply(std::FILE* f, const Mesh& mesh) {
-    const bool normals = !mesh.normals.empty();
+std::size_t stl_bytes(const Mesh& mesh) { return 84 + 50 * mesh.triangle_count(); }
+
+std::string ply_header(const Mesh& mesh) {
     std::string header = "ply\nformat binary_little_endian 1.0\ncomment written by voxmesh " +
                          std::string(VOXMESH_VERSION_STRING) + "\nelement vertex " +
                          std::to_string(mesh.vertex_count()) + "\nproperty float x\nproperty float y\nproperty float z\n";
-    if (normals) header += "property float nx\nproperty float ny\nproperty float nz\n";
-    header += "element face " + std::to_string(mesh.triangle_count()) +
-              "\nproperty list uchar uint vertex_indices\nend_header\n";
+    if (!mesh.normals.empty()) header += "property float nx\nproperty float ny\nproperty float nz\n";
+    return header + "element face " + std::to_string(mesh.triangle_count()) +
+           "\nproperty list uchar uint vertex_indices\nend_header\n";
+}
+
+// Vertices as 3 (or 6, with normals) floats, faces as a count byte and 3 indices.
+std::size_t ply_bytes(const Mesh& mesh) {
+    return ply_header(mesh).size() + (mesh.positions.size() + mesh.normals.size()) * 4 + 13 * mesh.triangle_count();
+}
+
+void write_ply(std::FILE* f, const Mesh& mesh) {
+    const bool normals = !mesh.normals.empty();
+    const std::string header = ply_header(mesh);
     write_bytes(f, header.data(), header.size());
     std::vector<float> vertex_block;
     const std::size_t stride = normals ? 6 : 3;
@@ -192,14 +203,20 @@ void write_obj(std::FILE* f, const Mesh& mesh) {
                 [&](std::string& out, std::size_t t) { append_face(out, &mesh.indices[3 * t], normals); });
 }
 
-using Writer = void (*)(std::FILE*, const Mesh&);
+// A format's writer, and its output's size where that is known before writing (0: not).
+struct Writer {
+    void (*write)(std::FILE*, const Mesh&) = nullptr;
+    std::size_t (*bytes)(const Mesh&) = nullptr;
+    void operator()(std::FILE* f, const Mesh& mesh) const { write(f, mesh); }
+    std::size_t expected_bytes(const Mesh& mesh) const { return bytes ? bytes(mesh) : 0; }
+};
 
 // The writer of format `ext`, once `mesh` is known to be writable; Error naming `name` if not.
 Writer checked_writer(const std::string& ext, const Mesh& mesh, const std::string& name) {
-    Writer writer = nullptr;
-    if (ext == ".stl") writer = write_stl;
-    else if (ext == ".ply") writer = write_ply;
-    else if (ext == ".obj") writer = write_obj;
+    Writer writer;
+    if (ext == ".stl") writer = {write_stl, stl_bytes};
+    else if (ext == ".ply") writer = {write_ply, ply_bytes};
+    else if (ext == ".obj") writer = {write_obj, nullptr};
     else throw Error("cannot write '" + name + "': unknown mesh format '" + ext + "' (use .stl, .ply or .obj)");
     detail::check_mesh_arrays(mesh);
     // "nan" and "inf" in a mesh file: most readers (ours included) refuse them.
@@ -213,6 +230,11 @@ Writer checked_writer(const std::string& ext, const Mesh& mesh, const std::strin
 void write_mesh(const std::string& path, const Mesh& mesh) {
     const Writer writer = checked_writer(lower_extension(path), mesh, path);
     detail::write_file_atomically(path, [&](std::FILE* f) { writer(f, mesh); });
+}
+
+std::vector<unsigned char> write_mesh_to_memory(const Mesh& mesh, const std::string& name) {
+    const Writer writer = checked_writer(lower_extension(name), mesh, name);
+    return detail::write_to_memory(name, [&](std::FILE* f) { writer(f, mesh); }, writer.expected_bytes(mesh));
 }
 
 void detail::write_mesh_to(std::FILE* file, const Mesh& mesh, const std::string& format, const std::string& name) {

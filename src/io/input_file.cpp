@@ -39,6 +39,15 @@ InputFile::InputFile(const std::string& path) : path_(path) {
     size_ = static_cast<std::size_t>(st.st_size);
 }
 
+InputFile::InputFile(const std::string& name, const void* data, std::size_t size)
+    : path_(name), memory_(static_cast<const unsigned char*>(data)), size_(size) {
+    static const unsigned char kNothing = 0;
+    if (memory_ == nullptr) {
+        if (size != 0) fail(name, "no bytes given (a null pointer with a size of " + std::to_string(size) + ")");
+        memory_ = &kNothing;  // empty, but still in memory
+    }
+}
+
 InputFile::~InputFile() {
     if (fd_ >= 0) ::close(fd_);
 }
@@ -51,6 +60,11 @@ std::string InputFile::read(std::size_t offset, std::size_t max_bytes) const {
 }
 
 void InputFile::read_exact(std::size_t offset, void* out, std::size_t bytes) const {
+    if (in_memory()) {
+        if (offset > size_ || bytes > size_ - offset) fail(path_, "file ended early");
+        if (bytes > 0) std::memcpy(out, memory_ + offset, bytes);
+        return;
+    }
     auto* dst = static_cast<char*>(out);
     while (bytes > 0) {
         const ssize_t got = ::pread(fd_, dst, std::min<std::size_t>(bytes, 1 << 30), static_cast<off_t>(offset));
@@ -71,6 +85,7 @@ void refuse_mmap_for_testing(bool refuse) { g_refuse_mmap.store(refuse); }
 
 std::shared_ptr<unsigned char> InputFile::map() const {
     if (size_ == 0) fail(path_, "file is empty");
+    if (in_memory()) return copy();
     // NORESERVE: the private mapping is only copied where someone writes to it.
     void* base = g_refuse_mmap.load() ? MAP_FAILED
                                       : ::mmap(nullptr, size_, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_NORESERVE, fd_, 0);
@@ -81,6 +96,10 @@ std::shared_ptr<unsigned char> InputFile::map() const {
     }
     // A filesystem without mmap (some FUSE and network mounts) or the process's map-count
     // limit: read the file into memory instead, which is what a copy would cost anyway.
+    return copy();
+}
+
+std::shared_ptr<unsigned char> InputFile::copy() const {
     check_memory(path_, size_);
     return out_of_memory_reading(path_, "file", [&] {
         std::shared_ptr<unsigned char> copy(new unsigned char[size_], std::default_delete<unsigned char[]>());
@@ -89,10 +108,15 @@ std::shared_ptr<unsigned char> InputFile::map() const {
     });
 }
 
-MappedFile map_whole_file(const std::string& path) {
-    const InputFile file(path);
+std::shared_ptr<const unsigned char> InputFile::view() const {
+    if (size_ == 0) fail(path_, "file is empty");
+    if (in_memory()) return {std::shared_ptr<const unsigned char>(), memory_};  // aliasing: owns nothing
+    return map();
+}
+
+MappedFile map_whole_file(const InputFile& file) {
     MappedFile mapped;
-    mapped.mapping = file.map();  // the mapping outlives the descriptor
+    mapped.mapping = file.view();  // a mapping outlives the descriptor
     mapped.text = std::string_view(reinterpret_cast<const char*>(mapped.mapping.get()), file.size());
     return mapped;
 }
@@ -128,10 +152,13 @@ bool ends_with_nocase(const std::string& path, const std::string& suffix) {
                                                   std::tolower(static_cast<unsigned char>(b)); });
 }
 
-std::string sibling_path(const std::string& header_path, const std::string& name) {
+std::string detached_data_path(const InputFile& header, const std::string& name) {
+    if (header.in_memory())
+        fail(header.path(), "names a separate data file '" + name +
+                                "'; a header read from memory must hold its samples itself");
     const std::filesystem::path p(name);
     if (p.is_absolute()) return name;
-    return (std::filesystem::path(header_path).parent_path() / p).string();
+    return (std::filesystem::path(header.path()).parent_path() / p).string();
 }
 
 }  // namespace voxmesh::io

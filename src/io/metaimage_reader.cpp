@@ -51,8 +51,8 @@ std::array<std::vector<double>, 3> transform_axes(const std::string& path, const
 
 }  // namespace
 
-VolumeHeader read_metaimage_header(const std::string& path) {
-    const InputFile file(path);
+VolumeHeader read_metaimage_header(const InputFile& file) {
+    const std::string& path = file.path();
     if (file.size() == 0) fail(path, "file is empty");
     const std::string text = file.read(0, kMaxHeader);
 
@@ -175,7 +175,7 @@ VolumeHeader read_metaimage_header(const std::string& path) {
         // several files; anything else is one file name, spaces included ("my scan.raw").
         if (data_file == "LIST" || data_file.find('%') != std::string::npos)
             fail(path, "ElementDataFile '" + data_file + "': lists and file patterns are not supported");
-        layout.data_path = sibling_path(path, data_file);
+        layout.data_path = detached_data_path(file, data_file);
         layout.offset = 0;
     }
     if (header_size == -1) layout.at_end = true;

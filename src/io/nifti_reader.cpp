@@ -84,15 +84,15 @@ std::array<std::vector<double>, 3> qform_axes(const HeaderBytes& hdr) {
 
 }  // namespace
 
-VolumeHeader read_nifti_header(const std::string& path) {
-    const InputFile file(path);
+VolumeHeader read_nifti_header(const InputFile& file) {
+    const std::string& path = file.path();
     if (file.size() == 0) fail(path, "file is empty");
     const std::string magic = file.read(0, 2);
     const bool gzip = magic.size() == 2 && static_cast<unsigned char>(magic[0]) == 0x1f &&
                       static_cast<unsigned char>(magic[1]) == 0x8b;
     unsigned char raw[kHeaderBytes];
     if (gzip) {
-        const std::shared_ptr<unsigned char> mapping = file.map();
+        const std::shared_ptr<const unsigned char> mapping = file.view();
         Inflater inflater(path, mapping.get(), file.size());
         const std::size_t got = inflater.read(raw, kHeaderBytes);
         if (got < kHeaderBytes)

@@ -95,8 +95,8 @@ std::size_t skip_lines(const InputFile& file, std::size_t lines) {
 
 }  // namespace
 
-VolumeHeader read_nrrd_header(const std::string& path) {
-    const InputFile file(path);
+VolumeHeader read_nrrd_header(const InputFile& file) {
+    const std::string& path = file.path();
     if (file.size() == 0) fail(path, "file is empty");
     const std::string text = file.read(0, kMaxNrrdHeader);
     std::size_t pos = 0;
@@ -248,7 +248,7 @@ VolumeHeader read_nrrd_header(const std::string& path) {
     if (const std::string* data_file = optional("data file")) {
         if (split_words(*data_file).size() > 1 && data_file->find('%') != std::string::npos)
             fail(path, "multi-file 'data file' patterns are not supported");
-        layout.data_path = sibling_path(path, *data_file);
+        layout.data_path = detached_data_path(file, *data_file);
         offset = 0;
     } else if (!blank_line) {
         fail(path, "no blank line after the header and no 'data file': the samples are missing");

@@ -30,9 +30,14 @@ const char* nrrd_type(ScalarType type) {
 }
 
 // What write_nrrd writes for `volume` (its header, then the samples), after its checks (Error
-// naming `name`).
-std::function<void(std::FILE*)> checked_nrrd(const VolumeView& volume, const std::map<std::string, std::string>& key_values,
-                                             const std::string& name) {
+// naming `name`), and how many bytes that is.
+struct NrrdOutput {
+    std::function<void(std::FILE*)> write;
+    std::size_t bytes = 0;
+};
+
+NrrdOutput checked_nrrd(const VolumeView& volume, const std::map<std::string, std::string>& key_values,
+                        const std::string& name) {
     auto refuse = [&](const std::string& why) { throw Error("cannot write '" + name + "': " + why); };
     std::size_t bytes = 0;
     try {
@@ -82,22 +87,29 @@ std::function<void(std::FILE*)> checked_nrrd(const VolumeView& volume, const std
         refuse("the key/value lines make a header of " + std::to_string(header.size()) +
                " bytes, more than the " + std::to_string(io::kMaxNrrdHeader) + " NRRD readers here read");
 
-    return [header, data = volume.data, bytes](std::FILE* file) {
+    const auto write = [header, data = volume.data, bytes](std::FILE* file) {
         detail::write_bytes(file, header.data(), header.size());
         detail::write_bytes(file, data, bytes);
     };
+    return {write, header.size() + bytes};
 }
 
 }  // namespace
 
 void write_nrrd(const std::string& path, const VolumeView& volume,
                 const std::map<std::string, std::string>& key_values) {
-    detail::write_file_atomically(path, checked_nrrd(volume, key_values, path));
+    detail::write_file_atomically(path, checked_nrrd(volume, key_values, path).write);
+}
+
+std::vector<unsigned char> write_nrrd_to_memory(const VolumeView& volume, const std::string& name,
+                                                const std::map<std::string, std::string>& key_values) {
+    const NrrdOutput output = checked_nrrd(volume, key_values, name);
+    return detail::write_to_memory(name, output.write, output.bytes);
 }
 
 void detail::write_nrrd_to(std::FILE* file, const VolumeView& volume,
                            const std::map<std::string, std::string>& key_values, const std::string& name) {
-    write_to_stream(file, name, checked_nrrd(volume, key_values, name));
+    write_to_stream(file, name, checked_nrrd(volume, key_values, name).write);
 }
 
 }  // namespace voxmesh

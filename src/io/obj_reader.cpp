@@ -13,6 +13,7 @@
 //  * Keywords are case-sensitive, as the format defines them (lower case).
 #include "header_text.hpp"
 #include "input_file.hpp"
+#include "mesh_readers.hpp"
 
 #include <voxmesh/io.hpp>
 
@@ -195,8 +196,11 @@ private:
     std::size_t line_ = 0;
 };
 
-Mesh read_obj_file(const std::string& path) {
-    const io::MappedFile file = io::map_whole_file(path);
+}  // namespace
+
+Mesh io::read_obj_from(const InputFile& input) {
+    const std::string& path = input.path();
+    const io::MappedFile file = io::map_whole_file(input);
     const std::string_view text = file.text;
 
     ObjParser parser(path);
@@ -221,12 +225,6 @@ Mesh read_obj_file(const std::string& path) {
         parser.statement(joined, first_line);
     }
     return parser.finish();
-}
-
-}  // namespace
-
-Mesh read_obj(const std::string& path) {
-    return io::out_of_memory_reading(path, "mesh", [&] { return read_obj_file(path); });
 }
 
 }  // namespace voxmesh

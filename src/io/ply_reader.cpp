@@ -18,6 +18,7 @@
 //    none), as read_obj does; a coordinate so is an error.
 #include "header_text.hpp"
 #include "input_file.hpp"
+#include "mesh_readers.hpp"
 
 #include <voxmesh/io.hpp>
 
@@ -536,8 +537,11 @@ void read_elements(Body& body, const Header& h, Mesh& mesh) {
     if (!finite_normals) mesh.normals = {};
 }
 
-Mesh read_ply_file(const std::string& path) {
-    const io::MappedFile file = io::map_whole_file(path);
+}  // namespace
+
+Mesh io::read_ply_from(const InputFile& input) {
+    const std::string& path = input.path();
+    const io::MappedFile file = io::map_whole_file(input);
     const std::size_t size = file.text.size();
     const unsigned char* data = file.bytes();
     const std::string_view text = file.text;
@@ -560,12 +564,6 @@ Mesh read_ply_file(const std::string& path) {
         read_elements(body, h, mesh);
     }
     return mesh;
-}
-
-}  // namespace
-
-Mesh read_ply(const std::string& path) {
-    return io::out_of_memory_reading(path, "mesh", [&] { return read_ply_file(path); });
 }
 
 }  // namespace voxmesh

@@ -91,18 +91,19 @@ void check_extent(const std::string& path, const VolumeInfo& info) {
                    ", beyond the range of float mesh coordinates");
 }
 
-VolumeHeader parse_header(const std::string& path) {
-    if (ends_with_nocase(path, ".nrrd") || ends_with_nocase(path, ".nhdr")) return read_nrrd_header(path);
-    if (ends_with_nocase(path, ".mhd") || ends_with_nocase(path, ".mha")) return read_metaimage_header(path);
-    if (ends_with_nocase(path, ".nii") || ends_with_nocase(path, ".nii.gz")) return read_nifti_header(path);
+VolumeHeader parse_header(const InputFile& file) {
+    const std::string& path = file.path();
+    if (ends_with_nocase(path, ".nrrd") || ends_with_nocase(path, ".nhdr")) return read_nrrd_header(file);
+    if (ends_with_nocase(path, ".mhd") || ends_with_nocase(path, ".mha")) return read_metaimage_header(file);
+    if (ends_with_nocase(path, ".nii") || ends_with_nocase(path, ".nii.gz")) return read_nifti_header(file);
     if (ends_with_nocase(path, ".raw"))
         fail(path, "a headerless .raw volume needs its dims and type (read_raw / --dims --type)");
     fail(path, "unknown volume format (expected .nrrd, .nhdr, .mhd, .mha, .nii or .nii.gz)");
 }
 
-VolumeHeader read_header(const std::string& path) {
-    VolumeHeader h = parse_header(path);
-    check_extent(path, h.info);
+VolumeHeader read_header(const InputFile& file) {
+    VolumeHeader h = parse_header(file);
+    check_extent(file.path(), h.info);
     return h;
 }
 
@@ -140,6 +141,7 @@ VolumeHeader raw_header(const std::string& path, const RawLayout& raw) {
 namespace voxmesh {
 
 namespace {
+
 // Loaded samples, placed where their header puts them.
 Volume placed(Volume v, const VolumeInfo& info) {
     v.spacing = info.spacing;
@@ -147,20 +149,49 @@ Volume placed(Volume v, const VolumeInfo& info) {
     return v;
 }
 
-// f(), out of memory in it an Error naming the file.
+// The readers over one InputFile: a path opened, or bytes in memory.
+Volume read_volume_from(const io::InputFile& file, VolumeInfo& info) {
+    const io::VolumeHeader h = io::read_header(file);
+    Volume v = placed(io::load_samples(file, h.layout), h.info);
+    info = h.info;
+    return v;
+}
+
+VolumeInfo read_volume_info_from(const io::InputFile& file) {
+    io::VolumeHeader h = io::read_header(file);
+    const std::size_t data_bytes = io::check_samples(file, h.layout);
+    if (h.layout.data_path == file.path()) h.info.file_bytes = data_bytes;
+    return h.info;
+}
+
+// f(file) with `file` the path opened, out of memory anywhere in it an Error naming the file.
 template <class F>
 auto reading(const std::string& path, F&& f) {
-    return io::out_of_memory_reading(path, "volume", f);
+    return io::out_of_memory_reading(path, "volume", [&] {
+        const io::InputFile file(path);
+        return f(file);
+    });
 }
+
+// The same for bytes in memory.
+template <class F>
+auto reading(const void* data, std::size_t size, const std::string& name, F&& f) {
+    return io::out_of_memory_reading(name, "volume", [&] {
+        const io::InputFile file(name, data, size);
+        return f(file);
+    });
+}
+
+// The caller's layout as the header of `file`'s samples.
+Volume read_raw_from(const io::InputFile& file, const RawLayout& layout) {
+    const io::VolumeHeader h = io::raw_header(file.path(), layout);
+    return placed(io::load_samples(file, h.layout), h.info);
+}
+
 }  // namespace
 
 Volume read_volume(const std::string& path, VolumeInfo& info) {
-    return reading(path, [&] {
-        const io::VolumeHeader h = io::read_header(path);
-        Volume v = placed(io::load_samples(path, h.layout), h.info);
-        info = h.info;
-        return v;
-    });
+    return reading(path, [&](const io::InputFile& file) { return read_volume_from(file, info); });
 }
 
 Volume read_volume(const std::string& path) {
@@ -169,34 +200,43 @@ Volume read_volume(const std::string& path) {
 }
 
 VolumeInfo read_volume_info(const std::string& path) {
-    return reading(path, [&] {
-        io::VolumeHeader h = io::read_header(path);
-        const std::size_t data_bytes = io::check_samples(path, h.layout);
-        if (h.layout.data_path == path) h.info.file_bytes = data_bytes;
-        return h.info;
-    });
+    return reading(path, read_volume_info_from);
 }
 
 Volume read_raw(const std::string& path, const RawLayout& layout) {
-    return reading(path, [&] {
-        const io::VolumeHeader h = io::raw_header(path, layout);
-        return placed(io::load_samples(path, h.layout), h.info);
-    });
+    return reading(path, [&](const io::InputFile& file) { return read_raw_from(file, layout); });
 }
 
 Volume read_raw(std::istream& in, const std::string& name, const RawLayout& layout) {
-    return reading(name, [&] {
+    return io::out_of_memory_reading(name, "volume", [&] {
         const io::VolumeHeader h = io::raw_header(name, layout);
         return placed(io::load_stream_samples(in, name, h.layout), h.info);
     });
 }
 
 VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout) {
-    return reading(path, [&] {
+    return reading(path, [&](const io::InputFile& file) {
         io::VolumeHeader h = io::raw_header(path, layout);
-        h.info.file_bytes = io::check_samples(path, h.layout);
+        h.info.file_bytes = io::check_samples(file, h.layout);
         return h.info;
     });
+}
+
+Volume read_volume_from_memory(const void* data, std::size_t size, const std::string& name, VolumeInfo& info) {
+    return reading(data, size, name, [&](const io::InputFile& file) { return read_volume_from(file, info); });
+}
+
+Volume read_volume_from_memory(const void* data, std::size_t size, const std::string& name) {
+    VolumeInfo info;
+    return read_volume_from_memory(data, size, name, info);
+}
+
+VolumeInfo read_volume_info_from_memory(const void* data, std::size_t size, const std::string& name) {
+    return reading(data, size, name, read_volume_info_from);
+}
+
+Volume read_raw_from_memory(const void* data, std::size_t size, const std::string& name, const RawLayout& layout) {
+    return reading(data, size, name, [&](const io::InputFile& file) { return read_raw_from(file, layout); });
 }
 
 }  // namespace voxmesh

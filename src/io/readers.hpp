@@ -2,6 +2,7 @@
 // (VolumeInfo) and where the samples are (SampleLayout); read_volume.cpp loads them.
 #pragma once
 
+#include "input_file.hpp"
 #include "samples.hpp"
 
 #include <voxmesh/io.hpp>
@@ -17,9 +18,10 @@ struct VolumeHeader {
     SampleLayout layout;
 };
 
-VolumeHeader read_nrrd_header(const std::string& path);
-VolumeHeader read_metaimage_header(const std::string& path);
-VolumeHeader read_nifti_header(const std::string& path);
+// Each reads the header at the start of `file` (which names it in errors).
+VolumeHeader read_nrrd_header(const InputFile& file);
+VolumeHeader read_metaimage_header(const InputFile& file);
+VolumeHeader read_nifti_header(const InputFile& file);
 
 // N-D sizes as 3-D dims: N must be at least 3, and axes past the third must have size 1.
 std::array<std::size_t, 3> volume_dims(const std::string& path, const std::vector<std::size_t>& sizes);

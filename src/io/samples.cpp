@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstring>
 #include <istream>
+#include <optional>
 #include <vector>
 
 namespace voxmesh::io {
@@ -86,12 +87,14 @@ Located locate(const InputFile& file, const std::string& header_path, const Samp
     return at;
 }
 
-// The data file, with the header named in errors when they differ.
-InputFile open_data(const std::string& header_path, const SampleLayout& layout) {
+// The file holding the samples: `header` itself, or the detached data file opened into
+// `detached`, with the header named in errors.
+const InputFile& open_data(const InputFile& header, const SampleLayout& layout, std::optional<InputFile>& detached) {
+    if (layout.data_path == header.path()) return header;
     try {
-        return InputFile(layout.data_path);
+        return detached.emplace(layout.data_path);
     } catch (const Error& e) {
-        detail::rethrow_with_message(e, e.what() + where(header_path, layout));
+        detail::rethrow_with_message(e, e.what() + where(header.path(), layout));
     }
 }
 
@@ -123,10 +126,11 @@ std::size_t sample_bytes(const std::string& path, std::array<std::size_t, 3> dim
     }
 }
 
-std::size_t check_samples(const std::string& header_path, const SampleLayout& layout) {
-    const std::size_t bytes = sample_bytes(header_path, layout.dims, layout.type);
-    const InputFile file = open_data(header_path, layout);
-    locate(file, header_path, layout, bytes);
+std::size_t check_samples(const InputFile& header, const SampleLayout& layout) {
+    const std::size_t bytes = sample_bytes(header.path(), layout.dims, layout.type);
+    std::optional<InputFile> detached;
+    const InputFile& file = open_data(header, layout, detached);
+    locate(file, header.path(), layout, bytes);
     return file.size();
 }
 
@@ -136,14 +140,15 @@ void swap_bytes(void* data, std::size_t count, std::size_t size) {
     for (std::size_t i = 0; i < count; ++i, p += size) std::reverse(p, p + size);
 }
 
-Volume load_samples(const std::string& header_path, const SampleLayout& layout) {
-    const std::size_t bytes = sample_bytes(header_path, layout.dims, layout.type);
-    const InputFile file = open_data(header_path, layout);
-    const Located at = locate(file, header_path, layout, bytes);
+Volume load_samples(const InputFile& header, const SampleLayout& layout) {
+    const std::size_t bytes = sample_bytes(header.path(), layout.dims, layout.type);
+    std::optional<InputFile> detached;
+    const InputFile& file = open_data(header, layout, detached);
+    const Located at = locate(file, header.path(), layout, bytes);
     const std::size_t value_size = scalar_size(layout.type);
-    const std::string ctx = where(header_path, layout);
+    const std::string ctx = where(header.path(), layout);
 
-    if (!layout.compressed && host_order(layout) && at.start % value_size == 0) {
+    if (!layout.compressed && host_order(layout) && at.start % value_size == 0 && !file.in_memory()) {
         // Map, don't copy: the Volume keeps the mapping alive.
         std::shared_ptr<unsigned char> mapping = file.map();
         Volume v;
@@ -162,7 +167,7 @@ Volume load_samples(const std::string& header_path, const SampleLayout& layout) 
     if (!layout.compressed) {
         file.read_exact(at.start, v.data, bytes);
     } else {
-        const std::shared_ptr<unsigned char> mapping = file.map();
+        const std::shared_ptr<const unsigned char> mapping = file.view();
         Inflater inflater(file.path(), mapping.get() + at.start, at.length);
         if (inflater.skip(layout.skip) != layout.skip)
             fail(file.path(), "decompressed data ends inside the " + std::to_string(layout.skip) + "-byte header" + ctx);

@@ -2,6 +2,8 @@
 // place that checks sizes against the file, maps, copies, decompresses and byte-swaps.
 #pragma once
 
+#include "input_file.hpp"
+
 #include <voxmesh/io.hpp>
 
 #include <array>
@@ -27,14 +29,17 @@ struct SampleLayout {
 // Overflow-checked byte size of the samples; errors name `path`. Zero dims are an error.
 std::size_t sample_bytes(const std::string& path, std::array<std::size_t, 3> dims, ScalarType type);
 
+// Both read the samples from `header` itself where layout.data_path is its path (attached
+// data, a raw file), else from the detached data file, naming the header in its errors.
+//
 // Everything that can be checked without reading samples: the data file exists, raw data
 // matches the file size exactly, compressed data could hold that much. Returns the data
-// file's size. `header_path` names the header in errors about a detached file.
-std::size_t check_samples(const std::string& header_path, const SampleLayout& layout);
+// file's size.
+std::size_t check_samples(const InputFile& header, const SampleLayout& layout);
 
-// The samples, mapped when possible (see io.hpp), otherwise copied / inflated / swapped;
-// then reversed along layout.flipped.
-Volume load_samples(const std::string& header_path, const SampleLayout& layout);
+// The samples, mapped when possible (see io.hpp; copied from a header in memory), otherwise
+// copied / inflated / swapped; then reversed along layout.flipped.
+Volume load_samples(const InputFile& header, const SampleLayout& layout);
 
 // The samples from a stream (a pipe, stdin), never mapped: layout.offset bytes skipped, then
 // exactly the samples, and nothing after them; swapped and reversed as load_samples does.

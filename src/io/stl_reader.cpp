@@ -4,6 +4,7 @@
 #include "core/out_of_memory.hpp"
 #include "header_text.hpp"
 #include "input_file.hpp"
+#include "mesh_readers.hpp"
 #include "samples.hpp"
 
 #include <voxmesh/io.hpp>
@@ -151,8 +152,11 @@ bool starts_with_solid(std::string_view text) {
     return io::lower(text.substr(i, 5)) == "solid";
 }
 
-Mesh read_stl_file(const std::string& path) {
-    const io::MappedFile file = io::map_whole_file(path);
+}  // namespace
+
+Mesh io::read_stl_from(const InputFile& input) {
+    const std::string& path = input.path();
+    const io::MappedFile file = io::map_whole_file(input);
     const std::size_t size = file.text.size();
     const unsigned char* data = file.bytes();
 
@@ -182,12 +186,6 @@ Mesh read_stl_file(const std::string& path) {
     }
     if (mesh.indices.empty()) fail(path, "ASCII STL with no triangles");
     return mesh;
-}
-
-}  // namespace
-
-Mesh read_stl(const std::string& path) {
-    return io::out_of_memory_reading(path, "mesh", [&] { return read_stl_file(path); });
 }
 
 }  // namespace voxmesh
