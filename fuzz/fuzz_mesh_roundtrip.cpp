@@ -3,10 +3,15 @@
 // bit, and STL (welded on reading, normals not stored) every triangle's corner positions in
 // order (-0 read as +0, which compares equal). The input is a flags byte, a vertex count, then
 // floats for the positions (and normals), then one byte per index (modulo the vertex count).
+// write_mesh_to_memory must give the file's bytes, or refuse with write_mesh's message.
 #include "fuzz_common.hpp"
 #include "support/mesh_checks.hpp"
 
 #include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
 
 namespace {
 
@@ -40,11 +45,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
     for (const char* name : {"/roundtrip.ply", "/roundtrip.obj", "/roundtrip.stl"}) {
         const std::string path = fuzz::scratch_dir() + name;
-        try {
-            voxmesh::write_mesh(path, mesh);
-        } catch (const voxmesh::Error&) {
-            return 0;  // refused with a message: a NaN or infinite coordinate or normal
-        }
+        std::vector<unsigned char> in_memory;
+        const auto memory_error = fuzz::error_of([&] { in_memory = voxmesh::write_mesh_to_memory(mesh, path); });
+        const auto error = fuzz::error_of([&] { voxmesh::write_mesh(path, mesh); });
+        if (error != memory_error) std::abort();
+        if (error) return 0;  // refused with a message: a NaN or infinite coordinate or normal
+        std::ifstream file(path, std::ios::binary);
+        const std::string written{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()};
+        if (written != std::string(in_memory.begin(), in_memory.end())) std::abort();
         const voxmesh::Mesh back = read_back(path);
         if (std::strstr(name, ".stl")) {
             if (!back.normals.empty() || vmtest::triangle_corners(back) != vmtest::triangle_corners(mesh)) std::abort();

@@ -3,11 +3,16 @@
 // samples byte for byte, key/values, and spacing and origin (negative spacings flip an axis:
 // the reader reverses it and moves the origin to the minimum corner). The input is a header
 // (type, dims, 6 doubles of geometry), a key and a value separated by a 0 byte, then samples.
+// write_nrrd_to_memory must give the file's bytes (or write_nrrd's refusal), and
+// read_volume_from_memory of them the volume read_volume gives.
 #include "fuzz_common.hpp"
 
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 #include <map>
+#include <string>
 #include <vector>
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -36,18 +41,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     view.data = storage.data();
 
     const std::string path = fuzz::scratch_dir() + "/roundtrip.nrrd";
-    try {
-        voxmesh::write_nrrd(path, view, key_values);
-    } catch (const voxmesh::Error&) {
-        return 0;  // refused with a message: bad geometry or key/value
-    }
+    std::vector<unsigned char> in_memory;
+    const auto memory_error = fuzz::error_of([&] { in_memory = voxmesh::write_nrrd_to_memory(view, path, key_values); });
+    const auto error = fuzz::error_of([&] { voxmesh::write_nrrd(path, view, key_values); });
+    if (error != memory_error) std::abort();
+    if (error) return 0;  // refused with a message: bad geometry or key/value
+    std::ifstream file(path, std::ios::binary);
+    if (std::string{std::istreambuf_iterator<char>(file), std::istreambuf_iterator<char>()} !=
+        std::string(in_memory.begin(), in_memory.end()))
+        std::abort();
     voxmesh::VolumeInfo info;
-    voxmesh::Volume back;
+    voxmesh::Volume back, back_from_memory;
     try {
         back = voxmesh::read_volume(path, info);
+        back_from_memory = voxmesh::read_volume_from_memory(in_memory.data(), in_memory.size(), path);
     } catch (const voxmesh::Error&) {
         std::abort();  // the writer wrote what the reader refuses
     }
+    if (!fuzz::same_volume(back, back_from_memory)) std::abort();
     if (back.type != view.type || back.dims != view.dims || back.byte_size() != bytes) std::abort();
     for (const auto& [key, value] : key_values) {
         const auto it = info.key_values.find(key);
