@@ -16,6 +16,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace fuzz {
 
@@ -94,12 +95,16 @@ inline void read_volume_input(const char* name, const std::uint8_t* data, std::s
         error_of([&] { memory_info = voxmesh::read_volume_info_from_memory(data, size, path); });
     const auto error = error_of([&] { v = voxmesh::read_volume(path); });
     const auto memory_error = error_of([&] { memory_v = voxmesh::read_volume_from_memory(data, size, path); });
+    voxmesh::Volume handed_v;  // the bytes handed over, used in place where a file is mapped
+    const auto handed_error = error_of(
+        [&] { handed_v = voxmesh::read_volume_from_memory(std::vector<unsigned char>(data, data + size), path); });
     check_same_outcome(info_error, memory_info_error);
     check_same_outcome(error, memory_error);
+    if (memory_error != handed_error) std::abort();
     if (error) return;
     touch(v);
     if (!info_error && (v.dims != info.dims || v.type != info.type)) std::abort();  // info and load must agree
-    if (!memory_error && !same_volume(v, memory_v)) std::abort();
+    if (!memory_error && (!same_volume(v, memory_v) || !same_volume(v, handed_v))) std::abort();
 }
 
 // What a mesh reader returns must be a well-formed mesh: whole triples, normals for every

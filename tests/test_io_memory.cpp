@@ -73,13 +73,21 @@ Outcome volume_from_file(const std::string& path) {
     });
 }
 
-// Named as the file, so that messages match word for word.
+// Named as the file, so that messages match word for word. Bytes lent and bytes handed over
+// (used in place where a file would be mapped) give the same outcome.
 Outcome volume_from_memory(const std::string& bytes, const std::string& name) {
-    return outcome_of([&] {
+    const Outcome lent = outcome_of([&] {
         VolumeInfo info;
         const Volume v = read_volume_from_memory(bytes.data(), bytes.size(), name, info);
         return bytes_of(v, info);
     });
+    const Outcome handed_over = outcome_of([&] {
+        VolumeInfo info;
+        const Volume v = read_volume_from_memory(std::vector<unsigned char>(bytes.begin(), bytes.end()), name, info);
+        return bytes_of(v, info);
+    });
+    CHECK(lent == handed_over);
+    return lent;
 }
 
 Outcome mesh_from_file(const std::string& path) { return outcome_of([&] { return bytes_of(read_mesh(path)); }); }
@@ -143,6 +151,16 @@ bool names_data_file(const std::string& bytes) {
 
 bool never(const std::string&) { return false; }
 
+// A 3x2x2 i16 NRRD whose x axis runs in the negative direction: reversed on load, in place.
+std::string flipped_nrrd() {
+    std::string text = "NRRD0004\ntype: int16\ndimension: 3\nsizes: 3 2 2\nspace dimension: 3\n"
+                       "space directions: (-1,0,0) (0,1,0) (0,0,1)\nendian: little\nencoding: raw\n";
+    if ((text.size() + 1) % 2 != 0) text += "# \n";  // the samples at an even offset: mappable i16
+    text += "\n";
+    for (std::int16_t i = 0; i < 12; ++i) text.append(reinterpret_cast<const char*>(&i), 2);
+    return text;
+}
+
 }  // namespace
 
 TEST_CASE("memory: volumes read as from their file, or fail with the same message", "[io][memory]") {
@@ -163,22 +181,23 @@ TEST_CASE("memory: meshes read as from their file, or fail with the same message
 }
 
 TEST_CASE("memory: the caller's bytes are only read, and not kept", "[io][memory]") {
-    // A NIfTI-1 with the common sform diag(-2, 2, 2): axis x is reversed on load, in place.
+    // Axis x is reversed on load: in a copy, never in the caller's bytes.
     iotest::Scratch s;
-    const std::string nifti = iotest::read_file(test_data("../fuzz_corpus/nifti/le_i16.nii"));
-    std::string bytes = nifti;
+    const std::string nrrd = flipped_nrrd();
+    std::string bytes = nrrd;
     VolumeInfo info;
-    Volume v = read_volume_from_memory(bytes.data(), bytes.size(), "scan.nii", info);
-    CHECK(bytes == nifti);
-    const Volume from_file = read_volume(s.file("scan.nii", nifti));
+    Volume v = read_volume_from_memory(bytes.data(), bytes.size(), "scan.nrrd", info);
+    CHECK(info.flipped[0]);
+    CHECK(bytes == nrrd);
+    const Volume from_file = read_volume(s.file("scan.nrrd", nrrd));
     REQUIRE(v.byte_size() == from_file.byte_size());
     CHECK(std::memcmp(v.data, from_file.data, v.byte_size()) == 0);
     // The Volume owns its samples: the caller may reuse its buffer, and writes stay private.
     std::fill(bytes.begin(), bytes.end(), '\x7f');
     CHECK(std::memcmp(v.data, from_file.data, v.byte_size()) == 0);
-    bytes = nifti;
+    bytes = nrrd;
     std::memset(v.data, 0, v.byte_size());
-    CHECK(bytes == nifti);
+    CHECK(bytes == nrrd);
 
     const std::string stl = iotest::read_file(test_data("torus.stl"));
     std::string copy = stl;
@@ -320,4 +339,44 @@ TEST_CASE("memory: write_nrrd_to_memory gives write_nrrd's bytes, which read bac
 
     view.spacing[1] = 0;
     CHECK_THROWS_WITH(write_nrrd_to_memory(view, "ct.nrrd"), Contains("'ct.nrrd'") && Contains("spacing"));
+}
+
+TEST_CASE("memory: bytes handed over are used in place where a file would be mapped", "[io][memory]") {
+    SECTION("raw NRRD samples: no copy, the vector is kept") {
+        const FieldVolume field = make_field(Field::Sphere, 32, ScalarType::F32);
+        std::vector<unsigned char> bytes = write_nrrd_to_memory(field.volume.view(), "ball.nrrd");
+        const unsigned char* const first = bytes.data();
+        const std::size_t size = bytes.size();
+        const Volume v = read_volume_from_memory(std::move(bytes), "ball.nrrd");
+        CHECK(bytes.empty());
+        const auto* samples = static_cast<const unsigned char*>(v.data);
+        CHECK(samples >= first);
+        CHECK(samples + v.byte_size() == first + size);  // the samples end the file
+        CHECK(std::memcmp(v.data, field.volume.data, v.byte_size()) == 0);
+    }
+    SECTION("a flipped axis is reversed in place, as read from the file") {
+        iotest::Scratch s;
+        const std::string nrrd = flipped_nrrd();
+        const Volume from_file = read_volume(s.file("scan.nrrd", nrrd));
+        std::vector<unsigned char> bytes(nrrd.begin(), nrrd.end());
+        const unsigned char* const first = bytes.data();
+        VolumeInfo info;
+        const Volume v = read_volume_from_memory(std::move(bytes), "scan.nrrd", info);
+        REQUIRE(info.flipped[0]);
+        CHECK(static_cast<const unsigned char*>(v.data) == first + nrrd.size() - 24);  // the samples end it
+        CHECK(static_cast<const std::int16_t*>(v.data)[0] == 2);  // the file's row 0 1 2, reversed
+        REQUIRE(v.byte_size() == from_file.byte_size());
+        CHECK(std::memcmp(v.data, from_file.data, v.byte_size()) == 0);
+    }
+    SECTION("compressed samples are inflated; the vector is let go") {
+        const std::string gz = iotest::read_file(test_data("mri_someones_anatomy.nii.gz"));
+        const Volume lent = read_volume_from_memory(gz.data(), gz.size(), "mri.nii.gz");
+        const Volume v = read_volume_from_memory(std::vector<unsigned char>(gz.begin(), gz.end()), "mri.nii.gz");
+        REQUIRE(v.byte_size() == lent.byte_size());
+        CHECK(std::memcmp(v.data, lent.data, v.byte_size()) == 0);
+    }
+    SECTION("errors name the name") {
+        CHECK_THROWS_WITH(read_volume_from_memory(std::vector<unsigned char>{}, "none.nrrd"),
+                          Contains("'none.nrrd'") && Contains("empty"));
+    }
 }

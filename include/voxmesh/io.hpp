@@ -155,6 +155,11 @@ Mesh read_mesh(const std::string& path);
 // 'data file' / ElementDataFile) is an Error, as there is no directory to look in.
 Volume read_volume_from_memory(const void* data, std::size_t size, const std::string& name);
 Volume read_volume_from_memory(const void* data, std::size_t size, const std::string& name, VolumeInfo& info);
+// The same with the bytes handed over: where a file would be mapped (raw samples in host byte
+// order, aligned), the Volume keeps the vector and uses its samples where they lie, with no
+// copy (axes flipped in place); otherwise it is freed once read. `bytes` is left empty.
+Volume read_volume_from_memory(std::vector<unsigned char>&& bytes, const std::string& name);
+Volume read_volume_from_memory(std::vector<unsigned char>&& bytes, const std::string& name, VolumeInfo& info);
 VolumeInfo read_volume_info_from_memory(const void* data, std::size_t size, const std::string& name);
 Volume read_raw_from_memory(const void* data, std::size_t size, const std::string& name, const RawLayout& layout);
 Mesh read_mesh_from_memory(const void* data, std::size_t size, const std::string& name);

@@ -48,6 +48,11 @@ InputFile::InputFile(const std::string& name, const void* data, std::size_t size
     }
 }
 
+InputFile::InputFile(const std::string& name, std::shared_ptr<unsigned char> owned, std::size_t size)
+    : InputFile(name, owned.get(), size) {
+    owned_ = std::move(owned);
+}
+
 InputFile::~InputFile() {
     if (fd_ >= 0) ::close(fd_);
 }
@@ -85,6 +90,7 @@ void refuse_mmap_for_testing(bool refuse) { g_refuse_mmap.store(refuse); }
 
 std::shared_ptr<unsigned char> InputFile::map() const {
     if (size_ == 0) fail(path_, "file is empty");
+    if (owned_) return owned_;
     if (in_memory()) return copy();
     // NORESERVE: the private mapping is only copied where someone writes to it.
     void* base = g_refuse_mmap.load() ? MAP_FAILED

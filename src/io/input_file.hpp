@@ -25,6 +25,8 @@ public:
     explicit InputFile(const std::string& path);
     // `size` bytes at `data`, named `name` in errors. Not copied: they must outlive this object.
     InputFile(const std::string& name, const void* data, std::size_t size);
+    // Bytes handed over: map() gives them out, to be written in place, instead of a copy.
+    InputFile(const std::string& name, std::shared_ptr<unsigned char> owned, std::size_t size);
     ~InputFile();
     InputFile(const InputFile&) = delete;
     InputFile& operator=(const InputFile&) = delete;
@@ -33,6 +35,8 @@ public:
     std::size_t size() const { return size_; }
     // Bytes in memory, not a file: there is no directory to find a detached data file in.
     bool in_memory() const { return memory_ != nullptr; }
+    // map() costs no copy: a file (mapped) or bytes handed over.
+    bool maps_in_place() const { return !in_memory() || owned_ != nullptr; }
 
     // Up to `max_bytes` bytes from `offset` (fewer at the end of the file).
     std::string read(std::size_t offset, std::size_t max_bytes) const;
@@ -40,8 +44,8 @@ public:
     void read_exact(std::size_t offset, void* out, std::size_t bytes) const;
     // The whole file, mapped private and writable (copy-on-write); the pointer owns the
     // mapping. Where the file cannot be mapped, a heap copy of it (at least 16-byte aligned).
-    // Throws for an empty file. In memory: always a heap copy, so writes never reach the
-    // caller's bytes.
+    // Throws for an empty file. In memory: the bytes handed over, else a heap copy, so that
+    // writes never reach the caller's bytes.
     std::shared_ptr<unsigned char> map() const;
     // The whole file to read only: map() for a file, the caller's bytes (not owned, not copied)
     // in memory. Throws for an empty file.
@@ -53,6 +57,7 @@ private:
     std::string path_;
     int fd_ = -1;
     const unsigned char* memory_ = nullptr;
+    std::shared_ptr<unsigned char> owned_;  // memory_, when handed over
     std::size_t size_ = 0;
 };
 

@@ -231,6 +231,21 @@ Volume read_volume_from_memory(const void* data, std::size_t size, const std::st
     return read_volume_from_memory(data, size, name, info);
 }
 
+Volume read_volume_from_memory(std::vector<unsigned char>&& bytes, const std::string& name, VolumeInfo& info) {
+    return io::out_of_memory_reading(name, "volume", [&] {
+        // The vector moves into what the Volume may keep: its samples, used where they lie.
+        const auto kept = std::make_shared<std::vector<unsigned char>>(std::move(bytes));
+        const std::size_t size = kept->size();
+        const io::InputFile file(name, std::shared_ptr<unsigned char>(kept, kept->data()), size);
+        return read_volume_from(file, info);
+    });
+}
+
+Volume read_volume_from_memory(std::vector<unsigned char>&& bytes, const std::string& name) {
+    VolumeInfo info;
+    return read_volume_from_memory(std::move(bytes), name, info);
+}
+
 VolumeInfo read_volume_info_from_memory(const void* data, std::size_t size, const std::string& name) {
     return reading(data, size, name, read_volume_info_from);
 }

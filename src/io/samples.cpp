@@ -148,8 +148,8 @@ Volume load_samples(const InputFile& header, const SampleLayout& layout) {
     const std::size_t value_size = scalar_size(layout.type);
     const std::string ctx = where(header.path(), layout);
 
-    if (!layout.compressed && host_order(layout) && at.start % value_size == 0 && !file.in_memory()) {
-        // Map, don't copy: the Volume keeps the mapping alive.
+    if (!layout.compressed && host_order(layout) && at.start % value_size == 0 && file.maps_in_place()) {
+        // Map (or take the bytes handed over), don't copy: the Volume keeps them alive.
         std::shared_ptr<unsigned char> mapping = file.map();
         Volume v;
         v.type = layout.type;
@@ -157,7 +157,7 @@ Volume load_samples(const InputFile& header, const SampleLayout& layout) {
         v.data = mapping.get() + at.start;
         v.storage = std::move(mapping);
         // Reversing writes every page of the private mapping: as much memory as a copy.
-        if (any_flipped(layout)) check_memory(file.path(), bytes);
+        if (any_flipped(layout) && !file.in_memory()) check_memory(file.path(), bytes);
         reverse_axes(v, layout.flipped);
         return v;
     }
