@@ -244,6 +244,11 @@ TEST_CASE("cli: every input format from standard input", "[cli]") {
     CHECK(meta.code == 0);
     CHECK(meta.out.find("4x3x2") != std::string::npos);
     CHECK(meta.out.find("range:     7 .. 7") != std::string::npos);
+    const std::string vtk = std::string(VOXMESH_TEST_DATA) + "/../fuzz_corpus/vtk/i16_binary.vtk";  // VTK's own
+    const Result legacy_vtk = piped(cat(vtk), "info -");
+    CHECK(legacy_vtk.code == 0);
+    CHECK(legacy_vtk.out.find("format:    vtk (raw, big endian)") != std::string::npos);
+    CHECK(legacy_vtk.out.find("range:     -100 .. 61") != std::string::npos);
     const Result nii_plain = piped("gunzip -c " + quote(data_file("mri_someones_anatomy.nii.gz")), "info -");
     CHECK(nii_plain.code == 0);
     CHECK(nii_plain.out.find("57x67x56") != std::string::npos);
@@ -278,7 +283,7 @@ TEST_CASE("cli: every input format from standard input", "[cli]") {
     const struct {
         std::string producer, args, names;
     } refused[] = {
-        {"echo hello", "info -", "not a volume (NRRD, NIfTI-1, MetaImage .mha) or a model"},
+        {"echo hello", "info -", "not a volume (NRRD, NIfTI-1, MetaImage .mha, legacy VTK) or a model"},
         {"echo hello", "mesh - -o " + quote(s.path("x.stl")), "not a volume"},
         {"printf ''", "voxelize - -o " + quote(s.path("x.nrrd")) + " --resolution 8", "is empty"},
         {"head -c 2000 " + quote(head), "mesh - -o " + quote(s.path("x.stl")), "ends early"},

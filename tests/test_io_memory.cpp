@@ -165,7 +165,7 @@ std::string flipped_nrrd() {
 
 TEST_CASE("memory: volumes read as from their file, or fail with the same message", "[io][memory]") {
     std::vector<std::string> files = corpus("nrrd");
-    for (const char* f : {"nifti", "metaimage"})
+    for (const char* f : {"nifti", "metaimage", "vtk"})
         for (const std::string& path : corpus(f)) files.push_back(path);
     files.push_back(test_data("headsq.nrrd"));
     files.push_back(test_data("mri_someones_anatomy.nii.gz"));

@@ -70,7 +70,7 @@ Volume read_raw(std::istream& in, const std::string& name, const RawLayout& layo
 
 // What a volume file holds, read from its header only.
 struct VolumeInfo {
-    std::string format;  // "nrrd", "metaimage", "nifti", "raw"
+    std::string format;  // "nrrd", "metaimage", "nifti", "vtk", "raw"
     ScalarType type = ScalarType::U8;
     std::array<std::size_t, 3> dims{0, 0, 0};
     std::array<double, 3> spacing{1, 1, 1};
@@ -80,7 +80,7 @@ struct VolumeInfo {
     // The direction matrix is not diagonal (a rotation, an axis permutation, an oblique axis):
     // that part is dropped, as before (see Geometry).
     bool rotation_dropped = false;
-    std::string encoding;     // "raw", "gzip" (zlib streams, as in MetaImage, count as "gzip")
+    std::string encoding;     // "raw", "gzip" (zlib streams, as in MetaImage, count as "gzip"), "ascii" (legacy VTK)
     bool big_endian = false;  // byte order of the stored samples
     std::size_t file_bytes = 0;  // size of the file named (the header for .nhdr / .mhd)
     std::string data_file;       // the file holding the samples (== path when attached)
@@ -91,8 +91,13 @@ struct VolumeInfo {
     std::map<std::string, std::string> key_values;
 };
 
-// NRRD (.nrrd, .nhdr), MetaImage (.mhd, .mha), NIfTI-1 (.nii, .nii.gz), chosen by extension
-// (case-insensitive). A .nii that is gzip-compressed is detected by content.
+// NRRD (.nrrd, .nhdr), MetaImage (.mhd, .mha), NIfTI-1 (.nii, .nii.gz), legacy VTK (.vtk),
+// chosen by extension (case-insensitive). A .nii that is gzip-compressed is detected by content.
+// Legacy VTK: DATASET STRUCTURED_POINTS (DIMENSIONS, SPACING or ASPECT_RATIO, ORIGIN; a
+// negative spacing flips its axis) whose POINT_DATA's first array is the volume: SCALARS or
+// COLOR_SCALARS (unsigned char; ASCII writes byte b as b/255) of one component, or a FIELD's
+// first array; BINARY (big-endian, copied) or ASCII (numbers that must fit the type); arrays
+// after it are ignored. read_volume_info checks ASCII data only for length.
 Volume read_volume(const std::string& path);
 VolumeInfo read_volume_info(const std::string& path);
 // read_volume, also filling `info` as read_volume_info would, from the one reading of the header.

@@ -61,9 +61,9 @@ bool is_binary_stl(const std::string& head, std::size_t size) {
 
 std::string kind_text(InputKind kind) {
     switch (kind) {
-        case InputKind::Volume: return "a volume (NRRD, NIfTI-1, MetaImage .mha; raw samples with --dims and --type)";
+        case InputKind::Volume: return "a volume (NRRD, NIfTI-1, MetaImage .mha, legacy VTK; raw samples with --dims and --type)";
         case InputKind::Model: return "a model (STL, PLY, OBJ)";
-        case InputKind::VolumeOrModel: return "a volume (NRRD, NIfTI-1, MetaImage .mha) or a model (STL, PLY, OBJ)";
+        case InputKind::VolumeOrModel: return "a volume (NRRD, NIfTI-1, MetaImage .mha, legacy VTK) or a model (STL, PLY, OBJ)";
         case InputKind::Raw: return "raw samples";
         case InputKind::Text: return "text";
     }
@@ -116,6 +116,7 @@ std::string sniff_format(const std::string& head, std::size_t size, InputKind ki
     const bool volume = kind != InputKind::Model, model = kind != InputKind::Volume;
     if (volume) {
         if (starts_with(head, "NRRD000")) return ".nrrd";
+        if (starts_with(head, "# vtk DataFile")) return ".vtk";
         if (head.size() >= 2 && static_cast<unsigned char>(head[0]) == 0x1f && static_cast<unsigned char>(head[1]) == 0x8b)
             return ".nii.gz";
         if (head.size() >= 348 && head.compare(344, 4, std::string("n+1\0", 4)) == 0) return ".nii";

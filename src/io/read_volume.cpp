@@ -96,9 +96,10 @@ VolumeHeader parse_header(const InputFile& file) {
     if (ends_with_nocase(path, ".nrrd") || ends_with_nocase(path, ".nhdr")) return read_nrrd_header(file);
     if (ends_with_nocase(path, ".mhd") || ends_with_nocase(path, ".mha")) return read_metaimage_header(file);
     if (ends_with_nocase(path, ".nii") || ends_with_nocase(path, ".nii.gz")) return read_nifti_header(file);
+    if (ends_with_nocase(path, ".vtk")) return read_vtk_header(file);
     if (ends_with_nocase(path, ".raw"))
         fail(path, "a headerless .raw volume needs its dims and type (read_raw / --dims --type)");
-    fail(path, "unknown volume format (expected .nrrd, .nhdr, .mhd, .mha, .nii or .nii.gz)");
+    fail(path, "unknown volume format (expected .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz or .vtk)");
 }
 
 VolumeHeader read_header(const InputFile& file) {

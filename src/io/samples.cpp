@@ -1,5 +1,6 @@
 #include "samples.hpp"
 
+#include "header_text.hpp"
 #include "inflate.hpp"
 #include "core/dims_text.hpp"
 #include "core/out_of_memory.hpp"
@@ -7,6 +8,10 @@
 
 #include <algorithm>
 #include <bit>
+#include <charconv>
+#include <limits>
+#include <string_view>
+#include <type_traits>
 #include <cstdint>
 #include <cstring>
 #include <istream>
@@ -39,8 +44,8 @@ Volume allocate_samples(const std::string& path, const SampleLayout& layout) {
 
 struct Located {
     std::size_t file_size = 0;
-    std::size_t start = 0;   // raw: first sample; compressed: first stream byte
-    std::size_t length = 0;  // raw: sample bytes; compressed: stream bytes
+    std::size_t start = 0;   // raw: first sample; compressed: first stream byte; text: first byte
+    std::size_t length = 0;  // raw: sample bytes; compressed: stream bytes; text: to the file's end
 };
 
 Located locate(const InputFile& file, const std::string& header_path, const SampleLayout& layout,
@@ -50,6 +55,28 @@ Located locate(const InputFile& file, const std::string& header_path, const Samp
     Located at;
     at.file_size = file.size();
     if (at.file_size == 0) fail(path, "file is empty" + ctx);
+    const std::string samples_text = dims_text(layout.dims) + " " + scalar_name(layout.type) + " samples";
+    if (layout.text) {
+        // Each number takes a character and is followed by a separator (but the last): a file
+        // too short for the count is refused before anything is allocated.
+        at.start = std::min(layout.offset, at.file_size);
+        at.length = at.file_size - at.start;
+        const std::size_t count = bytes / scalar_size(layout.type);
+        if (at.length / 2 + at.length % 2 < count)
+            fail(path, "the " + std::to_string(at.length) + " bytes after the header cannot hold " + samples_text +
+                           " as text (truncated file, or dims that do not match it)" + ctx);
+        check_memory(path, bytes);
+        return at;
+    }
+    if (!layout.compressed && layout.more_may_follow) {
+        if (layout.offset > at.file_size || at.file_size - layout.offset < bytes)
+            fail(path, "holds " + std::to_string(at.file_size) + " bytes; " + samples_text + " after a " +
+                           std::to_string(layout.offset) + "-byte header need " + std::to_string(bytes) +
+                           " more (truncated file, or dims that do not match it)" + ctx);
+        at.start = layout.offset;
+        at.length = bytes;
+        return at;
+    }
     if (!layout.compressed) {
         if (layout.at_end) {
             if (at.file_size < bytes)
@@ -114,6 +141,79 @@ void to_host_layout(Volume& v, const SampleLayout& layout) {
     reverse_axes(v, layout.flipped);
 }
 
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f'; }
+
+// One number of text samples as T: an integer whole and in T's range, a float as float_word
+// reads it, a double as from_chars does; what is wrong with it otherwise.
+template <class T>
+const char* parse_sample(std::string_view word, T& out) {
+    if constexpr (std::is_same_v<T, float>) {
+        return float_word(word, out);
+    } else {
+        using Wide = std::conditional_t<std::is_integral_v<T>, long long, double>;
+        Wide value{};
+        const auto [end, error] = std::from_chars(word.data(), word.data() + word.size(), value);
+        if (error == std::errc::result_out_of_range) return "is out of range";
+        if (error != std::errc() || end != word.data() + word.size()) return "is not a number";
+        if constexpr (std::is_integral_v<T>)
+            if (value < std::numeric_limits<T>::min() || value > std::numeric_limits<T>::max())
+                return "is out of range for the type";
+        out = static_cast<T>(value);
+        return nullptr;
+    }
+}
+
+// A byte written as a fraction of 255 (legacy VTK's ASCII COLOR_SCALARS), read back as VTK's
+// reader does: rounded to the nearest byte.
+const char* parse_unit_color(std::string_view word, std::uint8_t& out) {
+    float value = 0;
+    if (const char* problem = float_word(word, value)) return problem;
+    if (!(value >= 0 && value <= 1)) return "is not a colour value from 0 to 1";
+    out = static_cast<std::uint8_t>(255 * value + 0.5f);
+    return nullptr;
+}
+
+// `count` whitespace-separated numbers into `out`, parse(word, out[i]) reading each.
+template <class T, class Parse>
+void parse_numbers(const std::string& path, std::string_view text, T* out, std::size_t count, Parse parse) {
+    std::size_t pos = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        while (pos < text.size() && is_space(text[pos])) ++pos;
+        if (pos == text.size())
+            fail(path, "the text data ends after " + std::to_string(i) + " of its " + std::to_string(count) +
+                           " samples (truncated file, or dims that do not match it)");
+        std::size_t end = pos;
+        while (end < text.size() && !is_space(text[end])) ++end;
+        std::string_view word = text.substr(pos, end - pos);
+        if (const char* problem = parse(word, out[i]))
+            fail(path, "sample " + std::to_string(i) + ": '" + shown(word) + "' " + problem);
+        pos = end;
+    }
+}
+
+template <class T>
+void parse_numbers_as(const std::string& path, std::string_view text, void* out, std::size_t count) {
+    parse_numbers(path, text, static_cast<T*>(out), count, parse_sample<T>);
+}
+
+// Numbers as text (legacy VTK ASCII) into `v`, in the file's order; what follows the last one
+// (more arrays) is not read.
+void parse_text_samples(const std::string& path, std::string_view text, bool unit_colors, Volume& v) {
+    const std::size_t n = v.sample_count();
+    if (unit_colors) return parse_numbers(path, text, static_cast<std::uint8_t*>(v.data), n, parse_unit_color);
+    switch (v.type) {
+        case ScalarType::U8: return parse_numbers_as<std::uint8_t>(path, text, v.data, n);
+        case ScalarType::I8: return parse_numbers_as<std::int8_t>(path, text, v.data, n);
+        case ScalarType::U16: return parse_numbers_as<std::uint16_t>(path, text, v.data, n);
+        case ScalarType::I16: return parse_numbers_as<std::int16_t>(path, text, v.data, n);
+        case ScalarType::U32: return parse_numbers_as<std::uint32_t>(path, text, v.data, n);
+        case ScalarType::I32: return parse_numbers_as<std::int32_t>(path, text, v.data, n);
+        case ScalarType::F32: return parse_numbers_as<float>(path, text, v.data, n);
+        case ScalarType::F64: return parse_numbers_as<double>(path, text, v.data, n);
+    }
+    throw Error("parse_text_samples: unexpected sample type");
+}
+
 }  // namespace
 
 std::size_t sample_bytes(const std::string& path, std::array<std::size_t, 3> dims, ScalarType type) {
@@ -147,6 +247,16 @@ Volume load_samples(const InputFile& header, const SampleLayout& layout) {
     const Located at = locate(file, header.path(), layout, bytes);
     const std::size_t value_size = scalar_size(layout.type);
     const std::string ctx = where(header.path(), layout);
+
+    if (layout.text) {
+        check_memory(file.path(), bytes);
+        Volume v = allocate_samples(file.path(), layout);
+        const std::shared_ptr<const unsigned char> mapping = file.view();
+        const std::string_view text(reinterpret_cast<const char*>(mapping.get()) + at.start, at.length);
+        parse_text_samples(file.path(), text, layout.unit_colors, v);
+        reverse_axes(v, layout.flipped);
+        return v;
+    }
 
     if (!layout.compressed && host_order(layout) && at.start % value_size == 0 && file.maps_in_place()) {
         // Map (or take the bytes handed over), don't copy: the Volume keeps them alive.

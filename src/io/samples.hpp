@@ -20,6 +20,9 @@ struct SampleLayout {
     std::string data_path;        // the file holding the samples
     std::size_t offset = 0;       // raw: first sample; compressed: start of the stream
     bool at_end = false;          // raw: the samples are the file's last bytes
+    bool more_may_follow = false; // raw or text: other data may follow the samples
+    bool text = false;            // numbers as text, separated by whitespace (legacy VTK ASCII)
+    bool unit_colors = false;     // text, u8: each a number 0..1 standing for round(255 x)
     bool compressed = false;      // zlib or gzip stream
     std::size_t skip = 0;         // compressed: decompressed bytes before the first sample
     std::size_t compressed_size = 0;  // compressed: stream length; 0 = to the end of the file

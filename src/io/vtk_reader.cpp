@@ -1,0 +1,198 @@
+// Legacy VTK (.vtk, as vtkStructuredPointsWriter and vtkDataSetWriter write it, file versions
+// 1.0 to 5.1): DATASET STRUCTURED_POINTS with DIMENSIONS, SPACING (or ASPECT_RATIO) and ORIGIN,
+// then POINT_DATA whose first array is the volume: SCALARS with one component, COLOR_SCALARS
+// with one (how VTK writes unsigned char: bytes in BINARY, 0..1 in ASCII), or the first array
+// of a FIELD. BINARY data is big-endian; ASCII data is numbers as text. Arrays after that one
+// (more point data, cell data) are ignored.
+#include "header_text.hpp"
+#include "input_file.hpp"
+#include "readers.hpp"
+
+#include <array>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace voxmesh::io {
+
+namespace {
+
+// The most bytes read looking for the end of the header (titles and keywords are short).
+constexpr std::size_t kMaxVtkHeader = std::size_t{1} << 16;
+
+struct TypeName {
+    const char* name;
+    ScalarType type;
+};
+constexpr TypeName kTypes[] = {
+    {"unsigned_char", ScalarType::U8},   {"char", ScalarType::I8},           {"signed_char", ScalarType::I8},
+    {"unsigned_short", ScalarType::U16}, {"short", ScalarType::I16},         {"unsigned_int", ScalarType::U32},
+    {"int", ScalarType::I32},            {"float", ScalarType::F32},         {"double", ScalarType::F64},
+    {"vtktypeuint8", ScalarType::U8},    {"vtktypeint8", ScalarType::I8},    {"vtktypeuint16", ScalarType::U16},
+    {"vtktypeint16", ScalarType::I16},   {"vtktypeuint32", ScalarType::U32}, {"vtktypeint32", ScalarType::I32},
+    {"vtktypefloat32", ScalarType::F32}, {"vtktypefloat64", ScalarType::F64},
+};
+
+ScalarType parse_type(const std::string& path, std::string_view name) {
+    for (const TypeName& t : kTypes)
+        if (lower(name) == t.name) return t.type;
+    fail(path, "unsupported VTK data type '" + shown(name) +
+                   "' (supported: 8/16/32-bit signed and unsigned integers, float, double)");
+}
+
+// The header's lines, read as the legacy reader does: keywords case-insensitive, blank lines
+// skipped.
+class Lines {
+public:
+    Lines(const std::string& path, std::string_view text) : path_(path), text_(text) {}
+
+    // The next line, blank or not; fails at the end of what was read.
+    std::string_view raw(const char* wanted) {
+        std::string_view line;
+        if (!next_line(text_, pos_, line))
+            fail(path_, std::string("ends before ") + wanted + " (truncated, or not a volume file)");
+        return line;
+    }
+    // The next non-blank line, as words.
+    std::vector<std::string_view> words(const char* wanted) {
+        for (;;) {
+            const std::string_view line = trim(raw(wanted));
+            if (!line.empty()) return split_words(line);
+        }
+    }
+    // Where the line after the last one read starts: the data, after the header.
+    std::size_t position() const { return pos_; }
+    bool next_starts_with(std::string_view keyword) const {
+        std::size_t at = pos_;
+        while (at < text_.size() && (text_[at] == '\n' || text_[at] == '\r')) ++at;
+        return lower(text_.substr(at, keyword.size())) == lower(keyword);
+    }
+
+private:
+    const std::string& path_;
+    std::string_view text_;
+    std::size_t pos_ = 0;
+};
+
+std::string keyword(std::string_view word) {
+    std::string k(word);
+    for (char& c : k) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    return k;
+}
+
+void expect_count(const std::string& path, const std::vector<std::string_view>& words, std::size_t count) {
+    if (words.size() != count)
+        fail(path, "'" + shown(words[0]) + "' takes " + std::to_string(count - 1) + " values, not " +
+                       std::to_string(words.size() - 1));
+}
+
+}  // namespace
+
+VolumeHeader read_vtk_header(const InputFile& file) {
+    const std::string& path = file.path();
+    if (file.size() == 0) fail(path, "file is empty");
+    const std::string text = file.read(0, kMaxVtkHeader);
+    Lines lines(path, text);
+    if (lower(lines.raw("the version line").substr(0, 22)) != "# vtk datafile version")
+        fail(path, "not a legacy VTK file (the first line is not '# vtk DataFile Version x.y')");
+    (void)lines.raw("the title line");
+
+    VolumeHeader h;
+    VolumeInfo& info = h.info;
+    SampleLayout& layout = h.layout;
+    info.format = "vtk";
+    const std::vector<std::string_view> encoding = lines.words("ASCII or BINARY");
+    if (keyword(encoding[0]) == "BINARY") {
+        info.encoding = "raw";
+        info.big_endian = true;  // legacy VTK's binary data always is
+    } else if (keyword(encoding[0]) == "ASCII") {
+        info.encoding = "ascii";
+        layout.text = true;
+    } else {
+        fail(path, "the third line is '" + shown(encoding[0]) + "', not ASCII or BINARY");
+    }
+    const std::vector<std::string_view> dataset = lines.words("DATASET");
+    if (keyword(dataset[0]) != "DATASET" || dataset.size() != 2) fail(path, "the fourth line is not 'DATASET type'");
+    if (keyword(dataset[1]) != "STRUCTURED_POINTS")
+        fail(path, "DATASET " + shown(dataset[1]) +
+                       ": only STRUCTURED_POINTS (an image volume) is read; meshes are read from .stl, .ply or .obj");
+
+    bool have_dims = false;
+    std::array<std::vector<double>, 3> axes;
+    for (;;) {
+        const std::vector<std::string_view> w = lines.words("POINT_DATA");
+        const std::string k = keyword(w[0]);
+        if (k == "POINT_DATA") {
+            expect_count(path, w, 2);
+            if (!have_dims) fail(path, "POINT_DATA comes before DIMENSIONS");
+            const std::size_t points = parse_size(path, "POINT_DATA", w[1]);
+            sample_bytes(path, info.dims, ScalarType::U8);  // the product is checked first
+            if (points != info.dims[0] * info.dims[1] * info.dims[2])
+                fail(path, "POINT_DATA " + std::to_string(points) + " does not match DIMENSIONS " +
+                               std::to_string(info.dims[0]) + " " + std::to_string(info.dims[1]) + " " +
+                               std::to_string(info.dims[2]));
+            break;
+        }
+        if (k == "DIMENSIONS") {
+            expect_count(path, w, 4);
+            for (std::size_t a = 0; a < 3; ++a) info.dims[a] = parse_size(path, "DIMENSIONS", w[a + 1]);
+            have_dims = true;
+        } else if (k == "SPACING" || k == "ASPECT_RATIO") {
+            expect_count(path, w, 4);
+            for (std::size_t a = 0; a < 3; ++a) {
+                const double s = parse_double(path, k, w[a + 1]);
+                info.spacing[a] = checked_spacing(path, k.c_str(), s);
+                if (s < 0) reverse_direction(axes, a);
+            }
+        } else if (k == "ORIGIN") {
+            expect_count(path, w, 4);
+            for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "ORIGIN", parse_double(path, "ORIGIN", w[a + 1]));
+        } else if (k == "CELL_DATA" || k == "FIELD") {
+            fail(path, k + " before POINT_DATA is not supported: the volume is the point data's first array");
+        } else {
+            fail(path, "unknown keyword '" + shown(w[0]) + "' in a STRUCTURED_POINTS header");
+        }
+    }
+
+    // The volume: the point data's first array, with one component.
+    const std::vector<std::string_view> array = lines.words("SCALARS or FIELD");
+    const std::string k = keyword(array[0]);
+    if (k == "SCALARS") {
+        if (array.size() != 3 && array.size() != 4) fail(path, "'SCALARS' takes a name, a type and optionally a component count");
+        layout.type = parse_type(path, array[2]);
+        if (array.size() == 4 && parse_size(path, "SCALARS", array[3]) != 1)
+            fail(path, "SCALARS '" + shown(array[1]) + "' has " + shown(array[3]) + " components; a volume needs 1");
+        if (lines.next_starts_with("LOOKUP_TABLE")) (void)lines.words("LOOKUP_TABLE");
+    } else if (k == "COLOR_SCALARS") {
+        if (array.size() != 3) fail(path, "'COLOR_SCALARS' takes a name and a component count");
+        if (parse_size(path, "COLOR_SCALARS", array[2]) != 1)
+            fail(path, "COLOR_SCALARS '" + shown(array[1]) + "' has " + shown(array[2]) + " components; a volume needs 1");
+        layout.type = ScalarType::U8;
+        layout.unit_colors = layout.text;  // ASCII writes byte b as b / 255
+    } else if (k == "FIELD") {
+        if (array.size() != 3) fail(path, "'FIELD' takes a name and an array count");
+        if (parse_size(path, "FIELD", array[2]) == 0) fail(path, "FIELD '" + shown(array[1]) + "' has no arrays");
+        const std::vector<std::string_view> first = lines.words("the FIELD's first array");
+        if (first.size() != 4) fail(path, "a FIELD array line is 'name components tuples type'");
+        if (parse_size(path, "FIELD array", first[1]) != 1)
+            fail(path, "FIELD array '" + shown(first[0]) + "' has " + shown(first[1]) + " components; a volume needs 1");
+        if (parse_size(path, "FIELD array", first[2]) != info.dims[0] * info.dims[1] * info.dims[2])
+            fail(path, "FIELD array '" + shown(first[0]) + "' has " + shown(first[2]) + " tuples, not POINT_DATA's count");
+        layout.type = parse_type(path, first[3]);
+    } else {
+        fail(path, "the point data's first array is " + shown(array[0]) +
+                       "; a volume is read from SCALARS or COLOR_SCALARS with one component, or a FIELD array");
+    }
+
+    info.type = layout.type;
+    info.data_file = path;
+    apply_directions(h, axis_directions(axes));
+    layout.dims = info.dims;
+    layout.big_endian = info.big_endian;
+    layout.data_path = path;
+    layout.offset = lines.position();
+    layout.more_may_follow = true;  // further arrays, and the writer's newline after binary data
+    return h;
+}
+
+}  // namespace voxmesh::io

@@ -1,0 +1,207 @@
+// Legacy VTK volumes (.vtk, DATASET STRUCTURED_POINTS): files that VTK 9.1 itself wrote
+// (tests/fuzz_corpus/vtk, made by tools/gen_vtk_corpus.py) read with their geometry and every sample; a volume
+// written here in both encodings reads back as the NRRD it came from, and meshes the same;
+// broken headers and data are errors naming the file.
+#include <catch2/catch.hpp>
+#include <voxmesh/io.hpp>
+
+#include "support/io_scratch.hpp"
+
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <sstream>
+#include <string>
+#include <type_traits>
+
+using Catch::Matchers::Contains;
+using namespace voxmesh;
+
+namespace {
+
+using iotest::Scratch;
+
+std::string corpus(const std::string& name) { return std::string(VOXMESH_TEST_DATA) + "/../fuzz_corpus/vtk/" + name; }
+
+// The corpus files' samples: file sample i holds (7 i) mod 251, less 100 for signed and float
+// types.
+template <class T>
+void check_samples(const Volume& v, std::array<std::size_t, 3> dims, std::array<bool, 3> flipped) {
+    REQUIRE(v.dims == dims);
+    const auto* s = static_cast<const T*>(v.data);
+    const long long shift = std::is_signed_v<T> ? 100 : 0;
+    iotest::for_each_sample_of_file(dims, flipped, [&](std::size_t at, std::array<std::size_t, 3> f) {
+        const std::size_t i = f[0] + dims[0] * (f[1] + dims[1] * f[2]);
+        INFO("sample " << at);
+        REQUIRE(s[at] == static_cast<T>(static_cast<long long>((i * 7) % 251) - shift));
+    });
+}
+
+// A volume as legacy VTK, the way vtkStructuredPointsWriter lays it out: BINARY samples
+// big-endian followed by a newline, ASCII nine numbers a line.
+std::string as_vtk(const Volume& v, bool binary) {
+    REQUIRE(v.type == ScalarType::I16);
+    std::ostringstream out;
+    out << "# vtk DataFile Version 3.0\nwritten by test_io_vtk\n" << (binary ? "BINARY" : "ASCII")
+        << "\nDATASET STRUCTURED_POINTS\nDIMENSIONS " << v.dims[0] << " " << v.dims[1] << " " << v.dims[2]
+        << "\nSPACING " << v.spacing[0] << " " << v.spacing[1] << " " << v.spacing[2] << "\nORIGIN " << v.origin[0]
+        << " " << v.origin[1] << " " << v.origin[2] << "\nPOINT_DATA " << v.sample_count()
+        << "\nSCALARS density short 1\nLOOKUP_TABLE default\n";
+    const auto* s = static_cast<const std::int16_t*>(v.data);
+    for (std::size_t i = 0; i < v.sample_count(); ++i) {
+        if (binary) {
+            const auto u = static_cast<std::uint16_t>(s[i]);
+            out << static_cast<char>(u >> 8) << static_cast<char>(u & 0xff);
+        } else {
+            out << s[i] << (i % 9 == 8 ? "\n" : " ");
+        }
+    }
+    out << "\n";
+    return out.str();
+}
+
+const std::string kHeader = "# vtk DataFile Version 3.0\ntitle\nASCII\nDATASET STRUCTURED_POINTS\n"
+                            "DIMENSIONS 2 2 2\nSPACING 1 1 1\nORIGIN 0 0 0\nPOINT_DATA 8\n";
+
+}  // namespace
+
+TEST_CASE("vtk: files written by VTK read with their geometry and every sample", "[io][vtk]") {
+    SECTION("short, ASCII and BINARY (version 5.1)") {
+        for (const char* name : {"i16_ascii.vtk", "i16_binary.vtk"}) {
+            INFO(name);
+            VolumeInfo info;
+            const Volume v = read_volume(corpus(name), info);
+            CHECK(v.type == ScalarType::I16);
+            CHECK(v.spacing == std::array<double, 3>{0.5, 1, 2});
+            CHECK(v.origin == std::array<double, 3>{-1, 2, 3});
+            check_samples<std::int16_t>(v, {4, 3, 2}, {false, false, false});
+            CHECK(info.format == "vtk");
+            CHECK(info.encoding == (std::string(name) == "i16_ascii.vtk" ? "ascii" : "raw"));
+        }
+    }
+    SECTION("float, BINARY, version 4.2, a negative spacing: y reversed from the minimum corner") {
+        VolumeInfo info;
+        const Volume v = read_volume(corpus("f32_binary_v42.vtk"), info);
+        CHECK(v.type == ScalarType::F32);
+        CHECK(info.flipped == std::array<bool, 3>{false, true, false});
+        CHECK(v.spacing == std::array<double, 3>{1, 1, 1});
+        CHECK(v.origin == std::array<double, 3>{-1, 2 - 3, 3});
+        check_samples<float>(v, {5, 4, 3}, {false, true, false});
+    }
+    SECTION("double, ASCII") {
+        const Volume v = read_volume(corpus("f64_ascii.vtk"));
+        CHECK(v.type == ScalarType::F64);
+        check_samples<double>(v, {5, 4, 3}, {false, false, false});
+    }
+    SECTION("unsigned short as a FIELD array") {
+        const Volume v = read_volume(corpus("u16_field_binary.vtk"));
+        CHECK(v.type == ScalarType::U16);
+        check_samples<std::uint16_t>(v, {4, 3, 2}, {false, false, false});
+    }
+    SECTION("unsigned char as COLOR_SCALARS (vtkDataSetWriter), every byte in both encodings") {
+        check_samples<std::uint8_t>(read_volume(corpus("u8_dataset_binary.vtk")), {3, 3, 3}, {false, false, false});
+        for (const char* name : {"u8_colors_ascii.vtk", "u8_colors_binary.vtk"}) {
+            INFO(name);
+            const Volume v = read_volume(corpus(name));
+            REQUIRE(v.type == ScalarType::U8);
+            REQUIRE(v.dims == std::array<std::size_t, 3>{16, 16, 1});
+            for (std::size_t i = 0; i < 256; ++i) REQUIRE(static_cast<const std::uint8_t*>(v.data)[i] == i);
+        }
+    }
+    SECTION("signed char, ASCII") {
+        const Volume v = read_volume(corpus("i8_ascii.vtk"));
+        CHECK(v.type == ScalarType::I8);
+        const std::int8_t want[] = {-128, -100, -1, 0, 1, 5, 100, 127};
+        CHECK(std::memcmp(v.data, want, sizeof want) == 0);
+    }
+}
+
+TEST_CASE("vtk: the CT written as legacy VTK reads back as its NRRD and meshes the same", "[io][vtk]") {
+    Scratch s;
+    const Volume nrrd = read_volume(std::string(VOXMESH_TEST_DATA) + "/headsq.nrrd");
+    Options options;
+    options.iso = 499.5;
+    options.backend = Backend::Cpu;
+    const Mesh expected = extract(nrrd.view(), options);
+    REQUIRE(expected.triangle_count() == 57698);  // what VTK 9.1's Flying Edges gives
+    for (const bool binary : {true, false}) {
+        INFO((binary ? "BINARY" : "ASCII"));
+        const std::string path = s.file(binary ? "ct_binary.vtk" : "ct_ascii.vtk", as_vtk(nrrd, binary));
+        VolumeInfo info;
+        const Volume v = read_volume(path, info);
+        CHECK(info.big_endian == binary);
+        CHECK(read_volume_info(path).dims == nrrd.dims);
+        REQUIRE(v.byte_size() == nrrd.byte_size());
+        CHECK(std::memcmp(v.data, nrrd.data, v.byte_size()) == 0);
+        CHECK(v.spacing == nrrd.spacing);
+        const Mesh mesh = extract(v.view(), options);
+        CHECK(mesh.indices == expected.indices);
+        CHECK(mesh.positions == expected.positions);
+    }
+}
+
+TEST_CASE("vtk: bad headers and data are errors naming the file", "[io][vtk][errors]") {
+    Scratch s;
+    const auto error_of = [&](const std::string& text) {
+        const std::string path = s.file("bad.vtk", text);
+        try {
+            (void)read_volume(path);
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            CHECK(what.rfind("'" + path + "': ", 0) == 0);
+            return what;
+        }
+        FAIL("no error for:\n" << text);
+        return std::string();
+    };
+    const std::string numbers = "1 2 3 4 5 6 7 8\n";
+    CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nASCII\nDATASET POLYDATA\nPOINTS 3 float\n"),
+               Contains("DATASET POLYDATA") && Contains("only STRUCTURED_POINTS"));
+    CHECK_THAT(error_of("NRRD0004\n"), Contains("not a legacy VTK file"));
+    CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nTEXT\n"), Contains("not ASCII or BINARY"));
+    CHECK_THAT(error_of(kHeader), Contains("ends before SCALARS"));
+    CHECK_THAT(error_of(kHeader + "SCALARS v short\n1 2 3" + std::string(20, ' ')), Contains("ends after 3 of its 8 samples"));
+    CHECK_THAT(error_of(kHeader + "SCALARS v unsigned_char\n1 2 3 4 5 6 7 300\n"),
+               Contains("sample 7: '300' is out of range"));
+    CHECK_THAT(error_of(kHeader + "SCALARS v short\n1 2 3 4 x 6 7 8\n"), Contains("sample 4: 'x' is not a number"));
+    CHECK_THAT(error_of(kHeader + "SCALARS v float 3\n" + numbers), Contains("3 components"));
+    CHECK_THAT(error_of(kHeader + "VECTORS v float\n" + numbers), Contains("first array is VECTORS"));
+    CHECK_THAT(error_of(kHeader + "SCALARS v long\n" + numbers), Contains("unsupported VTK data type 'long'"));
+    CHECK_THAT(error_of(kHeader + "COLOR_SCALARS v 4\n" + numbers), Contains("4 components"));
+    CHECK_THAT(error_of(kHeader + "COLOR_SCALARS v 1\n0 0.5 1 1 1 1 1 2\n"), Contains("'2' is not a colour value"));
+    CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n"
+                        "POINT_DATA 9\nSCALARS v short\n" + numbers),
+               Contains("POINT_DATA 9 does not match DIMENSIONS 2 2 2"));
+    CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nPOINT_DATA 8\n"),
+               Contains("POINT_DATA comes before DIMENSIONS"));
+    CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 0 2\n"
+                        "POINT_DATA 0\nSCALARS v short\n"),
+               Contains("empty"));
+    CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n"
+                        "CELL_DATA 1\n"),
+               Contains("CELL_DATA before POINT_DATA is not supported"));
+    CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n"
+                        "SPACING 1 0 1\nPOINT_DATA 8\nSCALARS v short\n" + numbers),
+               Contains("spacing must be finite and non-zero"));
+    // A binary array cut short, and a header whose count would need more bytes than the file has.
+    const std::string binary = "# vtk DataFile Version 3.0\nt\nBINARY\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n"
+                               "POINT_DATA 8\nSCALARS v float\nLOOKUP_TABLE default\n";
+    CHECK_THAT(error_of(binary + std::string(31, '\0')), Contains("need 32 more"));
+    CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 1000 1000 1000\n"
+                        "POINT_DATA 1000000000\nSCALARS v short\n1 2 3\n"),
+               Contains("cannot hold 1000x1000x1000 i16 samples as text"));
+}
+
+TEST_CASE("vtk: the header may vary as VTK's reader allows", "[io][vtk]") {
+    Scratch s;
+    // Keywords in any case and order, blank lines, no LOOKUP_TABLE, ASPECT_RATIO for SPACING,
+    // and arrays after the volume's (ignored).
+    const std::string text = "# vtk DataFile Version 2.0\n\ttitle with spaces\nascii\n\ndataset structured_points\n"
+                             "origin 1 2 3\naspect_ratio 2 2 2\ndimensions 2 2 2\n\npoint_data 8\n"
+                             "scalars v int 1\n1 2 3 4\n5 6 7 8\nVECTORS w float\n0 0 0 0 0 0\n";
+    const Volume v = read_volume(s.file("loose.VTK", text));
+    CHECK(v.type == ScalarType::I32);
+    CHECK(v.spacing == std::array<double, 3>{2, 2, 2});
+    CHECK(v.origin == std::array<double, 3>{1, 2, 3});
+    for (int i = 0; i < 8; ++i) CHECK(static_cast<const std::int32_t*>(v.data)[i] == i + 1);
+}

@@ -1,0 +1,69 @@
+#!/usr/bin/python3
+"""Writes tests/fuzz_corpus/vtk: small legacy VTK volumes written by VTK itself (Debian's
+python3-vtk9, 9.1), which tests/test_io_vtk.cpp reads and fuzz_vtk starts from.
+
+    /usr/bin/python3 tools/gen_vtk_corpus.py     # from the repository root
+
+File sample i holds (7 i) mod 251, less 100 for signed and float types; u8_colors_* hold 0..255
+(VTK writes unsigned char as COLOR_SCALARS: bytes in BINARY, fractions of 255 in ASCII).
+"""
+import os
+
+import numpy as np
+import vtk
+from vtk.util import numpy_support
+
+OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "tests", "fuzz_corpus", "vtk")
+
+
+def image(dims, vtk_type, np_type, values=None, spacing=(0.5, 1, 2), origin=(-1, 2, 3), name="values"):
+    n = dims[0] * dims[1] * dims[2]
+    if values is None:
+        values = (np.arange(n) * 7) % 251
+        if np.dtype(np_type).kind in "if":
+            values = values - 100
+    img = vtk.vtkImageData()
+    img.SetDimensions(*dims)
+    img.SetSpacing(*spacing)
+    img.SetOrigin(*origin)
+    array = numpy_support.numpy_to_vtk(np.asarray(values).astype(np_type), deep=1, array_type=vtk_type)
+    array.SetName(name)
+    img.GetPointData().SetScalars(array)
+    return img
+
+
+def write(data, name, binary=True, version=None, writer=vtk.vtkStructuredPointsWriter):
+    w = writer()
+    w.SetInputData(data)
+    w.SetFileName(os.path.join(OUT, name))
+    if binary:
+        w.SetFileTypeToBinary()
+    if version:
+        w.SetFileVersion(version)
+    w.Write()
+
+
+def main():
+    os.makedirs(OUT, exist_ok=True)
+    write(image((4, 3, 2), vtk.VTK_SHORT, np.int16), "i16_ascii.vtk", binary=False)
+    write(image((4, 3, 2), vtk.VTK_SHORT, np.int16), "i16_binary.vtk")
+    write(image((5, 4, 3), vtk.VTK_FLOAT, np.float32, spacing=(1, -1, 1)), "f32_binary_v42.vtk", version=42)
+    write(image((5, 4, 3), vtk.VTK_DOUBLE, np.float64), "f64_ascii.vtk", binary=False)
+    write(image((3, 3, 3), vtk.VTK_UNSIGNED_CHAR, np.uint8), "u8_dataset_binary.vtk", writer=vtk.vtkDataSetWriter)
+    # Not the active scalars: written as the first array of a FIELD.
+    field = image((4, 3, 2), vtk.VTK_UNSIGNED_SHORT, np.uint16)
+    array = field.GetPointData().GetScalars()
+    field.GetPointData().SetScalars(None)
+    field.GetPointData().AddArray(array)
+    write(field, "u16_field_binary.vtk")
+    colors = image((16, 16, 1), vtk.VTK_UNSIGNED_CHAR, np.uint8, values=np.arange(256), spacing=(1, 1, 1),
+                   origin=(0, 0, 0), name="bytes")
+    write(colors, "u8_colors_ascii.vtk", binary=False)
+    write(colors, "u8_colors_binary.vtk")
+    signed = image((4, 2, 1), vtk.VTK_SIGNED_CHAR, np.int8, values=[-128, -100, -1, 0, 1, 5, 100, 127],
+                   spacing=(1, 1, 1), origin=(0, 0, 0), name="s")
+    write(signed, "i8_ascii.vtk", binary=False)
+
+
+if __name__ == "__main__":
+    main()
