@@ -1,0 +1,109 @@
+/* voxmesh's C API: the C++ library's extract, volume reading and mesh writing behind a C ABI,
+ * for C programs and for other languages' foreign-function interfaces (Python's ctypes, Rust,
+ * Julia, C#). Link libvoxmesh_c (CMake: voxmesh::voxmesh_c).
+ *
+ * Every call that can fail returns a voxmesh_status; on failure voxmesh_last_error() gives the
+ * message the C++ library would have thrown (naming the problem), for the calling thread.
+ * Nothing throws or aborts across this boundary. Objects made here are freed here
+ * (voxmesh_mesh_free, voxmesh_volume_free); freeing NULL does nothing.
+ *
+ * The structs are plain data. Fill voxmesh_options from voxmesh_default_options() so that
+ * fields added in later versions get their defaults (0.x versions may add fields: rebuild
+ * against the header you link). */
+#ifndef VOXMESH_H
+#define VOXMESH_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum voxmesh_status {
+    VOXMESH_OK = 0,
+    VOXMESH_ERROR = 1,         /* bad input or arguments: the message names the problem */
+    VOXMESH_OUT_OF_MEMORY = 2, /* memory ran out during the call; may pass with more memory */
+    VOXMESH_INTERNAL = 3       /* anything else (a bug: please report the message) */
+} voxmesh_status;
+
+typedef enum voxmesh_scalar_type {
+    VOXMESH_U8 = 0,
+    VOXMESH_I8 = 1,
+    VOXMESH_U16 = 2,
+    VOXMESH_I16 = 3,
+    VOXMESH_U32 = 4,
+    VOXMESH_I32 = 5,
+    VOXMESH_F32 = 6,
+    VOXMESH_F64 = 7
+} voxmesh_scalar_type;
+
+typedef enum voxmesh_backend {
+    VOXMESH_BACKEND_AUTO = 0,
+    VOXMESH_BACKEND_CPU = 1,
+    VOXMESH_BACKEND_OPENCL = 2,
+    VOXMESH_BACKEND_HYBRID = 3
+} voxmesh_backend;
+
+/* A non-owning view of x-fastest samples: index = x + nx * (y + ny * z), `data` aligned to the
+ * sample size. Positions are origin + index * spacing. */
+typedef struct voxmesh_volume_view {
+    const void* data;
+    int type; /* a voxmesh_scalar_type */
+    size_t dims[3];
+    double spacing[3];
+    double origin[3];
+} voxmesh_volume_view;
+
+/* The C++ voxmesh::Options without the device choice and the log (warnings are dropped). */
+typedef struct voxmesh_options {
+    double iso;           /* a sample is inside when value >= iso */
+    int backend;          /* a voxmesh_backend */
+    unsigned threads;     /* 0: the CPUs this process may use */
+    int normals;          /* nonzero: per-vertex normals */
+    int inside_below;     /* nonzero: inside where value < iso (signed distance fields) */
+} voxmesh_options;
+
+/* iso 0, backend auto, threads 0, normals on, inside_below off. */
+voxmesh_options voxmesh_default_options(void);
+
+/* Opaque: a volume read from a file, and a mesh. */
+typedef struct voxmesh_volume voxmesh_volume;
+typedef struct voxmesh_mesh voxmesh_mesh;
+
+/* The canonical mesh of `volume` at options->iso (options NULL: the defaults). On success
+ * *mesh is a new mesh; on failure *mesh is NULL. */
+voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_options* options,
+                               voxmesh_mesh** mesh);
+
+size_t voxmesh_mesh_vertex_count(const voxmesh_mesh* mesh);
+size_t voxmesh_mesh_triangle_count(const voxmesh_mesh* mesh);
+/* xyz per vertex; NULL for a mesh without vertices. Valid until voxmesh_mesh_free. */
+const float* voxmesh_mesh_positions(const voxmesh_mesh* mesh);
+/* xyz per vertex, unit, outward; NULL when normals were off or there are no vertices. */
+const float* voxmesh_mesh_normals(const voxmesh_mesh* mesh);
+/* three per triangle, counter-clockwise seen from outside; NULL without triangles. */
+const uint32_t* voxmesh_mesh_indices(const voxmesh_mesh* mesh);
+void voxmesh_mesh_free(voxmesh_mesh* mesh);
+
+/* .stl, .ply or .obj by extension, through a temporary renamed into place. */
+voxmesh_status voxmesh_write_mesh(const char* path, const voxmesh_mesh* mesh);
+
+/* NRRD, MetaImage, NIfTI-1 or legacy VTK, by extension (as voxmesh::read_volume). */
+voxmesh_status voxmesh_read_volume(const char* path, voxmesh_volume** volume);
+/* The samples, valid until voxmesh_volume_free. */
+voxmesh_volume_view voxmesh_volume_get_view(const voxmesh_volume* volume);
+void voxmesh_volume_free(voxmesh_volume* volume);
+
+/* The message of the calling thread's last failed call ("" when none failed yet). Valid until
+ * that thread's next call into voxmesh. */
+const char* voxmesh_last_error(void);
+
+/* "MAJOR.MINOR.PATCH" of the library linked. */
+const char* voxmesh_version(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* VOXMESH_H */

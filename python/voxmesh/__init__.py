@@ -1,0 +1,228 @@
+"""voxmesh from Python: marching cubes on numpy volumes through the C API (libvoxmesh_c), with
+ctypes and numpy only.
+
+    import numpy as np, voxmesh
+    z, y, x = np.mgrid[:128, :128, :128]
+    volume = 40.0 - np.sqrt((x - 63.5) ** 2 + (y - 63.5) ** 2 + (z - 63.5) ** 2)
+    mesh = voxmesh.extract(volume, iso=0.0)          # threads: every CPU this process may use
+    mesh.positions, mesh.normals, mesh.indices        # (V, 3) float32, (V, 3) float32, (T, 3) uint32
+    mesh.write("sphere.ply")
+
+A volume is a 3-D array indexed [z, y, x] (C order, so x varies fastest, as voxmesh stores
+samples); positions are x, y, z in that order: origin + index * spacing, with spacing and
+origin given as (x, y, z). The mesh is the library's canonical mesh, the same buffers the C++
+API gives. Its arrays are views of the library's memory, kept alive as long as any of them is.
+
+The shared library is found through VOXMESH_LIBRARY (a path), else where the build or install
+that made this package put it.
+"""
+
+import ctypes
+import os
+
+import numpy as np
+
+__all__ = ["extract", "read_volume", "Mesh", "Volume", "VoxmeshError", "VoxmeshMemoryError", "version"]
+
+_DTYPES = [np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32, np.float32, np.float64]
+_BACKENDS = {"auto": 0, "cpu": 1, "opencl": 2, "hybrid": 3}
+
+
+class VoxmeshError(Exception):
+    """A call the library refused: the message names the problem."""
+
+
+class VoxmeshMemoryError(VoxmeshError, MemoryError):
+    """Memory ran out during the call."""
+
+
+class _VolumeView(ctypes.Structure):
+    _fields_ = [("data", ctypes.c_void_p), ("type", ctypes.c_int), ("dims", ctypes.c_size_t * 3),
+                ("spacing", ctypes.c_double * 3), ("origin", ctypes.c_double * 3)]
+
+
+class _Options(ctypes.Structure):
+    _fields_ = [("iso", ctypes.c_double), ("backend", ctypes.c_int), ("threads", ctypes.c_uint),
+                ("normals", ctypes.c_int), ("inside_below", ctypes.c_int)]
+
+
+def _library_path():
+    given = os.environ.get("VOXMESH_LIBRARY")
+    if given:
+        return given
+    from . import _library  # written by CMake beside this file
+
+    return os.path.join(os.path.dirname(os.path.abspath(__file__)), _library.PATH)
+
+
+def _load():
+    lib = ctypes.CDLL(_library_path())
+    handle = ctypes.c_void_p
+    lib.voxmesh_default_options.restype = _Options
+    lib.voxmesh_default_options.argtypes = []
+    lib.voxmesh_extract.restype = ctypes.c_int
+    lib.voxmesh_extract.argtypes = [ctypes.POINTER(_VolumeView), ctypes.POINTER(_Options), ctypes.POINTER(handle)]
+    for name in ("voxmesh_mesh_vertex_count", "voxmesh_mesh_triangle_count"):
+        getattr(lib, name).restype = ctypes.c_size_t
+        getattr(lib, name).argtypes = [handle]
+    for name in ("voxmesh_mesh_positions", "voxmesh_mesh_normals", "voxmesh_mesh_indices"):
+        getattr(lib, name).restype = ctypes.c_void_p
+        getattr(lib, name).argtypes = [handle]
+    lib.voxmesh_mesh_free.restype = None
+    lib.voxmesh_mesh_free.argtypes = [handle]
+    lib.voxmesh_write_mesh.restype = ctypes.c_int
+    lib.voxmesh_write_mesh.argtypes = [ctypes.c_char_p, handle]
+    lib.voxmesh_read_volume.restype = ctypes.c_int
+    lib.voxmesh_read_volume.argtypes = [ctypes.c_char_p, ctypes.POINTER(handle)]
+    lib.voxmesh_volume_get_view.restype = _VolumeView
+    lib.voxmesh_volume_get_view.argtypes = [handle]
+    lib.voxmesh_volume_free.restype = None
+    lib.voxmesh_volume_free.argtypes = [handle]
+    lib.voxmesh_last_error.restype = ctypes.c_char_p
+    lib.voxmesh_last_error.argtypes = []
+    lib.voxmesh_version.restype = ctypes.c_char_p
+    lib.voxmesh_version.argtypes = []
+    return lib
+
+
+_lib = _load()
+
+
+def version():
+    """The version of the library loaded, e.g. "0.1.0"."""
+    return _lib.voxmesh_version().decode()
+
+
+def _check(status):
+    if status == 0:
+        return
+    message = _lib.voxmesh_last_error().decode(errors="replace")
+    raise (VoxmeshMemoryError if status == 2 else VoxmeshError)(message)
+
+
+class _Handle:
+    """Owns one C object; frees it when the last array or wrapper using it is gone."""
+
+    def __init__(self, pointer, free):
+        self.pointer, self._free = pointer, free
+
+    def __del__(self):
+        if self.pointer:
+            self._free(self.pointer)
+            self.pointer = None
+
+
+class _Memory:
+    """Lends `count` elements of library memory to numpy, keeping their owner alive."""
+
+    def __init__(self, address, shape, dtype, owner, readonly):
+        self.__array_interface__ = {"shape": shape, "typestr": np.dtype(dtype).str, "data": (address, readonly),
+                                    "version": 3}
+        self._owner = owner
+
+
+def _view(address, shape, dtype, owner, readonly=False):
+    if not address:
+        return np.zeros(shape, dtype=dtype)
+    return np.asarray(_Memory(address, shape, dtype, owner, readonly))
+
+
+class Mesh:
+    """positions (V, 3) float32, normals (V, 3) float32 or None, indices (T, 3) uint32."""
+
+    def __init__(self, pointer):
+        handle = _Handle(pointer, _lib.voxmesh_mesh_free)
+        self._handle = handle
+        vertices = _lib.voxmesh_mesh_vertex_count(pointer)
+        triangles = _lib.voxmesh_mesh_triangle_count(pointer)
+        self.positions = _view(_lib.voxmesh_mesh_positions(pointer), (vertices, 3), np.float32, handle)
+        normals = _lib.voxmesh_mesh_normals(pointer)
+        self.normals = _view(normals, (vertices, 3), np.float32, handle) if normals else None
+        self.indices = _view(_lib.voxmesh_mesh_indices(pointer), (triangles, 3), np.uint32, handle)
+
+    @property
+    def vertex_count(self):
+        return self.positions.shape[0]
+
+    @property
+    def triangle_count(self):
+        return self.indices.shape[0]
+
+    def write(self, path):
+        """.stl, .ply or .obj by extension, through a temporary file renamed into place."""
+        _check(_lib.voxmesh_write_mesh(os.fsencode(path), self._handle.pointer))
+
+
+class Volume:
+    """A volume read from a file: `array` [z, y, x], `spacing` and `origin` as (x, y, z)."""
+
+    def __init__(self, pointer):
+        handle = _Handle(pointer, _lib.voxmesh_volume_free)
+        self._handle = handle
+        view = _lib.voxmesh_volume_get_view(pointer)
+        nx, ny, nz = view.dims
+        # Read-only: the samples may be the file itself, mapped.
+        self.array = _view(view.data, (nz, ny, nx), _DTYPES[view.type], handle, readonly=True)
+        self.spacing = tuple(view.spacing)
+        self.origin = tuple(view.origin)
+
+
+def _triple(name, value, default):
+    if value is None:
+        return [default] * 3
+    values = [float(v) for v in value]
+    if len(values) != 3:
+        raise VoxmeshError(f"{name} must be three numbers (x, y, z); got {len(values)}")
+    return values
+
+
+def read_volume(path):
+    """NRRD, MetaImage, NIfTI-1 or legacy VTK, chosen by extension, as voxmesh::read_volume."""
+    pointer = ctypes.c_void_p()
+    _check(_lib.voxmesh_read_volume(os.fsencode(path), ctypes.byref(pointer)))
+    return Volume(pointer.value)
+
+
+def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=0, normals=True,
+            inside_below=False):
+    """The iso-surface of `volume` (a 3-D array [z, y, x] or a Volume) at `iso` as a Mesh.
+
+    A sample is inside when value >= iso (value < iso with inside_below, for signed distance
+    fields). backend: "auto", "cpu", "opencl" or "hybrid"; threads 0: every CPU this process may
+    use. spacing and origin are (x, y, z); a Volume brings its own unless they are given.
+    """
+    if isinstance(volume, Volume):
+        spacing = volume.spacing if spacing is None else spacing
+        origin = volume.origin if origin is None else origin
+        volume = volume.array
+    array = np.asarray(volume)
+    if array.ndim != 3:
+        raise VoxmeshError(f"volume must be 3-D, indexed [z, y, x]; got {array.ndim} dimension(s)")
+    if array.dtype == np.bool_:
+        array = array.view(np.uint8)
+    native = array.dtype.newbyteorder("=")
+    if native.type not in _DTYPES:
+        raise VoxmeshError(f"unsupported sample type {array.dtype} (uint8, int8, uint16, int16, uint32, "
+                           "int32, float32, float64: convert first, e.g. volume.astype(np.float32))")
+    array = np.ascontiguousarray(array, dtype=native)  # a copy only where the layout needs one
+    if backend not in _BACKENDS:
+        raise VoxmeshError(f"unknown backend '{backend}' (auto, cpu, opencl, hybrid)")
+    if int(threads) < 0:
+        raise VoxmeshError(f"threads must be 0 (every CPU) or more; got {threads}")
+    spacing = _triple("spacing", spacing, 1.0)
+    origin = _triple("origin", origin, 0.0)
+    view = _VolumeView()
+    view.data = array.ctypes.data
+    view.type = _DTYPES.index(native.type)
+    view.dims[:] = [array.shape[2], array.shape[1], array.shape[0]]
+    view.spacing[:] = spacing
+    view.origin[:] = origin
+    options = _lib.voxmesh_default_options()
+    options.iso = float(iso)
+    options.backend = _BACKENDS[backend]
+    options.threads = int(threads)
+    options.normals = 1 if normals else 0
+    options.inside_below = 1 if inside_below else 0
+    pointer = ctypes.c_void_p()
+    _check(_lib.voxmesh_extract(ctypes.byref(view), ctypes.byref(options), ctypes.byref(pointer)))
+    return Mesh(pointer.value)

@@ -1,0 +1,193 @@
+// The C API (include/voxmesh/voxmesh.h): thin wrappers that turn arguments into the C++ API's
+// types and every exception into a status plus a per-thread message.
+#include <voxmesh/io.hpp>
+#include <voxmesh/voxmesh.h>
+#include <voxmesh/voxmesh.hpp>
+
+#include <iterator>
+#include <memory>
+#include <new>
+#include <string>
+#include <utility>
+#include <vector>
+
+struct voxmesh_mesh {
+    voxmesh::Mesh mesh;
+};
+
+struct voxmesh_volume {
+    voxmesh::Volume volume;
+};
+
+namespace {
+
+thread_local std::string g_last_error;
+
+voxmesh_status fail(voxmesh_status status, std::string message) noexcept {
+    try {
+        g_last_error = std::move(message);
+    } catch (...) {
+        g_last_error.clear();  // no memory even for the message: the status still tells
+    }
+    return status;
+}
+
+// Runs `body`, mapping what it throws to a status and the calling thread's message.
+template <class Body>
+voxmesh_status guarded(Body&& body) noexcept {
+    try {
+        body();
+        return VOXMESH_OK;
+    } catch (const voxmesh::OutOfMemoryError& e) {
+        return fail(VOXMESH_OUT_OF_MEMORY, e.what());
+    } catch (const voxmesh::Error& e) {
+        return fail(VOXMESH_ERROR, e.what());
+    } catch (const std::bad_alloc&) {
+        return fail(VOXMESH_OUT_OF_MEMORY, "out of memory");
+    } catch (const std::exception& e) {
+        return fail(VOXMESH_INTERNAL, e.what());
+    } catch (...) {
+        return fail(VOXMESH_INTERNAL, "unknown exception");
+    }
+}
+
+void require(const void* pointer, const char* who, const char* what) {
+    if (!pointer) throw voxmesh::Error(std::string(who) + ": " + what + " is NULL");
+}
+
+voxmesh::ScalarType scalar_type(int type) {
+    using voxmesh::ScalarType;
+    static constexpr ScalarType kTypes[] = {ScalarType::U8,  ScalarType::I8,  ScalarType::U16, ScalarType::I16,
+                                            ScalarType::U32, ScalarType::I32, ScalarType::F32, ScalarType::F64};
+    if (type < 0 || type >= static_cast<int>(std::size(kTypes)))
+        throw voxmesh::Error("voxmesh_extract: unknown scalar type " + std::to_string(type) +
+                             " (VOXMESH_U8 .. VOXMESH_F64)");
+    return kTypes[type];
+}
+
+int scalar_code(voxmesh::ScalarType type) {
+    using voxmesh::ScalarType;
+    switch (type) {
+        case ScalarType::U8: return VOXMESH_U8;
+        case ScalarType::I8: return VOXMESH_I8;
+        case ScalarType::U16: return VOXMESH_U16;
+        case ScalarType::I16: return VOXMESH_I16;
+        case ScalarType::U32: return VOXMESH_U32;
+        case ScalarType::I32: return VOXMESH_I32;
+        case ScalarType::F32: return VOXMESH_F32;
+        case ScalarType::F64: return VOXMESH_F64;
+    }
+    return -1;
+}
+
+voxmesh::Backend backend(int code) {
+    using voxmesh::Backend;
+    switch (code) {
+        case VOXMESH_BACKEND_AUTO: return Backend::Auto;
+        case VOXMESH_BACKEND_CPU: return Backend::Cpu;
+        case VOXMESH_BACKEND_OPENCL: return Backend::OpenCL;
+        case VOXMESH_BACKEND_HYBRID: return Backend::Hybrid;
+        default:
+            throw voxmesh::Error("voxmesh_extract: unknown backend " + std::to_string(code) +
+                                 " (VOXMESH_BACKEND_AUTO, _CPU, _OPENCL or _HYBRID)");
+    }
+}
+
+template <class T>
+const T* data_or_null(const std::vector<T>& array) {
+    return array.empty() ? nullptr : array.data();
+}
+
+}  // namespace
+
+extern "C" {
+
+voxmesh_options voxmesh_default_options(void) {
+    const voxmesh::Options defaults;
+    voxmesh_options options{};
+    options.iso = defaults.iso;
+    options.backend = VOXMESH_BACKEND_AUTO;
+    options.threads = defaults.threads;
+    options.normals = defaults.normals;
+    options.inside_below = defaults.inside_below;
+    return options;
+}
+
+voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_options* options,
+                               voxmesh_mesh** mesh) {
+    if (mesh) *mesh = nullptr;
+    return guarded([&] {
+        require(mesh, "voxmesh_extract", "the mesh pointer");
+        require(volume, "voxmesh_extract", "the volume");
+        const voxmesh_options given = options ? *options : voxmesh_default_options();
+        voxmesh::VolumeView view;
+        view.data = volume->data;
+        view.type = scalar_type(volume->type);
+        for (int a = 0; a < 3; ++a) {
+            view.dims[a] = volume->dims[a];
+            view.spacing[a] = volume->spacing[a];
+            view.origin[a] = volume->origin[a];
+        }
+        voxmesh::Options cpp;
+        cpp.iso = given.iso;
+        cpp.backend = backend(given.backend);
+        cpp.threads = given.threads;
+        cpp.normals = given.normals != 0;
+        cpp.inside_below = given.inside_below != 0;
+        auto made = std::make_unique<voxmesh_mesh>();
+        made->mesh = voxmesh::extract(view, cpp);
+        *mesh = made.release();
+    });
+}
+
+size_t voxmesh_mesh_vertex_count(const voxmesh_mesh* mesh) { return mesh ? mesh->mesh.vertex_count() : 0; }
+size_t voxmesh_mesh_triangle_count(const voxmesh_mesh* mesh) { return mesh ? mesh->mesh.triangle_count() : 0; }
+const float* voxmesh_mesh_positions(const voxmesh_mesh* mesh) {
+    return mesh ? data_or_null(mesh->mesh.positions) : nullptr;
+}
+const float* voxmesh_mesh_normals(const voxmesh_mesh* mesh) { return mesh ? data_or_null(mesh->mesh.normals) : nullptr; }
+const uint32_t* voxmesh_mesh_indices(const voxmesh_mesh* mesh) {
+    return mesh ? data_or_null(mesh->mesh.indices) : nullptr;
+}
+void voxmesh_mesh_free(voxmesh_mesh* mesh) { delete mesh; }
+
+voxmesh_status voxmesh_write_mesh(const char* path, const voxmesh_mesh* mesh) {
+    return guarded([&] {
+        require(path, "voxmesh_write_mesh", "the path");
+        require(mesh, "voxmesh_write_mesh", "the mesh");
+        voxmesh::write_mesh(path, mesh->mesh);
+    });
+}
+
+voxmesh_status voxmesh_read_volume(const char* path, voxmesh_volume** volume) {
+    if (volume) *volume = nullptr;
+    return guarded([&] {
+        require(volume, "voxmesh_read_volume", "the volume pointer");
+        require(path, "voxmesh_read_volume", "the path");
+        auto made = std::make_unique<voxmesh_volume>();
+        made->volume = voxmesh::read_volume(path);
+        *volume = made.release();
+    });
+}
+
+voxmesh_volume_view voxmesh_volume_get_view(const voxmesh_volume* volume) {
+    voxmesh_volume_view view{};
+    if (!volume) return view;
+    const voxmesh::Volume& v = volume->volume;
+    view.data = v.data;
+    view.type = scalar_code(v.type);
+    for (int a = 0; a < 3; ++a) {
+        view.dims[a] = v.dims[a];
+        view.spacing[a] = v.spacing[a];
+        view.origin[a] = v.origin[a];
+    }
+    return view;
+}
+
+void voxmesh_volume_free(voxmesh_volume* volume) { delete volume; }
+
+const char* voxmesh_last_error(void) { return g_last_error.c_str(); }
+
+const char* voxmesh_version(void) { return VOXMESH_VERSION_STRING; }
+
+}  // extern "C"

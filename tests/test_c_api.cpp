@@ -1,0 +1,227 @@
+// The C API (libvoxmesh_c) against the C++ API it wraps: the same meshes bit for bit, the
+// same volumes from files, the same error messages, one message per thread.
+#ifdef VOXMESH_TEST_C_API
+#include <catch2/catch.hpp>
+#include <voxmesh/fields.hpp>
+#include <voxmesh/io.hpp>
+#include <voxmesh/voxmesh.h>
+#include <voxmesh/voxmesh.hpp>
+
+#include "support/io_scratch.hpp"
+
+#include <cstring>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace {
+
+using MeshPtr = std::unique_ptr<voxmesh_mesh, decltype(&voxmesh_mesh_free)>;
+
+voxmesh_volume_view c_view(const voxmesh::VolumeView& v) {
+    voxmesh_volume_view view{};
+    view.data = v.data;
+    view.type = static_cast<int>(v.type);  // checked against the C names below
+    for (int a = 0; a < 3; ++a) {
+        view.dims[a] = v.dims[a];
+        view.spacing[a] = v.spacing[a];
+        view.origin[a] = v.origin[a];
+    }
+    return view;
+}
+
+template <class T>
+bool same_bytes(const T* c, const std::vector<T>& cpp) {
+    if (cpp.empty()) return c == nullptr;
+    return c && std::memcmp(c, cpp.data(), cpp.size() * sizeof(T)) == 0;
+}
+
+void require_same(const voxmesh_mesh* c, const voxmesh::Mesh& cpp) {
+    REQUIRE(voxmesh_mesh_vertex_count(c) == cpp.vertex_count());
+    REQUIRE(voxmesh_mesh_triangle_count(c) == cpp.triangle_count());
+    CHECK(same_bytes(voxmesh_mesh_positions(c), cpp.positions));
+    CHECK(same_bytes(voxmesh_mesh_normals(c), cpp.normals));
+    CHECK(same_bytes(voxmesh_mesh_indices(c), cpp.indices));
+}
+
+std::string cpp_error(const voxmesh::VolumeView& view, const voxmesh::Options& options) {
+    try {
+        voxmesh::extract(view, options);
+    } catch (const voxmesh::Error& e) {
+        return e.what();
+    }
+    return "(no error)";
+}
+
+}  // namespace
+
+TEST_CASE("C API: scalar type and backend codes are the C++ enums' order", "[capi]") {
+    using voxmesh::ScalarType;
+    CHECK(static_cast<int>(ScalarType::U8) == VOXMESH_U8);
+    CHECK(static_cast<int>(ScalarType::I8) == VOXMESH_I8);
+    CHECK(static_cast<int>(ScalarType::U16) == VOXMESH_U16);
+    CHECK(static_cast<int>(ScalarType::I16) == VOXMESH_I16);
+    CHECK(static_cast<int>(ScalarType::U32) == VOXMESH_U32);
+    CHECK(static_cast<int>(ScalarType::I32) == VOXMESH_I32);
+    CHECK(static_cast<int>(ScalarType::F32) == VOXMESH_F32);
+    CHECK(static_cast<int>(ScalarType::F64) == VOXMESH_F64);
+    CHECK(std::string(voxmesh_version()) == VOXMESH_VERSION_STRING);
+    const voxmesh_options d = voxmesh_default_options();
+    const voxmesh::Options cpp;
+    CHECK(d.iso == cpp.iso);
+    CHECK(d.threads == cpp.threads);
+    CHECK((d.normals != 0) == cpp.normals);
+    CHECK((d.inside_below != 0) == cpp.inside_below);
+    CHECK(d.backend == VOXMESH_BACKEND_AUTO);
+}
+
+TEST_CASE("C API: extract gives the C++ API's mesh bit for bit", "[capi]") {
+    struct Case {
+        voxmesh::Field field;
+        voxmesh::ScalarType type;
+        std::size_t n;
+    };
+    const Case cases[] = {{voxmesh::Field::Sphere, voxmesh::ScalarType::U8, 40},
+                          {voxmesh::Field::Gyroid, voxmesh::ScalarType::F32, 36},
+                          {voxmesh::Field::Ct, voxmesh::ScalarType::I16, 40},
+                          {voxmesh::Field::Blobs, voxmesh::ScalarType::F64, 32}};
+    std::vector<std::pair<int, voxmesh::Backend>> backends = {{VOXMESH_BACKEND_CPU, voxmesh::Backend::Cpu}};
+    if (voxmesh::opencl_available()) backends.push_back({VOXMESH_BACKEND_OPENCL, voxmesh::Backend::OpenCL});
+    for (const Case& c : cases) {
+        voxmesh::FieldVolume field = voxmesh::make_field(c.field, c.n, c.type);
+        field.volume.spacing = {0.5, 1.25, 2.0};
+        field.volume.origin = {-3.0, 4.0, 10.5};
+        const voxmesh::VolumeView view = field.volume.view();
+        const voxmesh_volume_view cview = c_view(view);
+        for (const auto& [code, backend] : backends)
+            for (int normals : {1, 0})
+                for (int inside_below : {0, 1}) {
+                    CAPTURE(voxmesh::field_name(c.field), voxmesh::scalar_name(c.type), code, normals, inside_below);
+                    voxmesh_options options = voxmesh_default_options();
+                    options.iso = field.iso;
+                    options.backend = code;
+                    options.threads = 2;
+                    options.normals = normals;
+                    options.inside_below = inside_below;
+                    voxmesh_mesh* made = nullptr;
+                    REQUIRE(voxmesh_extract(&cview, &options, &made) == VOXMESH_OK);
+                    const MeshPtr mesh(made, voxmesh_mesh_free);
+                    voxmesh::Options cpp;
+                    cpp.iso = field.iso;
+                    cpp.backend = voxmesh::Backend::Cpu;  // every engine gives the CPU engine's mesh
+                    cpp.threads = 1;
+                    cpp.normals = normals != 0;
+                    cpp.inside_below = inside_below != 0;
+                    require_same(mesh.get(), voxmesh::extract(view, cpp));
+                }
+    }
+}
+
+TEST_CASE("C API: options NULL means the defaults", "[capi]") {
+    voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Sphere, 24, voxmesh::ScalarType::F32);
+    const voxmesh_volume_view view = c_view(field.volume.view());
+    voxmesh_mesh* made = nullptr;
+    REQUIRE(voxmesh_extract(&view, nullptr, &made) == VOXMESH_OK);
+    const MeshPtr mesh(made, voxmesh_mesh_free);
+    voxmesh::Options cpp;
+    cpp.backend = voxmesh::Backend::Cpu;
+    require_same(mesh.get(), voxmesh::extract(field.volume.view(), cpp));
+}
+
+TEST_CASE("C API: read_volume gives read_volume's samples and geometry", "[capi]") {
+    for (const char* name : {"headsq.nrrd", "mri_someones_anatomy.nii.gz"}) {
+        CAPTURE(name);
+        const std::string path = std::string(VOXMESH_TEST_DATA) + "/" + name;
+        voxmesh_volume* made = nullptr;
+        REQUIRE(voxmesh_read_volume(path.c_str(), &made) == VOXMESH_OK);
+        const std::unique_ptr<voxmesh_volume, decltype(&voxmesh_volume_free)> read(made, voxmesh_volume_free);
+        const voxmesh_volume_view c = voxmesh_volume_get_view(read.get());
+        const voxmesh::Volume cpp = voxmesh::read_volume(path);
+        REQUIRE(c.type == static_cast<int>(cpp.type));
+        for (int a = 0; a < 3; ++a) {
+            CHECK(c.dims[a] == cpp.dims[a]);
+            CHECK(c.spacing[a] == cpp.spacing[a]);
+            CHECK(c.origin[a] == cpp.origin[a]);
+        }
+        CHECK(std::memcmp(c.data, cpp.data, cpp.byte_size()) == 0);
+    }
+    const voxmesh_volume_view none = voxmesh_volume_get_view(nullptr);
+    CHECK(none.data == nullptr);
+    CHECK(none.dims[0] == 0);
+}
+
+TEST_CASE("C API: failures give the C++ API's messages, a status and no object", "[capi]") {
+    std::vector<float> samples(8 * 8, 0.0f);
+    voxmesh::VolumeView flat{samples.data(), voxmesh::ScalarType::F32, {8, 8, 1}};
+    voxmesh::Options cpp;
+    const voxmesh_volume_view view = c_view(flat);
+    voxmesh_mesh* mesh = reinterpret_cast<voxmesh_mesh*>(&samples);  // must be reset to NULL
+    CHECK(voxmesh_extract(&view, nullptr, &mesh) == VOXMESH_ERROR);
+    CHECK(mesh == nullptr);
+    CHECK(std::string(voxmesh_last_error()) == cpp_error(flat, cpp));
+
+    voxmesh::VolumeView misaligned{reinterpret_cast<const char*>(samples.data()) + 1, voxmesh::ScalarType::F32,
+                                   {2, 2, 2}};
+    const voxmesh_volume_view bad = c_view(misaligned);
+    CHECK(voxmesh_extract(&bad, nullptr, &mesh) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()) == cpp_error(misaligned, cpp));
+
+    voxmesh_volume* volume = reinterpret_cast<voxmesh_volume*>(&samples);
+    const std::string missing = std::string(VOXMESH_TEST_DATA) + "/missing.nrrd";
+    CHECK(voxmesh_read_volume(missing.c_str(), &volume) == VOXMESH_ERROR);
+    CHECK(volume == nullptr);
+    std::string expected;
+    try {
+        voxmesh::read_volume(missing);
+    } catch (const voxmesh::Error& e) {
+        expected = e.what();
+    }
+    CHECK(!expected.empty());
+    CHECK(std::string(voxmesh_last_error()) == expected);
+    CHECK(voxmesh_read_volume(nullptr, &volume) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()) == "voxmesh_read_volume: the path is NULL");
+    CHECK(voxmesh_write_mesh("out.stl", nullptr) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()) == "voxmesh_write_mesh: the mesh is NULL");
+}
+
+TEST_CASE("C API: each thread has its own last error", "[capi]") {
+    voxmesh_mesh* mesh = nullptr;
+    CHECK(voxmesh_extract(nullptr, nullptr, &mesh) == VOXMESH_ERROR);
+    const std::string mine = voxmesh_last_error();
+    CHECK(mine == "voxmesh_extract: the volume is NULL");
+    std::string theirs_before, theirs_after;
+    std::thread other([&] {
+        theirs_before = voxmesh_last_error();
+        voxmesh_volume* volume = nullptr;
+        voxmesh_read_volume("/nonexistent/other.nrrd", &volume);
+        theirs_after = voxmesh_last_error();
+    });
+    other.join();
+    CHECK(theirs_before.empty());
+    CHECK(theirs_after.find("other.nrrd") != std::string::npos);
+    CHECK(std::string(voxmesh_last_error()) == mine);
+}
+
+TEST_CASE("C API: write_mesh writes write_mesh's bytes", "[capi]") {
+    voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Sphere, 24, voxmesh::ScalarType::U8);
+    const voxmesh_volume_view view = c_view(field.volume.view());
+    voxmesh_options options = voxmesh_default_options();
+    options.iso = field.iso;
+    voxmesh_mesh* made = nullptr;
+    REQUIRE(voxmesh_extract(&view, &options, &made) == VOXMESH_OK);
+    const MeshPtr mesh(made, voxmesh_mesh_free);
+    voxmesh::Options cpp;
+    cpp.iso = field.iso;
+    const voxmesh::Mesh expected = voxmesh::extract(field.volume.view(), cpp);
+    const iotest::Scratch scratch;
+    for (const char* format : {"ply", "stl", "obj"}) {
+        CAPTURE(format);
+        const std::string path = scratch.dir + "/c_api." + format;
+        REQUIRE(voxmesh_write_mesh(path.c_str(), mesh.get()) == VOXMESH_OK);
+        const std::string written = iotest::read_file(path);
+        const std::vector<unsigned char> bytes = voxmesh::write_mesh_to_memory(expected, path);
+        CHECK(written == std::string(bytes.begin(), bytes.end()));
+    }
+}
+#endif

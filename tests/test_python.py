@@ -1,0 +1,173 @@
+"""The Python package (python/voxmesh) against properties the mesh must have and against the
+command line tool, which runs the C++ library directly. Run by ctest with PYTHONPATH at the
+build's python/ folder; exits 77 (skipped) where numpy is missing, except under CI."""
+
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+
+try:
+    import numpy as np
+except ImportError:
+    if os.environ.get("CI"):
+        raise
+    print("numpy is missing: install python3-numpy (scripts/install-deps.sh does)")
+    sys.exit(77)
+
+import voxmesh
+
+DATA = os.environ.get("VOXMESH_TEST_DATA", os.path.join(os.path.dirname(__file__), "data"))
+
+
+def sphere(n, radius, dtype=np.float32, center=None):
+    """radius - distance to the center: positive inside, indexed [z, y, x]."""
+    c = (n - 1) / 2.0 if center is None else center
+    z, y, x = np.mgrid[:n, :n, :n]
+    return (radius - np.sqrt((x - c) ** 2 + (y - c) ** 2 + (z - c) ** 2)).astype(dtype)
+
+
+def edge_use_counts(indices):
+    """How many triangles use each undirected edge."""
+    edges = np.concatenate([indices[:, [0, 1]], indices[:, [1, 2]], indices[:, [2, 0]]])
+    edges.sort(axis=1)
+    keys = edges[:, 0].astype(np.uint64) << np.uint64(32) | edges[:, 1].astype(np.uint64)
+    _, counts = np.unique(keys, return_counts=True)
+    return counts
+
+
+def enclosed_volume(mesh):
+    p = mesh.positions.astype(np.float64)[mesh.indices]
+    return np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6.0
+
+
+class ExtractTest(unittest.TestCase):
+    def test_sphere_is_closed_with_the_right_volume_and_area(self):
+        r = 20.0
+        mesh = voxmesh.extract(sphere(64, r), iso=0.0, backend="cpu")
+        counts = edge_use_counts(mesh.indices)
+        self.assertTrue(np.all(counts == 2), "every edge in exactly two triangles")
+        euler = mesh.vertex_count - len(counts) + mesh.triangle_count
+        self.assertEqual(euler, 2)
+        self.assertAlmostEqual(enclosed_volume(mesh) / (4 / 3 * np.pi * r ** 3), 1.0, delta=0.01)
+        p = mesh.positions.astype(np.float64)[mesh.indices]
+        area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
+        self.assertAlmostEqual(area / (4 * np.pi * r ** 2), 1.0, delta=0.02)
+        # Normals: unit, pointing away from the center (outward: toward lower values).
+        self.assertTrue(np.allclose(np.linalg.norm(mesh.normals, axis=1), 1.0, atol=1e-5))
+        outward = np.einsum("ij,ij->i", mesh.normals, mesh.positions - 31.5)
+        self.assertTrue(np.all(outward > 0))
+
+    def test_axes_are_x_y_z_with_spacing_and_origin(self):
+        # A box that is long in x, medium in y, short in z, in an array indexed [z, y, x].
+        box = np.zeros((10, 20, 40), dtype=np.uint8)
+        box[2:8, 3:17, 5:35] = 255
+        mesh = voxmesh.extract(box, iso=127.5, spacing=(0.5, 2.0, 3.0), origin=(100.0, -10.0, 7.0))
+        lo, hi = mesh.positions.min(axis=0), mesh.positions.max(axis=0)
+        # Crossings halfway between samples 4.5 and 34.5 in x, 2.5 and 16.5 in y, 1.5 and 7.5 in z.
+        np.testing.assert_allclose(lo, [100 + 0.5 * 4.5, -10 + 2 * 2.5, 7 + 3 * 1.5], rtol=0, atol=1e-4)
+        np.testing.assert_allclose(hi, [100 + 0.5 * 34.5, -10 + 2 * 16.5, 7 + 3 * 7.5], rtol=0, atol=1e-4)
+
+    def test_thread_counts_and_sample_types_give_the_same_buffers(self):
+        base = sphere(48, 17.0, np.float64).round()  # integer values: every type holds them
+        reference = voxmesh.extract(base, iso=0.5, backend="cpu", threads=1)
+        for threads in (2, 4, 16):
+            mesh = voxmesh.extract(base, iso=0.5, backend="cpu", threads=threads)
+            np.testing.assert_array_equal(mesh.indices, reference.indices)
+            np.testing.assert_array_equal(mesh.positions, reference.positions)
+        shifted = base + 40  # non-negative for the unsigned types
+        reference = voxmesh.extract(shifted, iso=40.5, backend="cpu")
+        for dtype in (np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32, np.float32):
+            mesh = voxmesh.extract(shifted.astype(dtype), iso=40.5, backend="cpu")
+            np.testing.assert_array_equal(mesh.indices, reference.indices, err_msg=str(dtype))
+            np.testing.assert_array_equal(mesh.positions, reference.positions, err_msg=str(dtype))
+
+    def test_layouts_that_need_a_copy(self):
+        volume = sphere(40, 12.0)
+        reference = voxmesh.extract(volume)
+        big_endian = volume.astype(">f4")
+        np.testing.assert_array_equal(voxmesh.extract(big_endian).indices, reference.indices)
+        # A strided view: every other sample of a larger array.
+        wide = np.zeros((40, 40, 80), dtype=np.float32)
+        wide[:, :, ::2] = volume
+        np.testing.assert_array_equal(voxmesh.extract(wide[:, :, ::2]).indices, reference.indices)
+        # Transposed twice is the same volume, no longer C-contiguous after the first.
+        np.testing.assert_array_equal(voxmesh.extract(volume.T.copy().T).indices, reference.indices)
+        boolean = volume > 0
+        mesh = voxmesh.extract(boolean, iso=0.5)
+        self.assertTrue(np.all(edge_use_counts(mesh.indices) == 2))
+
+    def test_inside_below_and_normals_off(self):
+        volume = sphere(40, 12.0)
+        high = voxmesh.extract(volume, normals=False)
+        self.assertIsNone(high.normals)
+        low = voxmesh.extract(-volume, inside_below=True)
+        # Inside where -value < 0: the same surface, same winding (outward normals).
+        np.testing.assert_array_equal(low.indices, high.indices)
+        np.testing.assert_allclose(low.positions, high.positions, atol=1e-5)
+        self.assertGreater(enclosed_volume(low), 0)
+
+    def test_arrays_outlive_the_mesh_object(self):
+        mesh = voxmesh.extract(sphere(40, 12.0))
+        positions, indices = mesh.positions, mesh.indices
+        expected = positions.copy(), indices.copy()
+        del mesh
+        junk = [voxmesh.extract(sphere(40, 15.0)) for _ in range(3)]  # reuse freed memory, if any
+        np.testing.assert_array_equal(positions, expected[0])
+        np.testing.assert_array_equal(indices, expected[1])
+        del junk
+
+    def test_empty_surface(self):
+        mesh = voxmesh.extract(np.zeros((8, 8, 8), dtype=np.float32), iso=1.0)
+        self.assertEqual(mesh.positions.shape, (0, 3))
+        self.assertEqual(mesh.indices.shape, (0, 3))
+
+    def test_bad_input_raises_with_the_problem_named(self):
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "3-D"):
+            voxmesh.extract(np.zeros((4, 4)))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "unsupported sample type"):
+            voxmesh.extract(np.zeros((4, 4, 4), dtype=np.complex64))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "unknown backend"):
+            voxmesh.extract(np.zeros((4, 4, 4)), backend="cuda")
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "spacing must be three"):
+            voxmesh.extract(np.zeros((4, 4, 4)), spacing=(1, 1))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "threads"):
+            voxmesh.extract(np.zeros((4, 4, 4)), threads=-1)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "dimension"):
+            voxmesh.extract(np.zeros((1, 4, 4), dtype=np.float32))  # the library's own check
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "NaN"):
+            voxmesh.extract(np.full((4, 4, 4), np.nan, dtype=np.float32))
+
+
+class FilesTest(unittest.TestCase):
+    def test_head_ct_gives_vtks_count_and_the_tools_bytes(self):
+        volume = voxmesh.read_volume(os.path.join(DATA, "headsq.nrrd"))
+        self.assertEqual(volume.array.ndim, 3)
+        self.assertFalse(volume.array.flags.writeable)
+        mesh = voxmesh.extract(volume, iso=499.5)
+        self.assertEqual(mesh.triangle_count, 57698)  # vtkFlyingEdges3D's count
+        scratch = os.environ.get("VOXMESH_TEST_SCRATCH") or tempfile.mkdtemp()
+        ours = os.path.join(scratch, "python-head.stl")
+        mesh.write(ours)
+        cli = os.environ.get("VOXMESH_CLI")
+        if cli:  # the same bytes as the C++ library through the tool
+            theirs = os.path.join(scratch, "cli-head.stl")
+            subprocess.run([cli, "mesh", os.path.join(DATA, "headsq.nrrd"), "-o", theirs, "--iso", "499.5"],
+                           check=True, stdout=subprocess.DEVNULL)
+            with open(ours, "rb") as a, open(theirs, "rb") as b:
+                self.assertEqual(a.read(), b.read())
+
+    def test_read_errors_name_the_file(self):
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "missing.nrrd"):
+            voxmesh.read_volume("/nonexistent/missing.nrrd")
+        mesh = voxmesh.extract(sphere(16, 5.0))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "xyz"):
+            mesh.write(os.path.join(tempfile.gettempdir(), "mesh.xyz"))
+
+    def test_version(self):
+        self.assertRegex(voxmesh.version(), r"^\d+\.\d+\.\d+$")
+
+
+if __name__ == "__main__":
+    unittest.main(verbosity=2)
