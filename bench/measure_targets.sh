@@ -47,7 +47,7 @@ for spec in sphere:f32:256 sphere:f32:512 gyroid:f32:256 gyroid:f32:512 sphere:u
             gyroid:u8:256 gyroid:u8:512 ct:i16:256 ct:i16:512; do
   field=${spec%%:*}; rest=${spec#*:}; type=${rest%%:*}; size=${rest#*:}
   $bench --field "$field" --type "$type" --sizes "$size" --write-volume /tmp/v.nrrd > /dev/null
-  /usr/bin/python3 bench/peers/peers.py /tmp/v.nrrd --threads 2 --repeat 5 --bench $bench --tools voxmesh,fe \
+  /usr/bin/python3 bench/peers/peers.py /tmp/v.nrrd --threads 2 --repeat 5 --bench $bench --tools voxmesh,py,fe \
     --fe-scaling >> "$out/peers.txt"
 done
 rm -f /tmp/v.nrrd

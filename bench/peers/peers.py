@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """Times VTK's vtkFlyingEdges3D and vtkMarchingCubes and scikit-image's marching_cubes on one
-volume file, beside voxmesh (voxmesh-bench on the same file), and prints times, triangle counts
-and ratios. File loading is never timed. Triangle counts must agree with VTK's.
+volume file, beside voxmesh (voxmesh-bench on the same file, and the voxmesh Python package on
+the same array in this process), and prints times, triangle counts and ratios. File loading is
+never timed. Triangle counts must agree with VTK's.
 
     voxmesh-bench --field sphere --sizes 512 --write-volume /tmp/sphere512.nrrd
     /usr/bin/python3 bench/peers/peers.py /tmp/sphere512.nrrd --threads 2 --repeat 3
@@ -142,6 +143,34 @@ def skimage_peer(vol, iso, repeat):
             "note": "lewiner method, 1 thread; resolves ambiguous cases differently"}
 
 
+def voxmesh_python_peer(vol, iso, threads, repeat, normals, bench):
+    """voxmesh through its Python package on the same array, in this process (as skimage): the
+    package importable as it is, else the one of voxmesh-bench's build, else the newest build's."""
+    try:
+        import voxmesh
+    except ImportError:
+        root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+        builds = sorted(glob.glob(os.path.join(root, "build*")), key=os.path.getmtime, reverse=True)
+        if bench:
+            builds.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(bench))))
+        found = [b for b in builds if glob.glob(os.path.join(b, "src", "capi", "libvoxmesh_c.so*"))
+                 and os.path.exists(os.path.join(b, "python", "voxmesh", "_library.py"))]
+        if not found:
+            print("the voxmesh Python package was not found: build with VOXMESH_BUILD_C_API or set PYTHONPATH",
+                  file=sys.stderr)
+            return None
+        sys.path.insert(0, os.path.join(found[0], "python"))
+        import voxmesh
+
+    def run():
+        mesh = voxmesh.extract(vol, iso=iso, backend="cpu", threads=threads, normals=normals)
+        return mesh.triangle_count, mesh.vertex_count
+
+    times, (tris, verts) = time_runs(run, repeat)
+    return {"tool": f"voxmesh (python, {threads} thr)", "times": times, "triangles": tris, "vertices": verts,
+            "note": "voxmesh.extract on the numpy array, this process"}
+
+
 def find_bench(explicit):
     if explicit:
         return explicit
@@ -179,7 +208,8 @@ def main():
     ap.add_argument("--repeat", type=int, default=3, help="timed runs per tool (after one warmup)")
     ap.add_argument("--vtk-backend", default="", help="vtkSMPTools backend (TBB, STDThread, Sequential)")
     ap.add_argument("--bench", help="path to voxmesh-bench (default: newest build*/bench/voxmesh-bench)")
-    ap.add_argument("--tools", default="voxmesh,fe,mc,skimage", help="comma list of voxmesh, fe, mc, skimage")
+    ap.add_argument("--tools", default="voxmesh,py,fe,mc,skimage",
+                    help="comma list of voxmesh (voxmesh-bench), py (the voxmesh Python package), fe, mc, skimage")
     ap.add_argument("--no-normals", action="store_true", help="every tool without normals")
     ap.add_argument("--fe-scaling", action="store_true", help="also time Flying Edges on 1 thread")
     ap.add_argument("--json", action="store_true", help="one JSON object per tool")
@@ -217,6 +247,10 @@ def main():
             results += one
             import vtk
             vtk.vtkSMPTools.Initialize(args.threads)
+    if "py" in tools:
+        r = voxmesh_python_peer(vol, iso, args.threads, args.repeat, normals, find_bench(args.bench))
+        if r:
+            results.append(r)
     if "skimage" in tools:
         results.append(skimage_peer(vol, iso, args.repeat))
 
@@ -253,7 +287,7 @@ def main():
     status = 0
     if base:
         for r in results:
-            if r["tool"].startswith("vtk"):
+            if r["tool"].startswith("vtk") or r["tool"].startswith("voxmesh (python"):
                 if r["triangles"] != base["triangles"]:
                     print(f"MISMATCH: voxmesh {base['triangles']} triangles vs {r['tool']} {r['triangles']} "
                           f"(iso {iso!r})", file=sys.stdout if not args.json else sys.stderr)
