@@ -118,6 +118,25 @@ class ExtractTest(unittest.TestCase):
         np.testing.assert_array_equal(indices, expected[1])
         del junk
 
+    def test_calls_from_several_python_threads(self):
+        import threading
+
+        volumes = [sphere(48, 10.0 + k) for k in range(4)]
+        expected = [voxmesh.extract(v, backend="cpu", threads=1).indices for v in volumes]
+        got = [None] * len(volumes)
+
+        def work(k):
+            for _ in range(3):
+                got[k] = voxmesh.extract(volumes[k], backend="cpu", threads=2).indices
+
+        threads = [threading.Thread(target=work, args=(k,)) for k in range(len(volumes))]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        for k in range(len(volumes)):
+            np.testing.assert_array_equal(got[k], expected[k])
+
     def test_empty_surface(self):
         mesh = voxmesh.extract(np.zeros((8, 8, 8), dtype=np.float32), iso=1.0)
         self.assertEqual(mesh.positions.shape, (0, 3))
