@@ -1,6 +1,6 @@
 """The Python package: a numpy sphere meshed on every core, checked closed, written as PLY.
 
-    PYTHONPATH=<prefix>/lib/python3/dist-packages python3 examples/extract_sphere.py [out.ply]
+    PYTHONPATH=<prefix>/lib/python3.N/dist-packages python3 examples/extract_sphere.py [out.ply]
 
 Exits 0 only when the mesh is a closed surface with Euler characteristic 2 whose enclosed
 volume is within 1 % of the sphere's."""
