@@ -159,6 +159,29 @@ class ExtractTest(unittest.TestCase):
             voxmesh.extract(np.full((4, 4, 4), np.nan, dtype=np.float32))
 
 
+class ScikitImageTest(unittest.TestCase):
+    """What the README tells a scikit-image user: its verts are our positions reversed (array
+    axis order), with the same orientation under the same faces. Skipped without skimage."""
+
+    def test_positions_reversed_are_skimages_verts(self):
+        try:
+            from skimage import measure
+        except ImportError:
+            self.skipTest("scikit-image is not installed (python3-skimage)")
+        volume = sphere(40, 12.0, center=19.25)
+        verts, faces, normals, _ = measure.marching_cubes(volume, level=0.0, spacing=(1.0, 2.0, 3.0))
+        mesh = voxmesh.extract(volume, iso=0.0, spacing=(3.0, 2.0, 1.0))
+        ours = mesh.positions[:, ::-1]
+        self.assertEqual(len(ours), len(verts))
+        np.testing.assert_allclose(ours[np.lexsort(ours.T)], verts[np.lexsort(verts.T)], atol=1e-4)
+
+        def signed_volume(points, triangles):
+            p = points.astype(np.float64)[triangles]
+            return np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6
+
+        self.assertAlmostEqual(signed_volume(ours, mesh.indices) / signed_volume(verts, faces), 1.0, delta=0.01)
+
+
 class FilesTest(unittest.TestCase):
     def test_head_ct_gives_vtks_count_and_the_tools_bytes(self):
         volume = voxmesh.read_volume(os.path.join(DATA, "headsq.nrrd"))
