@@ -1,7 +1,8 @@
 /* The C API from C itself (C99, -Wall -Wextra -pedantic -Werror): a sphere meshed on 1 and 2
  * threads must give identical buffers and a closed surface (every edge in two triangles,
  * Euler characteristic 2), bad arguments must fail with a status and a message naming the
- * problem, and a mesh must write to a file. Exits 0 only when every check passes.
+ * problem, a mesh must write to a file, and a cube made from arrays must voxelize and mesh back
+ * closed. Exits 0 only when every check passes.
  *
  *   c_api_program <scratch-dir> <volume-file>   (a NRRD it must read; headsq.nrrd) */
 #include <voxmesh/voxmesh.h>
@@ -156,6 +157,32 @@ int main(int argc, char** argv) {
         }
         voxmesh_mesh_free(head);
         voxmesh_volume_free(file);
+    }
+
+    /* A model from arrays (a cube, wound outward), voxelized and meshed back: closed, Euler 2. */
+    {
+        static const float corners[8 * 3] = {0, 0, 0, 4, 0, 0, 0, 4, 0, 4, 4, 0, 0, 0, 4, 4, 0, 4, 0, 4, 4, 4, 4, 4};
+        static const uint32_t faces[12 * 3] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                                               2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+        voxmesh_mesh *cube = NULL, *back = NULL;
+        voxmesh_volume* grid = NULL;
+        voxmesh_voxelize_options vox = voxmesh_default_voxelize_options();
+        voxmesh_topology topology;
+        vox.resolution = 32;
+        CHECK(voxmesh_mesh_from_arrays(corners, 8, faces, 12, &cube) == VOXMESH_OK);
+        CHECK(voxmesh_analyze_topology(cube, &topology) == VOXMESH_OK);
+        CHECK(topology.boundary_edges == 0 && topology.nonmanifold_edges == 0 && topology.euler == 2);
+        CHECK(voxmesh_voxelize(cube, &vox, &grid) == VOXMESH_OK);
+        if (grid) {
+            const voxmesh_volume_view distance = voxmesh_volume_get_view(grid);
+            CHECK(distance.type == VOXMESH_F32);
+            CHECK(voxmesh_extract(&distance, NULL, &back) == VOXMESH_OK);
+            CHECK(voxmesh_analyze_topology(back, &topology) == VOXMESH_OK);
+            CHECK(topology.boundary_edges == 0 && topology.nonmanifold_edges == 0 && topology.euler == 2);
+        }
+        voxmesh_mesh_free(back);
+        voxmesh_volume_free(grid);
+        voxmesh_mesh_free(cube);
     }
 
     voxmesh_mesh_free(one);

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <voxmesh/fields.hpp>
 #include <voxmesh/io.hpp>
+#include <voxmesh/voxelize.hpp>
 #include <voxmesh/voxmesh.h>
 #include <voxmesh/voxmesh.hpp>
 
@@ -223,5 +224,87 @@ TEST_CASE("C API: write_mesh writes write_mesh's bytes", "[capi]") {
         const std::vector<unsigned char> bytes = voxmesh::write_mesh_to_memory(expected, path);
         CHECK(written == std::string(bytes.begin(), bytes.end()));
     }
+}
+TEST_CASE("C API: read_mesh, mesh_from_arrays, analyze_topology and voxelize give the C++ results", "[capi]") {
+    const std::string path = std::string(VOXMESH_TEST_DATA) + "/torus.stl";
+    voxmesh_mesh* made = nullptr;
+    REQUIRE(voxmesh_read_mesh(path.c_str(), &made) == VOXMESH_OK);
+    const MeshPtr model(made, voxmesh_mesh_free);
+    const voxmesh::Mesh cpp = voxmesh::read_mesh(path);
+    require_same(model.get(), cpp);
+
+    // The same arrays handed in from outside make the same mesh.
+    REQUIRE(voxmesh_mesh_from_arrays(cpp.positions.data(), cpp.vertex_count(), cpp.indices.data(), cpp.triangle_count(),
+                                     &made) == VOXMESH_OK);
+    const MeshPtr copied(made, voxmesh_mesh_free);
+    require_same(copied.get(), cpp);
+
+    voxmesh_topology topology{};
+    REQUIRE(voxmesh_analyze_topology(copied.get(), &topology) == VOXMESH_OK);
+    const voxmesh::MeshTopology expected = voxmesh::analyze_topology(cpp);
+    CHECK(topology.boundary_edges == expected.boundary_edges);
+    CHECK(topology.nonmanifold_edges == expected.nonmanifold_edges);
+    CHECK(topology.euler == expected.euler);
+    CHECK(topology.components == expected.components);
+    CHECK(topology.euler == 0);  // a torus
+
+    for (int field : {VOXMESH_FIELD_DISTANCE, VOXMESH_FIELD_OCCUPANCY}) {
+        CAPTURE(field);
+        voxmesh_voxelize_options options = voxmesh_default_voxelize_options();
+        options.resolution = 48;
+        options.field = field;
+        voxmesh_volume* volume = nullptr;
+        REQUIRE(voxmesh_voxelize(copied.get(), &options, &volume) == VOXMESH_OK);
+        const std::unique_ptr<voxmesh_volume, decltype(&voxmesh_volume_free)> owned(volume, voxmesh_volume_free);
+        voxmesh::VoxelizeOptions cpp_options;
+        cpp_options.resolution = 48;
+        cpp_options.field = field == VOXMESH_FIELD_OCCUPANCY ? voxmesh::VoxelField::Occupancy : voxmesh::VoxelField::Distance;
+        const voxmesh::Volume want = voxmesh::voxelize(cpp, cpp_options);
+        const voxmesh_volume_view got = voxmesh_volume_get_view(volume);
+        REQUIRE(got.type == static_cast<int>(want.type));
+        for (int a = 0; a < 3; ++a) {
+            CHECK(got.dims[a] == want.dims[a]);
+            CHECK(got.spacing[a] == want.spacing[a]);
+            CHECK(got.origin[a] == want.origin[a]);
+        }
+        CHECK(std::memcmp(got.data, want.data, want.byte_size()) == 0);
+    }
+
+    const voxmesh_voxelize_options defaults = voxmesh_default_voxelize_options();
+    const voxmesh::VoxelizeOptions cpp_defaults;
+    CHECK(defaults.resolution == cpp_defaults.resolution);
+    CHECK(defaults.padding == cpp_defaults.padding);
+    CHECK(defaults.band == cpp_defaults.band);
+    CHECK(defaults.threads == cpp_defaults.threads);
+    CHECK(defaults.field == VOXMESH_FIELD_DISTANCE);
+}
+
+TEST_CASE("C API: models that cannot be voxelized or checked fail with the library's message", "[capi]") {
+    const float positions[] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    const std::uint32_t one_triangle[] = {0, 1, 2}, out_of_range[] = {0, 1, 7};
+    voxmesh_mesh* made = nullptr;
+    REQUIRE(voxmesh_mesh_from_arrays(positions, 3, one_triangle, 1, &made) == VOXMESH_OK);
+    const MeshPtr open(made, voxmesh_mesh_free);
+    voxmesh_volume* volume = nullptr;
+    CHECK(voxmesh_voxelize(open.get(), nullptr, &volume) == VOXMESH_ERROR);
+    CHECK(volume == nullptr);
+    CHECK(std::string(voxmesh_last_error()).find("not closed") != std::string::npos);
+    voxmesh_voxelize_options options = voxmesh_default_voxelize_options();
+    options.field = 5;
+    CHECK(voxmesh_voxelize(open.get(), &options, &volume) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()) == "voxmesh_voxelize: unknown field 5 (VOXMESH_FIELD_OCCUPANCY or VOXMESH_FIELD_DISTANCE)");
+
+    REQUIRE(voxmesh_mesh_from_arrays(positions, 3, out_of_range, 1, &made) == VOXMESH_OK);
+    const MeshPtr bad(made, voxmesh_mesh_free);
+    voxmesh_topology topology{};
+    CHECK(voxmesh_analyze_topology(bad.get(), &topology) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()).find("index 7 is out of range") != std::string::npos);
+    CHECK(voxmesh_mesh_from_arrays(nullptr, 3, one_triangle, 1, &made) == VOXMESH_ERROR);
+    CHECK(made == nullptr);
+    CHECK(std::string(voxmesh_last_error()) == "voxmesh_mesh_from_arrays: positions is NULL");
+    CHECK(voxmesh_mesh_from_arrays(nullptr, 0, nullptr, 0, &made) == VOXMESH_OK);  // an empty mesh
+    CHECK(voxmesh_mesh_vertex_count(made) == 0);
+    CHECK(voxmesh_mesh_positions(made) == nullptr);
+    voxmesh_mesh_free(made);
 }
 #endif

@@ -159,6 +159,69 @@ class ExtractTest(unittest.TestCase):
             voxmesh.extract(np.full((4, 4, 4), np.nan, dtype=np.float32))
 
 
+def cube_mesh(side):
+    """A closed cube [0, side]^3 as (positions, indices), wound outward."""
+    positions = np.array([[x, y, z] for z in (0, side) for y in (0, side) for x in (0, side)], dtype=np.float32)
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    indices = [tri for a, b, c, d in quads for tri in ((a, b, c), (a, c, d))]
+    return positions, np.array(indices, dtype=np.int64)
+
+
+class VoxelizeTest(unittest.TestCase):
+    """The paper's path from Python: a model in, voxelized, meshed back."""
+
+    def test_torus_model_voxelized_and_meshed_back(self):
+        model = voxmesh.read_mesh(os.path.join(DATA, "torus.stl"))
+        found = model.topology()
+        self.assertTrue(found.closed)
+        self.assertEqual(found.euler, 0)
+        for field, iso in (("distance", 0.0), ("occupancy", 127.5)):
+            volume = voxmesh.voxelize(model, resolution=96, field=field)
+            self.assertEqual(volume.array.dtype, np.float32 if field == "distance" else np.uint8)
+            mesh = voxmesh.extract(volume, iso=iso)
+            back = mesh.topology()
+            self.assertTrue(back.closed, field)
+            self.assertEqual((back.euler, back.components), (0, 1), field)
+            # R = 1, r = 0.5: 2 pi^2 R r^2; occupancy steps by a voxel, so a looser bound.
+            analytic = 2 * np.pi ** 2 * 1.0 * 0.25
+            self.assertAlmostEqual(enclosed_volume(mesh) / analytic, 1.0, delta=0.01 if field == "distance" else 0.05)
+            lo, hi = mesh.positions.min(axis=0), mesh.positions.max(axis=0)
+            np.testing.assert_allclose(lo, [-1.5, -1.5, -0.5], atol=0.05)
+            np.testing.assert_allclose(hi, [1.5, 1.5, 0.5], atol=0.05)
+
+    def test_arrays_of_ones_own(self):
+        positions, indices = cube_mesh(2.0)
+        mesh = voxmesh.Mesh.from_arrays(positions, indices)
+        np.testing.assert_array_equal(mesh.positions, positions)
+        np.testing.assert_array_equal(mesh.indices, indices)
+        self.assertIsNone(mesh.normals)
+        self.assertEqual(mesh.topology().euler, 2)
+        volume = voxmesh.voxelize((positions, indices), resolution=40)
+        volume.array[0, 0, 0] = volume.array[0, 0, 0]  # voxelized samples are the caller's to edit
+        back = voxmesh.extract(volume, iso=0.0)
+        self.assertTrue(back.topology().closed)
+        self.assertAlmostEqual(enclosed_volume(back) / 8.0, 1.0, delta=0.02)
+
+    def test_bad_models_are_refused(self):
+        positions, indices = cube_mesh(2.0)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "closed|open|boundary|edge"):
+            voxmesh.voxelize((positions, indices[:-1]))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, r"\(V, 3\)"):
+            voxmesh.Mesh.from_arrays(positions[:, :2], indices)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "vertex numbers"):
+            voxmesh.Mesh.from_arrays(positions, -indices)
+        bad = indices.copy()
+        bad[0, 0] = 99
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "99"):
+            voxmesh.Mesh.from_arrays(positions, bad).topology()  # the library's own check
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "unknown field"):
+            voxmesh.voxelize((positions, indices), field="sdf")
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "resolution"):
+            voxmesh.voxelize((positions, indices), resolution=1)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "missing.stl"):
+            voxmesh.read_mesh("/nonexistent/missing.stl")
+
+
 class ScikitImageTest(unittest.TestCase):
     """What the README tells a scikit-image user: its verts are our positions reversed (array
     axis order), with the same orientation under the same faces. Skipped without skimage."""

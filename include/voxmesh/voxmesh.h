@@ -1,6 +1,6 @@
-/* voxmesh's C API: the C++ library's extract, volume reading and mesh writing behind a C ABI,
- * for C programs and for other languages' foreign-function interfaces (Python's ctypes, Rust,
- * Julia, C#). Link libvoxmesh_c (CMake: voxmesh::voxmesh_c).
+/* voxmesh's C API: the C++ library's extract, volume and mesh files, voxelize and the topology
+ * check behind a C ABI, for C programs and for other languages' foreign-function interfaces
+ * (Python's ctypes, Rust, Julia, C#). Link libvoxmesh_c (CMake: voxmesh::voxmesh_c).
  *
  * Every call that can fail returns a voxmesh_status; on failure voxmesh_last_error() gives the
  * message the C++ library would have thrown (naming the problem), for the calling thread.
@@ -67,7 +67,7 @@ typedef struct voxmesh_options {
 /* iso 0, backend auto, threads 0, normals on, inside_below off. */
 voxmesh_options voxmesh_default_options(void);
 
-/* Opaque: a volume read from a file, and a mesh. */
+/* Opaque: a volume (read from a file, or voxelized), and a mesh. */
 typedef struct voxmesh_volume voxmesh_volume;
 typedef struct voxmesh_mesh voxmesh_mesh;
 
@@ -88,6 +88,38 @@ void voxmesh_mesh_free(voxmesh_mesh* mesh);
 
 /* .stl, .ply or .obj by extension, through a temporary renamed into place. */
 voxmesh_status voxmesh_write_mesh(const char* path, const voxmesh_mesh* mesh);
+/* STL (binary or ASCII), PLY or OBJ by extension (as voxmesh::read_mesh). */
+voxmesh_status voxmesh_read_mesh(const char* path, voxmesh_mesh** mesh);
+/* A mesh holding copies of `vertex_count` xyz positions and `triangle_count` index triples
+ * (normals none). Not checked here: the calls that use a mesh check it (indices in range). */
+voxmesh_status voxmesh_mesh_from_arrays(const float* positions, size_t vertex_count, const uint32_t* indices,
+                                        size_t triangle_count, voxmesh_mesh** mesh);
+
+/* voxmesh::MeshTopology: closed when both edge counts are 0. */
+typedef struct voxmesh_topology {
+    size_t boundary_edges;    /* edges in one triangle */
+    size_t nonmanifold_edges; /* edges in three or more */
+    long long euler;          /* V - E + F over the vertices triangles use */
+    size_t components;        /* connected pieces (triangles sharing a vertex are in one) */
+} voxmesh_topology;
+voxmesh_status voxmesh_analyze_topology(const voxmesh_mesh* mesh, voxmesh_topology* topology);
+
+/* A closed triangle mesh to a volume (voxmesh::voxelize; see voxmesh/voxelize.hpp). */
+typedef enum voxmesh_voxel_field {
+    VOXMESH_FIELD_OCCUPANCY = 0, /* u8: 255 inside, 0 outside; mesh it back at iso 127.5 */
+    VOXMESH_FIELD_DISTANCE = 1   /* f32 signed distance, positive inside; mesh it back at iso 0 */
+} voxmesh_voxel_field;
+typedef struct voxmesh_voxelize_options {
+    size_t resolution; /* voxels along the longest side of the bounding box (2..4096) */
+    size_t padding;    /* samples added outside the box on every side */
+    int field;         /* a voxmesh_voxel_field */
+    double band;       /* distance: exact within this many voxels (>= 2) */
+    unsigned threads;  /* 0: the CPUs this process may use */
+} voxmesh_voxelize_options;
+/* resolution 128, padding 2, distance, band 3, threads 0. */
+voxmesh_voxelize_options voxmesh_default_voxelize_options(void);
+voxmesh_status voxmesh_voxelize(const voxmesh_mesh* mesh, const voxmesh_voxelize_options* options,
+                                voxmesh_volume** volume);
 
 /* NRRD, MetaImage, NIfTI-1 or legacy VTK, by extension (as voxmesh::read_volume). */
 voxmesh_status voxmesh_read_volume(const char* path, voxmesh_volume** volume);

@@ -8,6 +8,10 @@ ctypes and numpy only.
     mesh.positions, mesh.normals, mesh.indices        # (V, 3) float32, (V, 3) float32, (T, 3) uint32
     mesh.write("sphere.ply")
 
+Models go the paper's way too: voxmesh.read_mesh("model.stl") (or Mesh.from_arrays(positions,
+indices)), voxmesh.voxelize(model, resolution=128) to a signed-distance Volume, and extract
+of that at iso 0 back in the model's units; mesh.topology() says whether a mesh is closed.
+
 A volume is a 3-D array indexed [z, y, x] (C order, so x varies fastest, as voxmesh stores
 samples); positions are x, y, z in that order: origin + index * spacing, with spacing and
 origin given as (x, y, z). The mesh is the library's canonical mesh, the same buffers the C++
@@ -22,7 +26,8 @@ import os
 
 import numpy as np
 
-__all__ = ["extract", "read_volume", "Mesh", "Volume", "VoxmeshError", "VoxmeshMemoryError", "version"]
+__all__ = ["extract", "read_volume", "read_mesh", "voxelize", "Mesh", "Volume", "Topology", "VoxmeshError",
+           "VoxmeshMemoryError", "version"]
 
 _DTYPES = [np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32, np.float32, np.float64]
 _BACKENDS = {"auto": 0, "cpu": 1, "opencl": 2, "hybrid": 3}
@@ -39,6 +44,16 @@ class VoxmeshMemoryError(VoxmeshError, MemoryError):
 class _VolumeView(ctypes.Structure):
     _fields_ = [("data", ctypes.c_void_p), ("type", ctypes.c_int), ("dims", ctypes.c_size_t * 3),
                 ("spacing", ctypes.c_double * 3), ("origin", ctypes.c_double * 3)]
+
+
+class _Topology(ctypes.Structure):
+    _fields_ = [("boundary_edges", ctypes.c_size_t), ("nonmanifold_edges", ctypes.c_size_t),
+                ("euler", ctypes.c_longlong), ("components", ctypes.c_size_t)]
+
+
+class _VoxelizeOptions(ctypes.Structure):
+    _fields_ = [("resolution", ctypes.c_size_t), ("padding", ctypes.c_size_t), ("field", ctypes.c_int),
+                ("band", ctypes.c_double), ("threads", ctypes.c_uint)]
 
 
 class _Options(ctypes.Structure):
@@ -72,6 +87,17 @@ def _load():
     lib.voxmesh_mesh_free.argtypes = [handle]
     lib.voxmesh_write_mesh.restype = ctypes.c_int
     lib.voxmesh_write_mesh.argtypes = [ctypes.c_char_p, handle]
+    lib.voxmesh_read_mesh.restype = ctypes.c_int
+    lib.voxmesh_read_mesh.argtypes = [ctypes.c_char_p, ctypes.POINTER(handle)]
+    lib.voxmesh_mesh_from_arrays.restype = ctypes.c_int
+    lib.voxmesh_mesh_from_arrays.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p, ctypes.c_size_t,
+                                             ctypes.POINTER(handle)]
+    lib.voxmesh_analyze_topology.restype = ctypes.c_int
+    lib.voxmesh_analyze_topology.argtypes = [handle, ctypes.POINTER(_Topology)]
+    lib.voxmesh_default_voxelize_options.restype = _VoxelizeOptions
+    lib.voxmesh_default_voxelize_options.argtypes = []
+    lib.voxmesh_voxelize.restype = ctypes.c_int
+    lib.voxmesh_voxelize.argtypes = [handle, ctypes.POINTER(_VoxelizeOptions), ctypes.POINTER(handle)]
     lib.voxmesh_read_volume.restype = ctypes.c_int
     lib.voxmesh_read_volume.argtypes = [ctypes.c_char_p, ctypes.POINTER(handle)]
     lib.voxmesh_volume_get_view.restype = _VolumeView
@@ -127,8 +153,41 @@ def _view(address, shape, dtype, owner, readonly=False):
     return np.asarray(_Memory(address, shape, dtype, owner, readonly))
 
 
+class Topology:
+    """boundary_edges, nonmanifold_edges, euler, components; closed: no edge in one triangle
+    or in three or more."""
+
+    def __init__(self, found):
+        self.boundary_edges = found.boundary_edges
+        self.nonmanifold_edges = found.nonmanifold_edges
+        self.euler = found.euler
+        self.components = found.components
+        self.closed = self.boundary_edges == 0 and self.nonmanifold_edges == 0
+
+    def __repr__(self):
+        return (f"Topology(closed={self.closed}, euler={self.euler}, components={self.components}, "
+                f"boundary_edges={self.boundary_edges}, nonmanifold_edges={self.nonmanifold_edges})")
+
+
 class Mesh:
-    """positions (V, 3) float32, normals (V, 3) float32 or None, indices (T, 3) uint32."""
+    """positions (V, 3) float32, normals (V, 3) float32 or None, indices (T, 3) uint32.
+    Mesh.from_arrays(positions, indices) makes one from your own arrays (copied)."""
+
+    @classmethod
+    def from_arrays(cls, positions, indices):
+        positions = np.ascontiguousarray(positions, dtype=np.float32)
+        indices = np.asarray(indices)
+        if positions.ndim != 2 or positions.shape[1] != 3:
+            raise VoxmeshError(f"positions must be shaped (V, 3); got {positions.shape}")
+        if indices.ndim != 2 or indices.shape[1] != 3:
+            raise VoxmeshError(f"indices must be shaped (T, 3); got {indices.shape}")
+        if indices.size and (indices.min() < 0 or indices.max() > np.iinfo(np.uint32).max):
+            raise VoxmeshError("indices must be vertex numbers from 0 to 2^32-1")
+        indices = np.ascontiguousarray(indices, dtype=np.uint32)
+        pointer = ctypes.c_void_p()
+        _check(_lib.voxmesh_mesh_from_arrays(positions.ctypes.data, positions.shape[0], indices.ctypes.data,
+                                             indices.shape[0], ctypes.byref(pointer)))
+        return cls(pointer.value)
 
     def __init__(self, pointer):
         handle = _Handle(pointer, _lib.voxmesh_mesh_free)
@@ -152,19 +211,57 @@ class Mesh:
         """.stl, .ply or .obj by extension, through a temporary file renamed into place."""
         _check(_lib.voxmesh_write_mesh(os.fsencode(path), self._handle.pointer))
 
+    def topology(self):
+        """voxmesh::analyze_topology: closed or not, Euler characteristic, connected pieces."""
+        found = _Topology()
+        _check(_lib.voxmesh_analyze_topology(self._handle.pointer, ctypes.byref(found)))
+        return Topology(found)
+
 
 class Volume:
-    """A volume read from a file: `array` [z, y, x], `spacing` and `origin` as (x, y, z)."""
+    """A volume read from a file or voxelized: `array` [z, y, x], `spacing` and `origin` as
+    (x, y, z). A file's samples are read-only (they may be the file itself, mapped)."""
 
-    def __init__(self, pointer):
+    def __init__(self, pointer, readonly=True):
         handle = _Handle(pointer, _lib.voxmesh_volume_free)
         self._handle = handle
         view = _lib.voxmesh_volume_get_view(pointer)
         nx, ny, nz = view.dims
-        # Read-only: the samples may be the file itself, mapped.
-        self.array = _view(view.data, (nz, ny, nx), _DTYPES[view.type], handle, readonly=True)
+        self.array = _view(view.data, (nz, ny, nx), _DTYPES[view.type], handle, readonly=readonly)
         self.spacing = tuple(view.spacing)
         self.origin = tuple(view.origin)
+
+
+def read_mesh(path):
+    """STL (binary or ASCII), PLY or OBJ, chosen by extension, as voxmesh::read_mesh."""
+    pointer = ctypes.c_void_p()
+    _check(_lib.voxmesh_read_mesh(os.fsencode(path), ctypes.byref(pointer)))
+    return Mesh(pointer.value)
+
+
+_FIELDS = {"occupancy": 0, "distance": 1}
+
+
+def voxelize(mesh, resolution=128, padding=2, field="distance", band=3.0, threads=0):
+    """A closed mesh (a Mesh, or a (positions, indices) pair) as a Volume, as voxmesh::voxelize:
+    field "distance" (float32, positive inside: extract it at iso 0) or "occupancy" (uint8, 255
+    inside: extract it at iso 127.5); spacing and origin put its mesh back in the model's units."""
+    if not isinstance(mesh, Mesh):
+        mesh = Mesh.from_arrays(*mesh)
+    if field not in _FIELDS:
+        raise VoxmeshError(f"unknown field '{field}' (distance, occupancy)")
+    for name, value in (("resolution", resolution), ("padding", padding), ("threads", threads)):
+        if int(value) < 0:
+            raise VoxmeshError(f"{name} must not be negative; got {value}")
+    options = _lib.voxmesh_default_voxelize_options()
+    options.resolution = int(resolution)
+    options.padding = int(padding)
+    options.field = _FIELDS[field]
+    options.band = float(band)
+    options.threads = int(threads)
+    pointer = ctypes.c_void_p()
+    _check(_lib.voxmesh_voxelize(mesh._handle.pointer, ctypes.byref(options), ctypes.byref(pointer)))
+    return Volume(pointer.value, readonly=False)
 
 
 def _triple(name, value, default):

@@ -1,11 +1,12 @@
 // The C API (include/voxmesh/voxmesh.h): thin wrappers that turn arguments into the C++ API's
 // types and every exception into a status plus a per-thread message.
 #include <voxmesh/io.hpp>
+#include <voxmesh/voxelize.hpp>
 #include <voxmesh/voxmesh.h>
 #include <voxmesh/voxmesh.hpp>
 
+#include <algorithm>
 #include <iterator>
-#include <memory>
 #include <new>
 #include <string>
 #include <utility>
@@ -134,9 +135,7 @@ voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_
         cpp.threads = given.threads;
         cpp.normals = given.normals != 0;
         cpp.inside_below = given.inside_below != 0;
-        auto made = std::make_unique<voxmesh_mesh>();
-        made->mesh = voxmesh::extract(view, cpp);
-        *mesh = made.release();
+        *mesh = new voxmesh_mesh{voxmesh::extract(view, cpp)};
     });
 }
 
@@ -159,14 +158,83 @@ voxmesh_status voxmesh_write_mesh(const char* path, const voxmesh_mesh* mesh) {
     });
 }
 
+voxmesh_status voxmesh_read_mesh(const char* path, voxmesh_mesh** mesh) {
+    if (mesh) *mesh = nullptr;
+    return guarded([&] {
+        require(mesh, "voxmesh_read_mesh", "the mesh pointer");
+        require(path, "voxmesh_read_mesh", "the path");
+        *mesh = new voxmesh_mesh{voxmesh::read_mesh(path)};
+    });
+}
+
+voxmesh_status voxmesh_mesh_from_arrays(const float* positions, size_t vertex_count, const uint32_t* indices,
+                                        size_t triangle_count, voxmesh_mesh** mesh) {
+    if (mesh) *mesh = nullptr;
+    return guarded([&] {
+        require(mesh, "voxmesh_mesh_from_arrays", "the mesh pointer");
+        if (vertex_count) require(positions, "voxmesh_mesh_from_arrays", "positions");
+        if (triangle_count) require(indices, "voxmesh_mesh_from_arrays", "indices");
+        constexpr size_t kMax = ~size_t{0} / 3 / sizeof(float);
+        if (vertex_count > kMax || triangle_count > kMax)
+            throw voxmesh::Error("voxmesh_mesh_from_arrays: " + std::to_string(std::max(vertex_count, triangle_count)) +
+                                 " elements cannot be addressed");
+        voxmesh::Mesh copy;
+        copy.positions.assign(positions, positions + 3 * vertex_count);
+        copy.indices.assign(indices, indices + 3 * triangle_count);
+        *mesh = new voxmesh_mesh{std::move(copy)};
+    });
+}
+
+voxmesh_status voxmesh_analyze_topology(const voxmesh_mesh* mesh, voxmesh_topology* topology) {
+    return guarded([&] {
+        require(mesh, "voxmesh_analyze_topology", "the mesh");
+        require(topology, "voxmesh_analyze_topology", "the topology pointer");
+        const voxmesh::MeshTopology found = voxmesh::analyze_topology(mesh->mesh);
+        topology->boundary_edges = found.boundary_edges;
+        topology->nonmanifold_edges = found.nonmanifold_edges;
+        topology->euler = found.euler;
+        topology->components = found.components;
+    });
+}
+
+voxmesh_voxelize_options voxmesh_default_voxelize_options(void) {
+    const voxmesh::VoxelizeOptions defaults;
+    voxmesh_voxelize_options options{};
+    options.resolution = defaults.resolution;
+    options.padding = defaults.padding;
+    options.field = defaults.field == voxmesh::VoxelField::Occupancy ? VOXMESH_FIELD_OCCUPANCY : VOXMESH_FIELD_DISTANCE;
+    options.band = defaults.band;
+    options.threads = defaults.threads;
+    return options;
+}
+
+voxmesh_status voxmesh_voxelize(const voxmesh_mesh* mesh, const voxmesh_voxelize_options* options,
+                                voxmesh_volume** volume) {
+    if (volume) *volume = nullptr;
+    return guarded([&] {
+        require(volume, "voxmesh_voxelize", "the volume pointer");
+        require(mesh, "voxmesh_voxelize", "the mesh");
+        const voxmesh_voxelize_options given = options ? *options : voxmesh_default_voxelize_options();
+        voxmesh::VoxelizeOptions cpp;
+        cpp.resolution = given.resolution;
+        cpp.padding = given.padding;
+        if (given.field == VOXMESH_FIELD_OCCUPANCY) cpp.field = voxmesh::VoxelField::Occupancy;
+        else if (given.field == VOXMESH_FIELD_DISTANCE) cpp.field = voxmesh::VoxelField::Distance;
+        else
+            throw voxmesh::Error("voxmesh_voxelize: unknown field " + std::to_string(given.field) +
+                                 " (VOXMESH_FIELD_OCCUPANCY or VOXMESH_FIELD_DISTANCE)");
+        cpp.band = given.band;
+        cpp.threads = given.threads;
+        *volume = new voxmesh_volume{voxmesh::voxelize(mesh->mesh, cpp)};
+    });
+}
+
 voxmesh_status voxmesh_read_volume(const char* path, voxmesh_volume** volume) {
     if (volume) *volume = nullptr;
     return guarded([&] {
         require(volume, "voxmesh_read_volume", "the volume pointer");
         require(path, "voxmesh_read_volume", "the path");
-        auto made = std::make_unique<voxmesh_volume>();
-        made->volume = voxmesh::read_volume(path);
-        *volume = made.release();
+        *volume = new voxmesh_volume{voxmesh::read_volume(path)};
     });
 }
 
