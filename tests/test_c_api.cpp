@@ -307,4 +307,49 @@ TEST_CASE("C API: models that cannot be voxelized or checked fail with the libra
     CHECK(voxmesh_mesh_positions(made) == nullptr);
     voxmesh_mesh_free(made);
 }
+TEST_CASE("C API: a mesh keeps what its extract did and warned", "[capi]") {
+    voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Sphere, 32, voxmesh::ScalarType::F32);
+    voxmesh_volume_view view = c_view(field.volume.view());
+    voxmesh_options options = voxmesh_default_options();
+    options.iso = field.iso;
+    options.backend = VOXMESH_BACKEND_CPU;
+    options.threads = 2;
+    voxmesh_mesh* made = nullptr;
+    REQUIRE(voxmesh_extract(&view, &options, &made) == VOXMESH_OK);
+    MeshPtr mesh(made, voxmesh_mesh_free);
+    const voxmesh_stats stats = voxmesh_mesh_stats(mesh.get());
+    CHECK(stats.backend == VOXMESH_BACKEND_CPU);
+    CHECK(stats.threads == 2);
+    CHECK(stats.workers >= 1);
+    CHECK(stats.workers <= 2);
+    CHECK(stats.total_s > 0);
+    CHECK(stats.classify_s + stats.scan_s + stats.generate_s <= stats.total_s);
+    CHECK(std::string(voxmesh_mesh_warnings(mesh.get())).empty());
+
+    // Far from 0, a spacing too fine for float vertices: the C++ API's warning, word for word.
+    view.origin[0] = 1e6;
+    view.spacing[0] = 1e-3;
+    REQUIRE(voxmesh_extract(&view, &options, &made) == VOXMESH_OK);
+    mesh.reset(made);
+    voxmesh::VolumeView cpp_view = field.volume.view();
+    cpp_view.origin = {1e6, 0, 0};
+    cpp_view.spacing = {1e-3, 1, 1};
+    voxmesh::Options cpp;
+    cpp.iso = field.iso;
+    cpp.backend = voxmesh::Backend::Cpu;
+    voxmesh::Stats cpp_stats;
+    voxmesh::extract(cpp_view, cpp, cpp_stats);
+    REQUIRE(cpp_stats.warnings.size() == 1);
+    CHECK(std::string(voxmesh_mesh_warnings(mesh.get())) == cpp_stats.warnings[0] + "\n");
+
+    // A mesh no extract made has no stats.
+    const std::string path = std::string(VOXMESH_TEST_DATA) + "/unit_sphere.stl";
+    REQUIRE(voxmesh_read_mesh(path.c_str(), &made) == VOXMESH_OK);
+    mesh.reset(made);
+    const voxmesh_stats none = voxmesh_mesh_stats(mesh.get());
+    CHECK(none.backend == VOXMESH_BACKEND_AUTO);
+    CHECK(none.total_s == 0);
+    CHECK(std::string(voxmesh_mesh_warnings(mesh.get())).empty());
+    CHECK(voxmesh_mesh_stats(nullptr).backend == VOXMESH_BACKEND_AUTO);
+}
 #endif

@@ -137,6 +137,18 @@ class ExtractTest(unittest.TestCase):
         for k in range(len(volumes)):
             np.testing.assert_array_equal(got[k], expected[k])
 
+    def test_stats_and_warnings(self):
+        mesh = voxmesh.extract(sphere(32, 10.0), backend="cpu", threads=2)
+        self.assertEqual(mesh.stats["backend"], "cpu")
+        self.assertEqual(mesh.stats["threads"], 2)
+        self.assertGreater(mesh.stats["total_s"], 0)
+        self.assertEqual(mesh.warnings, [])
+        with self.assertWarnsRegex(RuntimeWarning, "too fine for float vertex coordinates"):
+            far = voxmesh.extract(sphere(32, 10.0), backend="cpu", origin=(1e6, 0, 0), spacing=(1e-3, 1, 1))
+        self.assertEqual(len(far.warnings), 1)
+        positions, indices = cube_mesh(1.0)
+        self.assertIsNone(voxmesh.Mesh.from_arrays(positions, indices).stats)
+
     def test_empty_surface(self):
         mesh = voxmesh.extract(np.zeros((8, 8, 8), dtype=np.float32), iso=1.0)
         self.assertEqual(mesh.positions.shape, (0, 3))

@@ -86,6 +86,19 @@ const float* voxmesh_mesh_normals(const voxmesh_mesh* mesh);
 const uint32_t* voxmesh_mesh_indices(const voxmesh_mesh* mesh);
 void voxmesh_mesh_free(voxmesh_mesh* mesh);
 
+/* What the voxmesh_extract that made a mesh did (voxmesh::Stats); all zero, backend AUTO, for
+ * a mesh it did not make. */
+typedef struct voxmesh_stats {
+    int backend;       /* the voxmesh_backend that ran: CPU, OPENCL or HYBRID */
+    unsigned threads;  /* CPU slabs (options.threads resolved); 0 for OpenCL alone */
+    unsigned workers;  /* CPU threads that ran them at once */
+    double classify_s, scan_s, generate_s, total_s; /* seconds per pass, and in all */
+} voxmesh_stats;
+voxmesh_stats voxmesh_mesh_stats(const voxmesh_mesh* mesh);
+/* That extract's warnings (a fallback to the CPU engine, a spacing too fine for float vertices,
+ * ...), one a line; "" when there were none. Valid until voxmesh_mesh_free. */
+const char* voxmesh_mesh_warnings(const voxmesh_mesh* mesh);
+
 /* .stl, .ply or .obj by extension, through a temporary renamed into place. */
 voxmesh_status voxmesh_write_mesh(const char* path, const voxmesh_mesh* mesh);
 /* STL (binary or ASCII), PLY or OBJ by extension (as voxmesh::read_mesh). */

@@ -23,6 +23,7 @@ that made this package put it.
 
 import ctypes
 import os
+import warnings
 
 import numpy as np
 
@@ -31,6 +32,7 @@ __all__ = ["extract", "read_volume", "read_mesh", "voxelize", "Mesh", "Volume", 
 
 _DTYPES = [np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32, np.float32, np.float64]
 _BACKENDS = {"auto": 0, "cpu": 1, "opencl": 2, "hybrid": 3}
+_BACKEND_NAMES = {code: name for name, code in _BACKENDS.items()}
 
 
 class VoxmeshError(Exception):
@@ -54,6 +56,12 @@ class _Topology(ctypes.Structure):
 class _VoxelizeOptions(ctypes.Structure):
     _fields_ = [("resolution", ctypes.c_size_t), ("padding", ctypes.c_size_t), ("field", ctypes.c_int),
                 ("band", ctypes.c_double), ("threads", ctypes.c_uint)]
+
+
+class _Stats(ctypes.Structure):
+    _fields_ = [("backend", ctypes.c_int), ("threads", ctypes.c_uint), ("workers", ctypes.c_uint),
+                ("classify_s", ctypes.c_double), ("scan_s", ctypes.c_double), ("generate_s", ctypes.c_double),
+                ("total_s", ctypes.c_double)]
 
 
 class _Options(ctypes.Structure):
@@ -83,6 +91,10 @@ def _load():
     for name in ("voxmesh_mesh_positions", "voxmesh_mesh_normals", "voxmesh_mesh_indices"):
         getattr(lib, name).restype = ctypes.c_void_p
         getattr(lib, name).argtypes = [handle]
+    lib.voxmesh_mesh_stats.restype = _Stats
+    lib.voxmesh_mesh_stats.argtypes = [handle]
+    lib.voxmesh_mesh_warnings.restype = ctypes.c_char_p
+    lib.voxmesh_mesh_warnings.argtypes = [handle]
     lib.voxmesh_mesh_free.restype = None
     lib.voxmesh_mesh_free.argtypes = [handle]
     lib.voxmesh_write_mesh.restype = ctypes.c_int
@@ -198,6 +210,15 @@ class Mesh:
         normals = _lib.voxmesh_mesh_normals(pointer)
         self.normals = _view(normals, (vertices, 3), np.float32, handle) if normals else None
         self.indices = _view(_lib.voxmesh_mesh_indices(pointer), (triangles, 3), np.uint32, handle)
+        stats = _lib.voxmesh_mesh_stats(pointer)
+        # What extract did (None for a mesh it did not make): the backend that ran, the CPU
+        # slabs and the threads that ran them, seconds per pass.
+        self.stats = None if stats.backend == 0 else {
+            "backend": _BACKEND_NAMES[stats.backend], "threads": stats.threads, "workers": stats.workers,
+            "classify_s": stats.classify_s, "scan_s": stats.scan_s, "generate_s": stats.generate_s,
+            "total_s": stats.total_s}
+        # Its warnings (also issued as RuntimeWarning by extract).
+        self.warnings = _lib.voxmesh_mesh_warnings(pointer).decode(errors="replace").splitlines()
 
     @property
     def vertex_count(self):
@@ -322,4 +343,7 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     options.inside_below = 1 if inside_below else 0
     pointer = ctypes.c_void_p()
     _check(_lib.voxmesh_extract(ctypes.byref(view), ctypes.byref(options), ctypes.byref(pointer)))
-    return Mesh(pointer.value)
+    mesh = Mesh(pointer.value)
+    for message in mesh.warnings:
+        warnings.warn(message, RuntimeWarning, stacklevel=2)
+    return mesh

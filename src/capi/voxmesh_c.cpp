@@ -14,6 +14,9 @@
 
 struct voxmesh_mesh {
     voxmesh::Mesh mesh;
+    voxmesh::Stats stats{};  // of the extract that made it
+    std::string warnings{};  // stats.warnings, one a line
+    bool extracted = false;  // made by voxmesh_extract: stats and warnings are its
 };
 
 struct voxmesh_volume {
@@ -135,7 +138,11 @@ voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_
         cpp.threads = given.threads;
         cpp.normals = given.normals != 0;
         cpp.inside_below = given.inside_below != 0;
-        *mesh = new voxmesh_mesh{voxmesh::extract(view, cpp)};
+        voxmesh::Stats stats;
+        voxmesh::Mesh made = voxmesh::extract(view, cpp, stats);
+        std::string warnings;
+        for (const std::string& w : stats.warnings) warnings += w + "\n";
+        *mesh = new voxmesh_mesh{std::move(made), std::move(stats), std::move(warnings), true};
     });
 }
 
@@ -150,6 +157,28 @@ const uint32_t* voxmesh_mesh_indices(const voxmesh_mesh* mesh) {
 }
 void voxmesh_mesh_free(voxmesh_mesh* mesh) { delete mesh; }
 
+voxmesh_stats voxmesh_mesh_stats(const voxmesh_mesh* mesh) {
+    voxmesh_stats out{};
+    out.backend = VOXMESH_BACKEND_AUTO;
+    if (!mesh || !mesh->extracted) return out;
+    const voxmesh::Stats& s = mesh->stats;
+    switch (s.backend) {
+        case voxmesh::Backend::Cpu: out.backend = VOXMESH_BACKEND_CPU; break;
+        case voxmesh::Backend::OpenCL: out.backend = VOXMESH_BACKEND_OPENCL; break;
+        case voxmesh::Backend::Hybrid: out.backend = VOXMESH_BACKEND_HYBRID; break;
+        case voxmesh::Backend::Auto: break;
+    }
+    out.threads = s.threads;
+    out.workers = s.workers;
+    out.classify_s = s.times.classify;
+    out.scan_s = s.times.scan;
+    out.generate_s = s.times.generate;
+    out.total_s = s.times.total;
+    return out;
+}
+
+const char* voxmesh_mesh_warnings(const voxmesh_mesh* mesh) { return mesh ? mesh->warnings.c_str() : ""; }
+
 voxmesh_status voxmesh_write_mesh(const char* path, const voxmesh_mesh* mesh) {
     return guarded([&] {
         require(path, "voxmesh_write_mesh", "the path");
@@ -163,7 +192,7 @@ voxmesh_status voxmesh_read_mesh(const char* path, voxmesh_mesh** mesh) {
     return guarded([&] {
         require(mesh, "voxmesh_read_mesh", "the mesh pointer");
         require(path, "voxmesh_read_mesh", "the path");
-        *mesh = new voxmesh_mesh{voxmesh::read_mesh(path)};
+        *mesh = new voxmesh_mesh{voxmesh::read_mesh(path)};  // no stats: not extracted
     });
 }
 
