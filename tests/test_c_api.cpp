@@ -352,4 +352,61 @@ TEST_CASE("C API: a mesh keeps what its extract did and warned", "[capi]") {
     CHECK(std::string(voxmesh_mesh_warnings(mesh.get())).empty());
     CHECK(voxmesh_mesh_stats(nullptr).backend == VOXMESH_BACKEND_AUTO);
 }
+TEST_CASE("C API: the device list and device choice are the C++ API's", "[capi]") {
+    const std::vector<voxmesh::DeviceInfo> cpp = voxmesh::list_devices();
+    REQUIRE(voxmesh_device_count() == cpp.size());
+    for (std::size_t i = 0; i < cpp.size(); ++i) {
+        voxmesh_device d{};
+        REQUIRE(voxmesh_get_device(i, &d) == VOXMESH_OK);
+        CHECK(d.index == cpp[i].index);
+        CHECK(d.type == static_cast<int>(cpp[i].type));
+        CHECK(d.compute_units == cpp[i].compute_units);
+        CHECK(d.global_memory == cpp[i].global_memory);
+        CHECK(d.max_allocation == cpp[i].max_allocation);
+        CHECK((d.fp64 != 0) == cpp[i].fp64);
+        CHECK((d.host_memory != 0) == cpp[i].host_memory);
+        CHECK(std::string(d.name) == cpp[i].name.substr(0, sizeof d.name - 1));
+        CHECK(std::string(d.platform) == cpp[i].platform.substr(0, sizeof d.platform - 1));
+    }
+    voxmesh_device none{};
+    CHECK(voxmesh_get_device(cpp.size(), &none) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()).find("does not exist") != std::string::npos);
+    CHECK(voxmesh_get_device(0, nullptr) == VOXMESH_ERROR);
+
+    voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Gyroid, 32, voxmesh::ScalarType::F32);
+    const voxmesh_volume_view view = c_view(field.volume.view());
+    voxmesh::Options cpu;
+    cpu.iso = field.iso;
+    cpu.backend = voxmesh::Backend::Cpu;
+    const voxmesh::Mesh expected = voxmesh::extract(field.volume.view(), cpu);
+    voxmesh_options options = voxmesh_default_options();
+    options.iso = field.iso;
+    options.backend = VOXMESH_BACKEND_OPENCL;
+    const int first[] = {0}, missing[] = {static_cast<int>(cpp.size()) + 3};
+    voxmesh_mesh* made = nullptr;
+    if (!cpp.empty()) {
+        options.devices = first;
+        options.device_count = 1;
+        REQUIRE(voxmesh_extract(&view, &options, &made) == VOXMESH_OK);
+        const MeshPtr mesh(made, voxmesh_mesh_free);
+        CHECK(voxmesh_mesh_stats(mesh.get()).backend == VOXMESH_BACKEND_OPENCL);
+        require_same(mesh.get(), expected);
+    }
+    // A device that does not exist, or a type there is none of: the C++ API's refusal.
+    options.devices = missing;
+    options.device_count = 1;
+    voxmesh::Options cpp_options;
+    cpp_options.iso = field.iso;
+    cpp_options.backend = voxmesh::Backend::OpenCL;
+    cpp_options.devices = {missing[0]};
+    CHECK(voxmesh_extract(&view, &options, &made) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()) == cpp_error(field.volume.view(), cpp_options));
+    options.devices = nullptr;
+    CHECK(voxmesh_extract(&view, &options, &made) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()) == "voxmesh_extract: options->devices is NULL");
+    options.device_count = 0;
+    options.device_type = 9;
+    CHECK(voxmesh_extract(&view, &options, &made) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()).find("unknown device type 9") != std::string::npos);
+}
 #endif

@@ -149,6 +149,21 @@ class ExtractTest(unittest.TestCase):
         positions, indices = cube_mesh(1.0)
         self.assertIsNone(voxmesh.Mesh.from_arrays(positions, indices).stats)
 
+    def test_devices_and_device_choice(self):
+        found = voxmesh.devices()
+        volume = sphere(40, 12.0)
+        reference = voxmesh.extract(volume, backend="cpu")
+        for d in found:
+            self.assertIn(d["type"], ("cpu", "gpu", "accelerator"))
+            self.assertTrue(d["name"])
+            mesh = voxmesh.extract(volume, backend="opencl", devices=[d["index"]])
+            self.assertEqual(mesh.stats["backend"], "opencl")
+            np.testing.assert_array_equal(mesh.indices, reference.indices)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "does not exist|no usable OpenCL|without OpenCL"):
+            voxmesh.extract(volume, backend="opencl", devices=[len(found) + 3])
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "unknown device type"):
+            voxmesh.extract(volume, device_type="fpga")
+
     def test_empty_surface(self):
         mesh = voxmesh.extract(np.zeros((8, 8, 8), dtype=np.float32), iso=1.0)
         self.assertEqual(mesh.positions.shape, (0, 3))

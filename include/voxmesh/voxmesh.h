@@ -55,17 +55,42 @@ typedef struct voxmesh_volume_view {
     double origin[3];
 } voxmesh_volume_view;
 
-/* The C++ voxmesh::Options without the device choice and the log (warnings are dropped). */
+typedef enum voxmesh_device_type {
+    VOXMESH_DEVICE_ANY = 0,
+    VOXMESH_DEVICE_CPU = 1,
+    VOXMESH_DEVICE_GPU = 2,
+    VOXMESH_DEVICE_ACCELERATOR = 3
+} voxmesh_device_type;
+
+/* The C++ voxmesh::Options without chunk_planes, memory_budget and the log (warnings are kept
+ * with the mesh: voxmesh_mesh_warnings). */
 typedef struct voxmesh_options {
     double iso;           /* a sample is inside when value >= iso */
     int backend;          /* a voxmesh_backend */
     unsigned threads;     /* 0: the CPUs this process may use */
     int normals;          /* nonzero: per-vertex normals */
     int inside_below;     /* nonzero: inside where value < iso (signed distance fields) */
+    const int* devices;   /* OpenCL devices by index (voxmesh_get_device); NULL: every device */
+    size_t device_count;  /*   of device_type */
+    int device_type;      /* a voxmesh_device_type */
 } voxmesh_options;
 
-/* iso 0, backend auto, threads 0, normals on, inside_below off. */
+/* iso 0, backend auto, threads 0, normals on, inside_below off, every device of any type. */
 voxmesh_options voxmesh_default_options(void);
+
+/* The OpenCL devices (voxmesh::list_devices; none without OpenCL or a platform). */
+typedef struct voxmesh_device {
+    int index;             /* what voxmesh_options.devices names it by */
+    int type;              /* a voxmesh_device_type */
+    unsigned compute_units;
+    uint64_t global_memory, max_allocation; /* bytes */
+    int fp64;              /* nonzero: double precision, so vertices are bit-identical to the CPU's */
+    int host_memory;       /* nonzero: shares the host's memory (zero-copy) */
+    char platform[128], name[128], version[128]; /* truncated to fit, always terminated */
+} voxmesh_device;
+size_t voxmesh_device_count(void);
+/* Device `index` (0 .. voxmesh_device_count() - 1). */
+voxmesh_status voxmesh_get_device(size_t index, voxmesh_device* device);
 
 /* Opaque: a volume (read from a file, or voxelized), and a mesh. */
 typedef struct voxmesh_volume voxmesh_volume;

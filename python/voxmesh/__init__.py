@@ -27,12 +27,14 @@ import warnings
 
 import numpy as np
 
-__all__ = ["extract", "read_volume", "read_mesh", "voxelize", "Mesh", "Volume", "Topology", "VoxmeshError",
-           "VoxmeshMemoryError", "version"]
+__all__ = ["extract", "read_volume", "read_mesh", "voxelize", "devices", "Mesh", "Volume", "Topology",
+           "VoxmeshError", "VoxmeshMemoryError", "version"]
 
 _DTYPES = [np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32, np.float32, np.float64]
 _BACKENDS = {"auto": 0, "cpu": 1, "opencl": 2, "hybrid": 3}
 _BACKEND_NAMES = {code: name for name, code in _BACKENDS.items()}
+_DEVICE_TYPES = {"any": 0, "cpu": 1, "gpu": 2, "accelerator": 3}
+_DEVICE_TYPE_NAMES = {code: name for name, code in _DEVICE_TYPES.items()}
 
 
 class VoxmeshError(Exception):
@@ -66,7 +68,15 @@ class _Stats(ctypes.Structure):
 
 class _Options(ctypes.Structure):
     _fields_ = [("iso", ctypes.c_double), ("backend", ctypes.c_int), ("threads", ctypes.c_uint),
-                ("normals", ctypes.c_int), ("inside_below", ctypes.c_int)]
+                ("normals", ctypes.c_int), ("inside_below", ctypes.c_int), ("devices", ctypes.POINTER(ctypes.c_int)),
+                ("device_count", ctypes.c_size_t), ("device_type", ctypes.c_int)]
+
+
+class _Device(ctypes.Structure):
+    _fields_ = [("index", ctypes.c_int), ("type", ctypes.c_int), ("compute_units", ctypes.c_uint),
+                ("global_memory", ctypes.c_uint64), ("max_allocation", ctypes.c_uint64), ("fp64", ctypes.c_int),
+                ("host_memory", ctypes.c_int), ("platform", ctypes.c_char * 128), ("name", ctypes.c_char * 128),
+                ("version", ctypes.c_char * 128)]
 
 
 def _library_path():
@@ -116,6 +126,10 @@ def _load():
     lib.voxmesh_volume_get_view.argtypes = [handle]
     lib.voxmesh_volume_free.restype = None
     lib.voxmesh_volume_free.argtypes = [handle]
+    lib.voxmesh_device_count.restype = ctypes.c_size_t
+    lib.voxmesh_device_count.argtypes = []
+    lib.voxmesh_get_device.restype = ctypes.c_int
+    lib.voxmesh_get_device.argtypes = [ctypes.c_size_t, ctypes.POINTER(_Device)]
     lib.voxmesh_last_error.restype = ctypes.c_char_p
     lib.voxmesh_last_error.argtypes = []
     lib.voxmesh_version.restype = ctypes.c_char_p
@@ -124,6 +138,22 @@ def _load():
 
 
 _lib = _load()
+
+
+def devices():
+    """The OpenCL devices as dicts (index, type, name, platform, version, compute_units,
+    global_memory, max_allocation, fp64, host_memory); [] without OpenCL or a platform. An
+    index is what extract(devices=[...]) takes."""
+    found = []
+    for i in range(_lib.voxmesh_device_count()):
+        d = _Device()
+        _check(_lib.voxmesh_get_device(i, ctypes.byref(d)))
+        found.append({"index": d.index, "type": _DEVICE_TYPE_NAMES.get(d.type, "any"),
+                      "name": d.name.decode(errors="replace"), "platform": d.platform.decode(errors="replace"),
+                      "version": d.version.decode(errors="replace"), "compute_units": d.compute_units,
+                      "global_memory": d.global_memory, "max_allocation": d.max_allocation, "fp64": bool(d.fp64),
+                      "host_memory": bool(d.host_memory)})
+    return found
 
 
 def version():
@@ -302,12 +332,14 @@ def read_volume(path):
 
 
 def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=0, normals=True,
-            inside_below=False):
+            inside_below=False, devices=None, device_type="any"):
     """The iso-surface of `volume` (a 3-D array [z, y, x] or a Volume) at `iso` as a Mesh.
 
     A sample is inside when value >= iso (value < iso with inside_below, for signed distance
     fields). backend: "auto", "cpu", "opencl" or "hybrid"; threads 0: every CPU this process may
     use. spacing and origin are (x, y, z); a Volume brings its own unless they are given.
+    devices: OpenCL device indices (voxmesh.devices()); device_type: "any", "cpu", "gpu" or
+    "accelerator". Every backend, thread count and device gives the same mesh.
     """
     if isinstance(volume, Volume):
         spacing = volume.spacing if spacing is None else spacing
@@ -325,6 +357,9 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     array = np.ascontiguousarray(array, dtype=native)  # a copy only where the layout needs one
     if backend not in _BACKENDS:
         raise VoxmeshError(f"unknown backend '{backend}' (auto, cpu, opencl, hybrid)")
+    if device_type not in _DEVICE_TYPES:
+        raise VoxmeshError(f"unknown device type '{device_type}' (any, cpu, gpu, accelerator)")
+    chosen = [int(d) for d in (devices or [])]
     if int(threads) < 0:
         raise VoxmeshError(f"threads must be 0 (every CPU) or more; got {threads}")
     spacing = _triple("spacing", spacing, 1.0)
@@ -341,6 +376,10 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     options.threads = int(threads)
     options.normals = 1 if normals else 0
     options.inside_below = 1 if inside_below else 0
+    device_array = (ctypes.c_int * max(1, len(chosen)))(*chosen)  # alive until the call returns
+    options.devices = ctypes.cast(device_array, ctypes.POINTER(ctypes.c_int)) if chosen else None
+    options.device_count = len(chosen)
+    options.device_type = _DEVICE_TYPES[device_type]
     pointer = ctypes.c_void_p()
     _check(_lib.voxmesh_extract(ctypes.byref(view), ctypes.byref(options), ctypes.byref(pointer)))
     mesh = Mesh(pointer.value)

@@ -6,6 +6,7 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
+#include <cstring>
 #include <iterator>
 #include <new>
 #include <string>
@@ -97,6 +98,38 @@ voxmesh::Backend backend(int code) {
     }
 }
 
+voxmesh::DeviceType device_type(int code) {
+    using voxmesh::DeviceType;
+    switch (code) {
+        case VOXMESH_DEVICE_ANY: return DeviceType::Any;
+        case VOXMESH_DEVICE_CPU: return DeviceType::Cpu;
+        case VOXMESH_DEVICE_GPU: return DeviceType::Gpu;
+        case VOXMESH_DEVICE_ACCELERATOR: return DeviceType::Accelerator;
+        default:
+            throw voxmesh::Error("voxmesh_extract: unknown device type " + std::to_string(code) +
+                                 " (VOXMESH_DEVICE_ANY, _CPU, _GPU or _ACCELERATOR)");
+    }
+}
+
+int device_type_code(voxmesh::DeviceType type) {
+    using voxmesh::DeviceType;
+    switch (type) {
+        case DeviceType::Any: return VOXMESH_DEVICE_ANY;
+        case DeviceType::Cpu: return VOXMESH_DEVICE_CPU;
+        case DeviceType::Gpu: return VOXMESH_DEVICE_GPU;
+        case DeviceType::Accelerator: return VOXMESH_DEVICE_ACCELERATOR;
+    }
+    return VOXMESH_DEVICE_ANY;
+}
+
+// Copies `text` into a fixed field, cut to fit and always terminated.
+template <std::size_t N>
+void copy_text(char (&field)[N], const std::string& text) {
+    const std::size_t n = std::min(text.size(), N - 1);
+    std::memcpy(field, text.data(), n);
+    field[n] = '\0';
+}
+
 template <class T>
 const T* data_or_null(const std::vector<T>& array) {
     return array.empty() ? nullptr : array.data();
@@ -114,7 +147,40 @@ voxmesh_options voxmesh_default_options(void) {
     options.threads = defaults.threads;
     options.normals = defaults.normals;
     options.inside_below = defaults.inside_below;
+    options.devices = nullptr;
+    options.device_count = 0;
+    options.device_type = device_type_code(defaults.device_type);
     return options;
+}
+
+size_t voxmesh_device_count(void) {
+    try {
+        return voxmesh::list_devices().size();
+    } catch (...) {
+        return 0;
+    }
+}
+
+voxmesh_status voxmesh_get_device(size_t index, voxmesh_device* device) {
+    return guarded([&] {
+        require(device, "voxmesh_get_device", "the device pointer");
+        const std::vector<voxmesh::DeviceInfo> devices = voxmesh::list_devices();
+        if (index >= devices.size())
+            throw voxmesh::Error("voxmesh_get_device: device " + std::to_string(index) + " does not exist (" +
+                                 std::to_string(devices.size()) + " OpenCL device(s))");
+        const voxmesh::DeviceInfo& d = devices[index];
+        *device = voxmesh_device{};
+        device->index = d.index;
+        device->type = device_type_code(d.type);
+        device->compute_units = d.compute_units;
+        device->global_memory = d.global_memory;
+        device->max_allocation = d.max_allocation;
+        device->fp64 = d.fp64;
+        device->host_memory = d.host_memory;
+        copy_text(device->platform, d.platform);
+        copy_text(device->name, d.name);
+        copy_text(device->version, d.version);
+    });
 }
 
 voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_options* options,
@@ -138,6 +204,9 @@ voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_
         cpp.threads = given.threads;
         cpp.normals = given.normals != 0;
         cpp.inside_below = given.inside_below != 0;
+        if (given.device_count) require(given.devices, "voxmesh_extract", "options->devices");
+        cpp.devices.assign(given.devices, given.devices + given.device_count);
+        cpp.device_type = device_type(given.device_type);
         voxmesh::Stats stats;
         voxmesh::Mesh made = voxmesh::extract(view, cpp, stats);
         std::string warnings;
