@@ -46,6 +46,19 @@ void require_same(const voxmesh_mesh* c, const voxmesh::Mesh& cpp) {
     CHECK(same_bytes(voxmesh_mesh_indices(c), cpp.indices));
 }
 
+using VolumePtr = std::unique_ptr<voxmesh_volume, decltype(&voxmesh_volume_free)>;
+
+// A C API volume's view against the C++ volume: type, geometry and every sample byte.
+void require_same(const voxmesh_volume_view& c, const voxmesh::Volume& cpp) {
+    REQUIRE(c.type == static_cast<int>(cpp.type));
+    for (int a = 0; a < 3; ++a) {
+        CHECK(c.dims[a] == cpp.dims[a]);
+        CHECK(c.spacing[a] == cpp.spacing[a]);
+        CHECK(c.origin[a] == cpp.origin[a]);
+    }
+    CHECK(std::memcmp(c.data, cpp.data, cpp.byte_size()) == 0);
+}
+
 std::string cpp_error(const voxmesh::VolumeView& view, const voxmesh::Options& options) {
     try {
         voxmesh::extract(view, options);
@@ -136,16 +149,8 @@ TEST_CASE("C API: read_volume gives read_volume's samples and geometry", "[capi]
         const std::string path = std::string(VOXMESH_TEST_DATA) + "/" + name;
         voxmesh_volume* made = nullptr;
         REQUIRE(voxmesh_read_volume(path.c_str(), &made) == VOXMESH_OK);
-        const std::unique_ptr<voxmesh_volume, decltype(&voxmesh_volume_free)> read(made, voxmesh_volume_free);
-        const voxmesh_volume_view c = voxmesh_volume_get_view(read.get());
-        const voxmesh::Volume cpp = voxmesh::read_volume(path);
-        REQUIRE(c.type == static_cast<int>(cpp.type));
-        for (int a = 0; a < 3; ++a) {
-            CHECK(c.dims[a] == cpp.dims[a]);
-            CHECK(c.spacing[a] == cpp.spacing[a]);
-            CHECK(c.origin[a] == cpp.origin[a]);
-        }
-        CHECK(std::memcmp(c.data, cpp.data, cpp.byte_size()) == 0);
+        const VolumePtr read(made, voxmesh_volume_free);
+        require_same(voxmesh_volume_get_view(read.get()), voxmesh::read_volume(path));
     }
     const voxmesh_volume_view none = voxmesh_volume_get_view(nullptr);
     CHECK(none.data == nullptr);
@@ -255,19 +260,11 @@ TEST_CASE("C API: read_mesh, mesh_from_arrays, analyze_topology and voxelize giv
         options.field = field;
         voxmesh_volume* volume = nullptr;
         REQUIRE(voxmesh_voxelize(copied.get(), &options, &volume) == VOXMESH_OK);
-        const std::unique_ptr<voxmesh_volume, decltype(&voxmesh_volume_free)> owned(volume, voxmesh_volume_free);
+        const VolumePtr owned(volume, voxmesh_volume_free);
         voxmesh::VoxelizeOptions cpp_options;
         cpp_options.resolution = 48;
         cpp_options.field = field == VOXMESH_FIELD_OCCUPANCY ? voxmesh::VoxelField::Occupancy : voxmesh::VoxelField::Distance;
-        const voxmesh::Volume want = voxmesh::voxelize(cpp, cpp_options);
-        const voxmesh_volume_view got = voxmesh_volume_get_view(volume);
-        REQUIRE(got.type == static_cast<int>(want.type));
-        for (int a = 0; a < 3; ++a) {
-            CHECK(got.dims[a] == want.dims[a]);
-            CHECK(got.spacing[a] == want.spacing[a]);
-            CHECK(got.origin[a] == want.origin[a]);
-        }
-        CHECK(std::memcmp(got.data, want.data, want.byte_size()) == 0);
+        require_same(voxmesh_volume_get_view(volume), voxmesh::voxelize(cpp, cpp_options));
     }
 
     const voxmesh_voxelize_options defaults = voxmesh_default_voxelize_options();

@@ -98,6 +98,17 @@ voxmesh::Backend backend(int code) {
     }
 }
 
+int backend_code(voxmesh::Backend backend) {
+    using voxmesh::Backend;
+    switch (backend) {
+        case Backend::Auto: return VOXMESH_BACKEND_AUTO;
+        case Backend::Cpu: return VOXMESH_BACKEND_CPU;
+        case Backend::OpenCL: return VOXMESH_BACKEND_OPENCL;
+        case Backend::Hybrid: return VOXMESH_BACKEND_HYBRID;
+    }
+    return VOXMESH_BACKEND_AUTO;
+}
+
 voxmesh::DeviceType device_type(int code) {
     using voxmesh::DeviceType;
     switch (code) {
@@ -130,6 +141,16 @@ void copy_text(char (&field)[N], const std::string& text) {
     field[n] = '\0';
 }
 
+// dims, spacing and origin between a C view and a C++ volume or view (same field names).
+template <class From, class To>
+void copy_geometry(const From& from, To& to) {
+    for (int a = 0; a < 3; ++a) {
+        to.dims[a] = from.dims[a];
+        to.spacing[a] = from.spacing[a];
+        to.origin[a] = from.origin[a];
+    }
+}
+
 template <class T>
 const T* data_or_null(const std::vector<T>& array) {
     return array.empty() ? nullptr : array.data();
@@ -143,7 +164,7 @@ voxmesh_options voxmesh_default_options(void) {
     const voxmesh::Options defaults;
     voxmesh_options options{};
     options.iso = defaults.iso;
-    options.backend = VOXMESH_BACKEND_AUTO;
+    options.backend = backend_code(defaults.backend);
     options.threads = defaults.threads;
     options.normals = defaults.normals;
     options.inside_below = defaults.inside_below;
@@ -193,11 +214,7 @@ voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_
         voxmesh::VolumeView view;
         view.data = volume->data;
         view.type = scalar_type(volume->type);
-        for (int a = 0; a < 3; ++a) {
-            view.dims[a] = volume->dims[a];
-            view.spacing[a] = volume->spacing[a];
-            view.origin[a] = volume->origin[a];
-        }
+        copy_geometry(*volume, view);
         voxmesh::Options cpp;
         cpp.iso = given.iso;
         cpp.backend = backend(given.backend);
@@ -231,12 +248,7 @@ voxmesh_stats voxmesh_mesh_stats(const voxmesh_mesh* mesh) {
     out.backend = VOXMESH_BACKEND_AUTO;
     if (!mesh || !mesh->extracted) return out;
     const voxmesh::Stats& s = mesh->stats;
-    switch (s.backend) {
-        case voxmesh::Backend::Cpu: out.backend = VOXMESH_BACKEND_CPU; break;
-        case voxmesh::Backend::OpenCL: out.backend = VOXMESH_BACKEND_OPENCL; break;
-        case voxmesh::Backend::Hybrid: out.backend = VOXMESH_BACKEND_HYBRID; break;
-        case voxmesh::Backend::Auto: break;
-    }
+    out.backend = backend_code(s.backend);
     out.threads = s.threads;
     out.workers = s.workers;
     out.classify_s = s.times.classify;
@@ -342,11 +354,7 @@ voxmesh_volume_view voxmesh_volume_get_view(const voxmesh_volume* volume) {
     const voxmesh::Volume& v = volume->volume;
     view.data = v.data;
     view.type = scalar_code(v.type);
-    for (int a = 0; a < 3; ++a) {
-        view.dims[a] = v.dims[a];
-        view.spacing[a] = v.spacing[a];
-        view.origin[a] = v.origin[a];
-    }
+    copy_geometry(v, view);
     return view;
 }
 
