@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <new>
 #include <vector>
 #include <zlib.h>
 
@@ -23,7 +24,9 @@ Inflater::Inflater(const std::string& path, const unsigned char* data, std::size
     state_->data = data;
     state_->size = size;
     // 15 + 32: accept both zlib (MetaImage) and gzip (NRRD, .nii.gz) headers.
-    if (inflateInit2(&state_->z, 15 + 32) != Z_OK) fail(path, "cannot initialise zlib");
+    const int rc = inflateInit2(&state_->z, 15 + 32);
+    if (rc == Z_MEM_ERROR) throw std::bad_alloc();  // the readers name the file
+    if (rc != Z_OK) fail(path, "cannot initialise zlib");
 }
 
 Inflater::~Inflater() { inflateEnd(&state_->z); }
@@ -61,6 +64,10 @@ std::size_t Inflater::read(void* out, std::size_t bytes) {
             s.ended = true;
         } else if (rc == Z_BUF_ERROR) {
             if (s.remaining_input() == 0) fail(path_, "compressed data ends early (truncated file?)");
+        } else if (rc == Z_MEM_ERROR) {
+            // zlib allocates its window on the first inflate: memory ran out, the data may be
+            // sound (it was reported as corrupt data, exit 2, before).
+            throw std::bad_alloc();
         } else if (rc != Z_OK) {
             fail(path_, std::string("corrupt compressed data: ") + (s.z.msg ? s.z.msg : "zlib error " + std::to_string(rc)));
         }
