@@ -2,7 +2,8 @@
  * threads must give identical buffers and a closed surface (every edge in two triangles,
  * Euler characteristic 2), bad arguments must fail with a status and a message naming the
  * problem, a mesh must write to a file, and a cube made from arrays must voxelize and mesh back
- * closed. Exits 0 only when every check passes.
+ * closed, and a sculpt's edit must re-mesh only some blocks and weld to extract's mesh. Exits 0
+ * only when every check passes.
  *
  *   c_api_program <scratch-dir> <volume-file>   (a NRRD it must read; headsq.nrrd) */
 #include <voxmesh/voxmesh.h>
@@ -183,6 +184,39 @@ int main(int argc, char** argv) {
         voxmesh_mesh_free(back);
         voxmesh_volume_free(grid);
         voxmesh_mesh_free(cube);
+    }
+
+    /* Sculpting the sphere: a dab re-meshes some blocks, not all, the surface stays closed, and
+     * the welded mesh is what an extract of the edited samples gives. */
+    {
+        voxmesh_sculpt* sculpt = NULL;
+        voxmesh_sculpt_options so = voxmesh_default_sculpt_options();
+        voxmesh_update_result result;
+        voxmesh_mesh *sculpted = NULL, *fresh = NULL;
+        const double center[3] = {N / 2.0, N / 2.0, N / 2.0 + 14.0};
+        so.block_size = 8;
+        CHECK(voxmesh_sculpt_new(&view, &so, &sculpt) == VOXMESH_OK);
+        CHECK(voxmesh_sculpt_update(sculpt, &result) == VOXMESH_OK);
+        CHECK(result.remeshed == voxmesh_sculpt_block_count(sculpt));
+        CHECK(voxmesh_sculpt_apply(sculpt, VOXMESH_BRUSH_ADD, center, 4.0, 3.0, VOXMESH_UNITS_SAMPLES) == VOXMESH_OK);
+        CHECK(voxmesh_sculpt_update(sculpt, &result) == VOXMESH_OK);
+        CHECK(result.changed_count > 0 && result.remeshed < voxmesh_sculpt_block_count(sculpt));
+        CHECK(voxmesh_sculpt_mesh(sculpt, &sculpted) == VOXMESH_OK);
+        if (sculpted) {
+            const voxmesh_volume_view edited = voxmesh_sculpt_get_view(sculpt);
+            size_t t = voxmesh_mesh_triangle_count(sculpted);
+            CHECK(voxmesh_extract(&edited, NULL, &fresh) == VOXMESH_OK);
+            CHECK(t > voxmesh_mesh_triangle_count(one) && t == voxmesh_mesh_triangle_count(fresh));
+            CHECK(fresh &&
+                  memcmp(voxmesh_mesh_indices(sculpted), voxmesh_mesh_indices(fresh), 3 * t * sizeof(uint32_t)) == 0);
+            CHECK(closed_with_euler(sculpted, &euler));
+            CHECK(euler == 2);
+        }
+        CHECK(voxmesh_sculpt_apply(sculpt, 99, center, 4.0, 3.0, VOXMESH_UNITS_SAMPLES) == VOXMESH_ERROR);
+        CHECK(contains(voxmesh_last_error(), "unknown brush 99"));
+        voxmesh_mesh_free(fresh);
+        voxmesh_mesh_free(sculpted);
+        voxmesh_sculpt_free(sculpt);
     }
 
     voxmesh_mesh_free(one);

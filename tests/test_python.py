@@ -272,6 +272,136 @@ class ScikitImageTest(unittest.TestCase):
         self.assertAlmostEqual(signed_volume(ours, mesh.indices) / signed_volume(verts, faces), 1.0, delta=0.01)
 
 
+class SculptTest(unittest.TestCase):
+    """voxmesh.Sculpt: edits re-mesh some blocks, the welded mesh is extract's, the blocks
+    partition its triangles, and bad edits are refused."""
+
+    def make(self, **options):
+        return voxmesh.Sculpt(sphere(40, 14.0), spacing=(0.5, 1.0, 2.0), origin=(1.0, -2.0, 3.0), block_size=8,
+                              **options)
+
+    def assert_same_mesh(self, got, want):
+        self.assertTrue(np.array_equal(got.indices, want.indices))
+        self.assertTrue(np.array_equal(got.positions, want.positions))
+        if want.normals is None:
+            self.assertIsNone(got.normals)
+        else:
+            self.assertTrue(np.array_equal(got.normals, want.normals))
+
+    def test_edits_remesh_some_blocks_and_weld_to_extract(self):
+        s = self.make()
+        self.assertEqual(s.block_grid, (5, 5, 5))
+        self.assertEqual(s.block_count, 125)
+        self.assertTrue(s.dirty)
+        self.assertEqual(s.update().remeshed, 125)
+        self.assertFalse(s.dirty)
+        s.add((19.5, 19.5, 33.0), 4, strength=3)
+        s.subtract((1.0 + 0.5 * 6, -2.0 + 19.5, 3.0 + 2.0 * 19.5), 3.0, units="world")  # x = 6 in samples
+        s.smooth((19.5, 6.0, 19.5), 5, strength=0.8)
+        s.set_region((28, 28, 28), (33, 35, 38), -5.0)
+        self.assertTrue(s.dirty)
+        result = s.update()
+        self.assertGreater(len(result.changed), 0)
+        self.assertLess(result.remeshed, s.block_count)
+        self.assertEqual(result.changed, sorted(result.changed))
+        mesh = s.mesh()
+        self.assert_same_mesh(mesh, voxmesh.extract(s.array, spacing=s.spacing, origin=s.origin, backend="cpu"))
+        topology = mesh.topology()
+        self.assertTrue(topology.closed)
+        self.assertEqual(topology.euler, 2)
+
+        # The blocks partition the triangles: every welded triangle is in exactly one block, as
+        # the same three positions in the same order.
+        def keyed(positions, indices):
+            return sorted(map(bytes, positions[indices].reshape(len(indices), 9)))
+
+        pieces = [s.block(i) for i in range(s.block_count)]
+        self.assertEqual(keyed(mesh.positions, mesh.indices),
+                         sorted(sum((keyed(b.positions, b.indices) for b in pieces if len(b.indices)), [])))
+        b = pieces[result.changed[0]]
+        self.assertEqual(b.index, result.changed[0])
+        self.assertEqual(b.index, b.coord[0] + 5 * (b.coord[1] + 5 * b.coord[2]))
+        self.assertEqual(b.cell_begin, tuple(8 * c for c in b.coord))
+        self.assertEqual(b.normals.shape, b.positions.shape)
+
+    def test_writes_to_the_samples_then_invalidate_all(self):
+        s = voxmesh.Sculpt((sphere(24, 8.0) > 0).astype(np.uint8) * 200, iso=100, block_size=8, normals=False)
+        s.update()
+        s.array[1:3, 3:20, 3:20] = 255  # a slab below the ball (which starts at z 3.5)
+        self.assertFalse(s.dirty)  # not seen until invalidate_all
+        s.invalidate_all()
+        self.assertTrue(s.dirty)
+        mesh = s.mesh()
+        self.assertIsNone(mesh.normals)
+        self.assert_same_mesh(mesh, voxmesh.extract(s.array, iso=100, normals=False, backend="cpu"))
+        self.assertEqual(mesh.topology().components, 2)
+        array = s.array
+        del s  # the samples stay alive with the array
+        self.assertEqual(int(array[2, 10, 10]), 255)
+
+        f = voxmesh.Sculpt(sphere(16, 5.0))
+        f.array[3, 3, 3] = np.nan
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "NaN"):
+            f.invalidate_all()
+
+    def test_other_sample_types_are_copied_as_float32(self):
+        volume = sphere(20, 6.0, dtype=np.float64)
+        s = voxmesh.Sculpt(volume)
+        self.assertEqual(s.array.dtype, np.float32)
+        self.assertTrue(np.array_equal(s.array, volume.astype(np.float32)))
+        self.assertEqual(voxmesh.Sculpt(np.zeros((4, 4, 4), dtype=np.uint16)).array.dtype, np.uint16)
+        self.assertEqual(voxmesh.Sculpt(np.zeros((4, 4, 4), dtype=np.int16)).array.dtype, np.float32)
+        self.assertEqual(voxmesh.Sculpt(np.zeros((4, 4, 4), dtype=bool)).array.dtype, np.uint8)
+
+    def test_a_model_sculpted_in_world_units_stays_closed(self):
+        corners = np.array([[x, y, z] for z in (0, 4) for y in (0, 4) for x in (0, 4)], dtype=np.float32)
+        faces = np.array([[0, 2, 3], [0, 3, 1], [4, 5, 7], [4, 7, 6], [0, 1, 5], [0, 5, 4], [2, 6, 7], [2, 7, 3],
+                          [0, 4, 6], [0, 6, 2], [1, 3, 7], [1, 7, 5]])
+        s = voxmesh.Sculpt.from_mesh((corners, faces), resolution=24, block_size=8)
+        before = s.mesh()
+        # A bump of one voxel on the top face (the volume has two voxels of padding above it).
+        s.add((2.0, 2.0, 4.0), 1.0, strength=1, units="world")
+        after = s.mesh()
+        self.assertGreater(after.positions[:, 2].max(), before.positions[:, 2].max() + 0.1)
+        topology = after.topology()
+        self.assertTrue(topology.closed)
+        self.assertEqual(topology.euler, 2)
+
+    def test_refusals_name_the_problem(self):
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "3-D"):
+            voxmesh.Sculpt(np.zeros((8, 8)))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "block size"):
+            voxmesh.Sculpt(sphere(8, 3.0), block_size=1)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "hybrid"):
+            voxmesh.Sculpt(sphere(8, 3.0), backend="hybrid")
+        s = voxmesh.Sculpt(sphere(8, 3.0))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "unknown brush 'pinch'"):
+            s.apply("pinch", (4, 4, 4), 2)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "unknown units"):
+            s.add((4, 4, 4), 2, units="mm")
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "radius must be positive"):
+            s.add((4, 4, 4), 0)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "center must be three numbers"):
+            s.add((4, 4), 2)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "does not exist"):
+            s.block(s.block_count)
+
+    def test_opencl_remeshes_on_a_device_or_warns(self):
+        volume = sphere(24, 8.0)
+        if voxmesh.devices():
+            s = voxmesh.Sculpt(volume, backend="opencl", block_size=8)
+            self.assertEqual(s.backend, "opencl")
+            self.assertEqual(s.device_name, voxmesh.devices()[0]["name"])
+        else:
+            with self.assertWarnsRegex(RuntimeWarning, "CPU"):
+                s = voxmesh.Sculpt(volume, backend="opencl", block_size=8)
+            self.assertEqual(s.backend, "cpu")
+        s.add((12, 12, 20), 3, strength=2)
+        mesh = s.mesh()
+        want = voxmesh.extract(s.array, backend="cpu")
+        self.assertTrue(np.array_equal(mesh.indices, want.indices))
+
+
 class FilesTest(unittest.TestCase):
     def test_head_ct_gives_vtks_count_and_the_tools_bytes(self):
         volume = voxmesh.read_volume(os.path.join(DATA, "headsq.nrrd"))

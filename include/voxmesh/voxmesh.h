@@ -165,6 +165,91 @@ voxmesh_status voxmesh_read_volume(const char* path, voxmesh_volume** volume);
 voxmesh_volume_view voxmesh_volume_get_view(const voxmesh_volume* volume);
 void voxmesh_volume_free(voxmesh_volume* volume);
 
+/* ---- Sculpting (voxmesh::Sculpt, see voxmesh/sculpt.hpp): an editable copy of a volume
+ * whose surface is kept as a mesh in blocks, so that an edit re-meshes only the blocks it can
+ * change. Edits mark blocks dirty; voxmesh_sculpt_update re-meshes them. A sculpt is used from
+ * one thread at a time. */
+typedef struct voxmesh_sculpt voxmesh_sculpt;
+
+typedef struct voxmesh_sculpt_options {
+    double iso;            /* inside where value >= iso */
+    unsigned threads;      /* update's worker threads; 0: the CPUs this process may use */
+    size_t block_size;     /* cells per block side, 2..256 */
+    int normals;           /* nonzero: per-vertex normals */
+    int inside_below;      /* nonzero: inside where value < iso (winding and normals flip) */
+    double strength_scale; /* field change of an add/subtract of strength 1; 0: 1, or the voxel
+                              spacing for voxmesh_sculpt_from_mesh */
+    int backend;           /* where update re-meshes: a voxmesh_backend, CPU, OPENCL or AUTO */
+    int device;            /* OpenCL device index; -1: a GPU or accelerator, else the first */
+} voxmesh_sculpt_options;
+/* iso 0, threads 0, block_size 32, normals on, inside_below off, strength_scale 0, CPU, -1. */
+voxmesh_sculpt_options voxmesh_default_sculpt_options(void);
+
+/* A copy of `volume` (u8, u16 or f32 samples; convert others first). */
+voxmesh_status voxmesh_sculpt_new(const voxmesh_volume_view* volume, const voxmesh_sculpt_options* options,
+                                  voxmesh_sculpt** sculpt);
+/* A closed model voxelized to a signed distance field (f32, positive inside, iso 0) with
+ * `resolution` voxels along its longest side, in the model's units. */
+voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, size_t resolution,
+                                        const voxmesh_sculpt_options* options, voxmesh_sculpt** sculpt);
+void voxmesh_sculpt_free(voxmesh_sculpt* sculpt);
+
+typedef enum voxmesh_brush {
+    VOXMESH_BRUSH_ADD = 0,      /* value += strength * strength_scale * falloff */
+    VOXMESH_BRUSH_SUBTRACT = 1, /* value -= strength * strength_scale * falloff */
+    VOXMESH_BRUSH_SMOOTH = 2,   /* toward the mean of the 6 neighbours, strength 0..1 */
+    VOXMESH_BRUSH_SET = 3       /* the box center +- radius := strength */
+} voxmesh_brush;
+typedef enum voxmesh_units {
+    VOXMESH_UNITS_SAMPLES = 0, /* sample (index) coordinates */
+    VOXMESH_UNITS_WORLD = 1    /* origin + index * spacing, radii in the same units */
+} voxmesh_units;
+/* One brush dab at `center` (x, y, z) with `radius`; see voxmesh::BrushOp. */
+voxmesh_status voxmesh_sculpt_apply(voxmesh_sculpt* sculpt, int brush, const double center[3], double radius,
+                                    double strength, int units);
+/* Every sample with lo <= coordinate <= hi on each axis := value (clamped to the type). */
+voxmesh_status voxmesh_sculpt_set_region(voxmesh_sculpt* sculpt, const double lo[3], const double hi[3],
+                                         double value, int units);
+/* The samples, writable: write through data, then call voxmesh_sculpt_invalidate_all (which
+ * fails, marking nothing, where they now hold NaN or infinities). */
+voxmesh_volume_view voxmesh_sculpt_get_view(const voxmesh_sculpt* sculpt);
+void* voxmesh_sculpt_data(voxmesh_sculpt* sculpt);
+voxmesh_status voxmesh_sculpt_invalidate_all(voxmesh_sculpt* sculpt);
+
+typedef struct voxmesh_update_result {
+    const size_t* changed; /* blocks re-meshed that are or were non-empty, ascending; valid until
+                              the next update or voxmesh_sculpt_free */
+    size_t changed_count;
+    size_t remeshed;       /* dirty blocks re-meshed, empty ones included */
+    double seconds;
+} voxmesh_update_result;
+/* Re-meshes the dirty blocks (result may be NULL). Out of memory leaves them dirty. */
+voxmesh_status voxmesh_sculpt_update(voxmesh_sculpt* sculpt, voxmesh_update_result* result);
+int voxmesh_sculpt_dirty(const voxmesh_sculpt* sculpt); /* nonzero: edits not yet meshed */
+size_t voxmesh_sculpt_block_count(const voxmesh_sculpt* sculpt);
+void voxmesh_sculpt_block_grid(const voxmesh_sculpt* sculpt, size_t grid[3]); /* blocks per axis */
+
+/* One block's self-contained mesh (its own vertices; those on a face two blocks share are in
+ * both). The arrays are valid until the next update or voxmesh_sculpt_free; NULL when empty. */
+typedef struct voxmesh_block {
+    size_t index;                 /* bx + nbx * (by + nby * bz) */
+    size_t coord[3];              /* (bx, by, bz) */
+    size_t cell_begin[3], cell_end[3];
+    const float* positions;       /* xyz per vertex */
+    const float* normals;         /* xyz per vertex; NULL when normals are off */
+    const uint32_t* indices;      /* three per triangle, into this block's vertices */
+    size_t vertex_count, triangle_count;
+} voxmesh_block;
+voxmesh_status voxmesh_sculpt_get_block(const voxmesh_sculpt* sculpt, size_t index, voxmesh_block* block);
+/* The whole welded mesh, identical to voxmesh_extract of the samples (updates first). */
+voxmesh_status voxmesh_sculpt_mesh(voxmesh_sculpt* sculpt, voxmesh_mesh** mesh);
+/* Where update re-meshes: VOXMESH_BACKEND_CPU or _OPENCL, and "cpu" or the device's name. */
+int voxmesh_sculpt_backend(const voxmesh_sculpt* sculpt);
+const char* voxmesh_sculpt_device_name(const voxmesh_sculpt* sculpt);
+/* Warnings so far (a fallback to the CPU), one a line; "" when none. Valid until the next call
+ * on this sculpt. */
+const char* voxmesh_sculpt_warnings(const voxmesh_sculpt* sculpt);
+
 /* The message of the calling thread's last failed call ("" when none failed yet). Valid until
  * that thread's next call into voxmesh. */
 const char* voxmesh_last_error(void);

@@ -11,6 +11,8 @@ ctypes and numpy only.
 Models go the paper's way too: voxmesh.read_mesh("model.stl") (or Mesh.from_arrays(positions,
 indices)), voxmesh.voxelize(model, resolution=128) to a signed-distance Volume, and extract
 of that at iso 0 back in the model's units; mesh.topology() says whether a mesh is closed.
+voxmesh.Sculpt(volume) edits a copy of a volume with brushes and re-meshes only the blocks an
+edit reaches (the paper's real-time sculpting loop).
 
 A volume is a 3-D array indexed [z, y, x] (C order, so x varies fastest, as voxmesh stores
 samples); positions are x, y, z in that order: origin + index * spacing, with spacing and
@@ -21,14 +23,15 @@ The shared library is found through VOXMESH_LIBRARY (a path), else where the bui
 that made this package put it.
 """
 
+import collections
 import ctypes
 import os
 import warnings
 
 import numpy as np
 
-__all__ = ["extract", "read_volume", "read_mesh", "voxelize", "devices", "Mesh", "Volume", "Topology",
-           "VoxmeshError", "VoxmeshMemoryError", "version"]
+__all__ = ["extract", "read_volume", "read_mesh", "voxelize", "devices", "Mesh", "Volume", "Topology", "Sculpt",
+           "Block", "UpdateResult", "VoxmeshError", "VoxmeshMemoryError", "version"]
 
 _DTYPES = [np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32, np.float32, np.float64]
 _BACKENDS = {"auto": 0, "cpu": 1, "opencl": 2, "hybrid": 3}
@@ -77,6 +80,23 @@ class _Device(ctypes.Structure):
                 ("global_memory", ctypes.c_uint64), ("max_allocation", ctypes.c_uint64), ("fp64", ctypes.c_int),
                 ("host_memory", ctypes.c_int), ("platform", ctypes.c_char * 128), ("name", ctypes.c_char * 128),
                 ("version", ctypes.c_char * 128)]
+
+
+class _SculptOptions(ctypes.Structure):
+    _fields_ = [("iso", ctypes.c_double), ("threads", ctypes.c_uint), ("block_size", ctypes.c_size_t),
+                ("normals", ctypes.c_int), ("inside_below", ctypes.c_int), ("strength_scale", ctypes.c_double),
+                ("backend", ctypes.c_int), ("device", ctypes.c_int)]
+
+
+class _UpdateResult(ctypes.Structure):
+    _fields_ = [("changed", ctypes.POINTER(ctypes.c_size_t)), ("changed_count", ctypes.c_size_t),
+                ("remeshed", ctypes.c_size_t), ("seconds", ctypes.c_double)]
+
+
+class _Block(ctypes.Structure):
+    _fields_ = [("index", ctypes.c_size_t), ("coord", ctypes.c_size_t * 3), ("cell_begin", ctypes.c_size_t * 3),
+                ("cell_end", ctypes.c_size_t * 3), ("positions", ctypes.c_void_p), ("normals", ctypes.c_void_p),
+                ("indices", ctypes.c_void_p), ("vertex_count", ctypes.c_size_t), ("triangle_count", ctypes.c_size_t)]
 
 
 def _library_path():
@@ -130,11 +150,51 @@ def _load():
     lib.voxmesh_device_count.argtypes = []
     lib.voxmesh_get_device.restype = ctypes.c_int
     lib.voxmesh_get_device.argtypes = [ctypes.c_size_t, ctypes.POINTER(_Device)]
+    _declare_sculpt(lib, handle)
     lib.voxmesh_last_error.restype = ctypes.c_char_p
     lib.voxmesh_last_error.argtypes = []
     lib.voxmesh_version.restype = ctypes.c_char_p
     lib.voxmesh_version.argtypes = []
     return lib
+
+
+def _declare_sculpt(lib, handle):
+    triple = ctypes.POINTER(ctypes.c_double)
+    lib.voxmesh_default_sculpt_options.restype = _SculptOptions
+    lib.voxmesh_default_sculpt_options.argtypes = []
+    lib.voxmesh_sculpt_new.restype = ctypes.c_int
+    lib.voxmesh_sculpt_new.argtypes = [ctypes.POINTER(_VolumeView), ctypes.POINTER(_SculptOptions),
+                                       ctypes.POINTER(handle)]
+    lib.voxmesh_sculpt_from_mesh.restype = ctypes.c_int
+    lib.voxmesh_sculpt_from_mesh.argtypes = [handle, ctypes.c_size_t, ctypes.POINTER(_SculptOptions),
+                                             ctypes.POINTER(handle)]
+    lib.voxmesh_sculpt_free.restype = None
+    lib.voxmesh_sculpt_free.argtypes = [handle]
+    lib.voxmesh_sculpt_apply.restype = ctypes.c_int
+    lib.voxmesh_sculpt_apply.argtypes = [handle, ctypes.c_int, triple, ctypes.c_double, ctypes.c_double, ctypes.c_int]
+    lib.voxmesh_sculpt_set_region.restype = ctypes.c_int
+    lib.voxmesh_sculpt_set_region.argtypes = [handle, triple, triple, ctypes.c_double, ctypes.c_int]
+    lib.voxmesh_sculpt_get_view.restype = _VolumeView
+    lib.voxmesh_sculpt_get_view.argtypes = [handle]
+    lib.voxmesh_sculpt_invalidate_all.restype = ctypes.c_int
+    lib.voxmesh_sculpt_invalidate_all.argtypes = [handle]
+    lib.voxmesh_sculpt_update.restype = ctypes.c_int
+    lib.voxmesh_sculpt_update.argtypes = [handle, ctypes.POINTER(_UpdateResult)]
+    lib.voxmesh_sculpt_dirty.restype = ctypes.c_int
+    lib.voxmesh_sculpt_dirty.argtypes = [handle]
+    lib.voxmesh_sculpt_block_count.restype = ctypes.c_size_t
+    lib.voxmesh_sculpt_block_count.argtypes = [handle]
+    lib.voxmesh_sculpt_block_grid.restype = None
+    lib.voxmesh_sculpt_block_grid.argtypes = [handle, ctypes.POINTER(ctypes.c_size_t)]
+    lib.voxmesh_sculpt_get_block.restype = ctypes.c_int
+    lib.voxmesh_sculpt_get_block.argtypes = [handle, ctypes.c_size_t, ctypes.POINTER(_Block)]
+    lib.voxmesh_sculpt_mesh.restype = ctypes.c_int
+    lib.voxmesh_sculpt_mesh.argtypes = [handle, ctypes.POINTER(handle)]
+    lib.voxmesh_sculpt_backend.restype = ctypes.c_int
+    lib.voxmesh_sculpt_backend.argtypes = [handle]
+    for name in ("voxmesh_sculpt_device_name", "voxmesh_sculpt_warnings"):
+        getattr(lib, name).restype = ctypes.c_char_p
+        getattr(lib, name).argtypes = [handle]
 
 
 _lib = _load()
@@ -324,6 +384,32 @@ def _triple(name, value, default):
     return values
 
 
+def _as_view(volume, spacing, origin):
+    """A C view of a 3-D array [z, y, x] or a Volume, and the array it points into (keep it
+    alive while the view is used)."""
+    if isinstance(volume, Volume):
+        spacing = volume.spacing if spacing is None else spacing
+        origin = volume.origin if origin is None else origin
+        volume = volume.array
+    array = np.asarray(volume)
+    if array.ndim != 3:
+        raise VoxmeshError(f"volume must be 3-D, indexed [z, y, x]; got {array.ndim} dimension(s)")
+    if array.dtype == np.bool_:
+        array = array.view(np.uint8)
+    native = array.dtype.newbyteorder("=")
+    if native.type not in _DTYPES:
+        raise VoxmeshError(f"unsupported sample type {array.dtype} (uint8, int8, uint16, int16, uint32, "
+                           "int32, float32, float64: convert first, e.g. volume.astype(np.float32))")
+    array = np.ascontiguousarray(array, dtype=native)  # a copy only where the layout needs one
+    view = _VolumeView()
+    view.data = array.ctypes.data
+    view.type = _DTYPES.index(native.type)
+    view.dims[:] = [array.shape[2], array.shape[1], array.shape[0]]
+    view.spacing[:] = _triple("spacing", spacing, 1.0)
+    view.origin[:] = _triple("origin", origin, 0.0)
+    return view, array
+
+
 def read_volume(path):
     """NRRD, MetaImage, NIfTI-1 or legacy VTK, chosen by extension, as voxmesh::read_volume."""
     pointer = ctypes.c_void_p()
@@ -341,20 +427,6 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     devices: OpenCL device indices (voxmesh.devices()); device_type: "any", "cpu", "gpu" or
     "accelerator". Every backend, thread count and device gives the same mesh.
     """
-    if isinstance(volume, Volume):
-        spacing = volume.spacing if spacing is None else spacing
-        origin = volume.origin if origin is None else origin
-        volume = volume.array
-    array = np.asarray(volume)
-    if array.ndim != 3:
-        raise VoxmeshError(f"volume must be 3-D, indexed [z, y, x]; got {array.ndim} dimension(s)")
-    if array.dtype == np.bool_:
-        array = array.view(np.uint8)
-    native = array.dtype.newbyteorder("=")
-    if native.type not in _DTYPES:
-        raise VoxmeshError(f"unsupported sample type {array.dtype} (uint8, int8, uint16, int16, uint32, "
-                           "int32, float32, float64: convert first, e.g. volume.astype(np.float32))")
-    array = np.ascontiguousarray(array, dtype=native)  # a copy only where the layout needs one
     if backend not in _BACKENDS:
         raise VoxmeshError(f"unknown backend '{backend}' (auto, cpu, opencl, hybrid)")
     if device_type not in _DEVICE_TYPES:
@@ -362,14 +434,7 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     chosen = [int(d) for d in (devices or [])]
     if int(threads) < 0:
         raise VoxmeshError(f"threads must be 0 (every CPU) or more; got {threads}")
-    spacing = _triple("spacing", spacing, 1.0)
-    origin = _triple("origin", origin, 0.0)
-    view = _VolumeView()
-    view.data = array.ctypes.data
-    view.type = _DTYPES.index(native.type)
-    view.dims[:] = [array.shape[2], array.shape[1], array.shape[0]]
-    view.spacing[:] = spacing
-    view.origin[:] = origin
+    view, array = _as_view(volume, spacing, origin)  # `array` keeps the samples alive for the call
     options = _lib.voxmesh_default_options()
     options.iso = float(iso)
     options.backend = _BACKENDS[backend]
@@ -386,3 +451,193 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     for message in mesh.warnings:
         warnings.warn(message, RuntimeWarning, stacklevel=2)
     return mesh
+
+
+_BRUSHES = {"add": 0, "subtract": 1, "smooth": 2, "set": 3}
+_UNITS = {"samples": 0, "world": 1}
+
+# update(): the blocks re-meshed that are or were non-empty (ascending), how many dirty blocks
+# were re-meshed (empty ones included), and the seconds it took.
+UpdateResult = collections.namedtuple("UpdateResult", "changed remeshed seconds")
+# One block's own mesh (copied: a block's arrays change at the next update). index is
+# bx + nbx * (by + nby * bz); coord, cell_begin and cell_end are (x, y, z); positions (V, 3)
+# float32, normals (V, 3) float32 or None, indices (T, 3) uint32 into this block's vertices.
+Block = collections.namedtuple("Block", "index coord cell_begin cell_end positions normals indices")
+
+
+def _sculpt_options(iso, threads, block_size, normals, inside_below, strength_scale, backend, device):
+    if backend not in _BACKENDS:
+        raise VoxmeshError(f"unknown backend '{backend}' (cpu, opencl, auto)")
+    for name, value in (("threads", threads), ("block_size", block_size)):
+        if int(value) < 0:
+            raise VoxmeshError(f"{name} must not be negative; got {value}")
+    options = _lib.voxmesh_default_sculpt_options()
+    options.iso = float(iso)
+    options.threads = int(threads)
+    options.block_size = int(block_size)
+    options.normals = 1 if normals else 0
+    options.inside_below = 1 if inside_below else 0
+    options.strength_scale = float(strength_scale)
+    options.backend = _BACKENDS[backend]
+    options.device = int(device)
+    return options
+
+
+def _point(name, value):
+    values = [float(v) for v in value]
+    if len(values) != 3:
+        raise VoxmeshError(f"{name} must be three numbers (x, y, z); got {len(values)}")
+    return (ctypes.c_double * 3)(*values)
+
+
+class Sculpt:
+    """An editable copy of a volume whose surface is kept as a mesh in blocks (voxmesh::Sculpt):
+    a brush dab marks the blocks it can change, update() re-meshes only those, and mesh() welds
+    them into exactly extract()'s mesh of the edited samples.
+
+        sculpt = voxmesh.Sculpt(volume, iso=0.0, block_size=32)   # an array [z, y, x] or a Volume
+        sculpt.add((x, y, z), radius=6, strength=2)               # sample coordinates (units="world" too)
+        result = sculpt.update()                                  # result.changed: blocks to redraw
+        block = sculpt.block(result.changed[0])                   # that block's own mesh
+        mesh = sculpt.mesh()
+
+    The samples are copied: uint8 and uint16 as they are, other types as float32.
+    Brushes: add / subtract change the field by strength * strength_scale with a smooth falloff
+    inside the radius; smooth moves samples toward their neighbours' mean (strength 0..1); set_region
+    sets a box. `array` is the samples themselves, writable: write to it, then invalidate_all().
+    backend "opencl" (or "auto": a GPU when there is one) re-meshes on an OpenCL device. A
+    Sculpt is used from one thread at a time.
+    """
+
+    def __init__(self, volume, iso=0.0, spacing=None, origin=None, threads=0, block_size=32, normals=True,
+                 inside_below=False, strength_scale=0.0, backend="cpu", device=-1):
+        options = _sculpt_options(iso, threads, block_size, normals, inside_below, strength_scale, backend, device)
+        if isinstance(volume, Volume):
+            spacing = volume.spacing if spacing is None else spacing
+            origin = volume.origin if origin is None else origin
+            volume = volume.array
+        volume = np.asarray(volume)
+        if volume.dtype.type not in (np.uint8, np.uint16, np.float32, np.bool_):
+            # The sculpt keeps u8, u16 or f32 samples in a copy of its own: make that copy float32.
+            volume = volume.astype(np.float32)
+        view, array = _as_view(volume, spacing, origin)  # the library copies the samples
+        pointer = ctypes.c_void_p()
+        _check(_lib.voxmesh_sculpt_new(ctypes.byref(view), ctypes.byref(options), ctypes.byref(pointer)))
+        del array
+        self._adopt(pointer.value)
+
+    def _adopt(self, pointer):
+        self._handle = _Handle(pointer, _lib.voxmesh_sculpt_free)
+        view = _lib.voxmesh_sculpt_get_view(pointer)
+        nx, ny, nz = view.dims
+        # The samples [z, y, x], writable; call invalidate_all() after writing to them.
+        self.array = _view(view.data, (nz, ny, nx), _DTYPES[view.type], self._handle)
+        self.spacing = tuple(view.spacing)
+        self.origin = tuple(view.origin)
+        for message in self.warnings:
+            warnings.warn(message, RuntimeWarning, stacklevel=3)
+
+    @classmethod
+    def from_mesh(cls, model, resolution=128, threads=0, block_size=32, normals=True, strength_scale=0.0,
+                  backend="cpu", device=-1):
+        """A closed model (a Mesh, or a (positions, indices) pair) voxelized to a signed distance
+        field with `resolution` voxels along its longest side: float32, positive inside, iso 0, in
+        the model's units; brush strengths are in voxels of surface displacement."""
+        if not isinstance(model, Mesh):
+            model = Mesh.from_arrays(*model)
+        if int(resolution) < 0:
+            raise VoxmeshError(f"resolution must not be negative; got {resolution}")
+        options = _sculpt_options(0.0, threads, block_size, normals, False, strength_scale, backend, device)
+        pointer = ctypes.c_void_p()
+        _check(_lib.voxmesh_sculpt_from_mesh(model._handle.pointer, int(resolution), ctypes.byref(options),
+                                             ctypes.byref(pointer)))
+        sculpt = cls.__new__(cls)
+        sculpt._adopt(pointer.value)
+        return sculpt
+
+    def apply(self, brush, center, radius, strength=1.0, units="samples"):
+        """One dab: brush "add", "subtract", "smooth" or "set" (the box center +- radius :=
+        strength) at center (x, y, z), in "samples" (index) or "world" units."""
+        if brush not in _BRUSHES:
+            raise VoxmeshError(f"unknown brush '{brush}' (add, subtract, smooth, set)")
+        if units not in _UNITS:
+            raise VoxmeshError(f"unknown units '{units}' (samples, world)")
+        _check(_lib.voxmesh_sculpt_apply(self._handle.pointer, _BRUSHES[brush], _point("center", center),
+                                         float(radius), float(strength), _UNITS[units]))
+
+    def add(self, center, radius, strength=1.0, units="samples"):
+        self.apply("add", center, radius, strength, units)
+
+    def subtract(self, center, radius, strength=1.0, units="samples"):
+        self.apply("subtract", center, radius, strength, units)
+
+    def smooth(self, center, radius, strength=0.5, units="samples"):
+        self.apply("smooth", center, radius, strength, units)
+
+    def set_region(self, lo, hi, value, units="samples"):
+        """Every sample with lo <= coordinate <= hi on each axis := value (clamped to the type)."""
+        if units not in _UNITS:
+            raise VoxmeshError(f"unknown units '{units}' (samples, world)")
+        _check(_lib.voxmesh_sculpt_set_region(self._handle.pointer, _point("lo", lo), _point("hi", hi),
+                                              float(value), _UNITS[units]))
+
+    def invalidate_all(self):
+        """Marks every block dirty after writes to `array`; refuses NaN or infinite samples."""
+        _check(_lib.voxmesh_sculpt_invalidate_all(self._handle.pointer))
+
+    def update(self):
+        """Re-meshes the dirty blocks; an UpdateResult."""
+        result = _UpdateResult()
+        _check(_lib.voxmesh_sculpt_update(self._handle.pointer, ctypes.byref(result)))
+        changed = [result.changed[i] for i in range(result.changed_count)]
+        return UpdateResult(changed, result.remeshed, result.seconds)
+
+    @property
+    def dirty(self):
+        """Edits not yet meshed."""
+        return bool(_lib.voxmesh_sculpt_dirty(self._handle.pointer))
+
+    @property
+    def block_count(self):
+        return _lib.voxmesh_sculpt_block_count(self._handle.pointer)
+
+    @property
+    def block_grid(self):
+        """Blocks per axis (x, y, z)."""
+        grid = (ctypes.c_size_t * 3)()
+        _lib.voxmesh_sculpt_block_grid(self._handle.pointer, grid)
+        return tuple(grid)
+
+    def block(self, index):
+        """Block `index`'s mesh as of the last update (a Block of copies)."""
+        if not 0 <= int(index) < self.block_count:
+            raise VoxmeshError(f"block {index} does not exist ({self.block_count} blocks)")
+        found = _Block()
+        _check(_lib.voxmesh_sculpt_get_block(self._handle.pointer, int(index), ctypes.byref(found)))
+        v, t = found.vertex_count, found.triangle_count
+        positions = _view(found.positions, (v, 3), np.float32, None).copy()
+        normals = _view(found.normals, (v, 3), np.float32, None).copy() if found.normals else None
+        indices = _view(found.indices, (t, 3), np.uint32, None).copy()
+        return Block(found.index, tuple(found.coord), tuple(found.cell_begin), tuple(found.cell_end), positions,
+                     normals, indices)
+
+    def mesh(self):
+        """The whole welded mesh, exactly extract()'s of the samples (updates first)."""
+        pointer = ctypes.c_void_p()
+        _check(_lib.voxmesh_sculpt_mesh(self._handle.pointer, ctypes.byref(pointer)))
+        return Mesh(pointer.value)
+
+    @property
+    def backend(self):
+        """Where update() re-meshes: "cpu" or "opencl"."""
+        return _BACKEND_NAMES[_lib.voxmesh_sculpt_backend(self._handle.pointer)]
+
+    @property
+    def device_name(self):
+        """"cpu" or the OpenCL device's name."""
+        return _lib.voxmesh_sculpt_device_name(self._handle.pointer).decode(errors="replace")
+
+    @property
+    def warnings(self):
+        """The library's warnings so far (a fallback to the CPU), also issued as RuntimeWarning."""
+        return _lib.voxmesh_sculpt_warnings(self._handle.pointer).decode(errors="replace").splitlines()

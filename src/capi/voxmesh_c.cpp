@@ -1,13 +1,16 @@
 // The C API (include/voxmesh/voxmesh.h): thin wrappers that turn arguments into the C++ API's
 // types and every exception into a status plus a per-thread message.
 #include <voxmesh/io.hpp>
+#include <voxmesh/sculpt.hpp>
 #include <voxmesh/voxelize.hpp>
 #include <voxmesh/voxmesh.h>
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <iterator>
+#include <memory>
 #include <new>
 #include <string>
 #include <utility>
@@ -22,6 +25,13 @@ struct voxmesh_mesh {
 
 struct voxmesh_volume {
     voxmesh::Volume volume;
+};
+
+struct voxmesh_sculpt {
+    voxmesh::Sculpt sculpt;
+    std::shared_ptr<std::string> warnings;  // what SculptOptions::log was told, one a line
+    voxmesh::UpdateResult last_update{};    // keeps voxmesh_update_result::changed alive
+    mutable std::string device_name{};      // keeps voxmesh_sculpt_device_name's text alive
 };
 
 namespace {
@@ -60,12 +70,12 @@ void require(const void* pointer, const char* who, const char* what) {
     if (!pointer) throw voxmesh::Error(std::string(who) + ": " + what + " is NULL");
 }
 
-voxmesh::ScalarType scalar_type(int type) {
+voxmesh::ScalarType scalar_type(int type, const char* who) {
     using voxmesh::ScalarType;
     static constexpr ScalarType kTypes[] = {ScalarType::U8,  ScalarType::I8,  ScalarType::U16, ScalarType::I16,
                                             ScalarType::U32, ScalarType::I32, ScalarType::F32, ScalarType::F64};
     if (type < 0 || type >= static_cast<int>(std::size(kTypes)))
-        throw voxmesh::Error("voxmesh_extract: unknown scalar type " + std::to_string(type) +
+        throw voxmesh::Error(std::string(who) + ": unknown scalar type " + std::to_string(type) +
                              " (VOXMESH_U8 .. VOXMESH_F64)");
     return kTypes[type];
 }
@@ -85,7 +95,7 @@ int scalar_code(voxmesh::ScalarType type) {
     return -1;
 }
 
-voxmesh::Backend backend(int code) {
+voxmesh::Backend backend(int code, const char* who) {
     using voxmesh::Backend;
     switch (code) {
         case VOXMESH_BACKEND_AUTO: return Backend::Auto;
@@ -93,7 +103,7 @@ voxmesh::Backend backend(int code) {
         case VOXMESH_BACKEND_OPENCL: return Backend::OpenCL;
         case VOXMESH_BACKEND_HYBRID: return Backend::Hybrid;
         default:
-            throw voxmesh::Error("voxmesh_extract: unknown backend " + std::to_string(code) +
+            throw voxmesh::Error(std::string(who) + ": unknown backend " + std::to_string(code) +
                                  " (VOXMESH_BACKEND_AUTO, _CPU, _OPENCL or _HYBRID)");
     }
 }
@@ -156,6 +166,31 @@ const T* data_or_null(const std::vector<T>& array) {
     return array.empty() ? nullptr : array.data();
 }
 
+// C sculpt options to the C++ ones, with a log that keeps the warnings for the C caller.
+voxmesh::SculptOptions sculpt_options(const voxmesh_sculpt_options& given, const std::shared_ptr<std::string>& warnings,
+                                      const char* who) {
+    voxmesh::SculptOptions cpp;
+    cpp.iso = given.iso;
+    cpp.threads = given.threads;
+    cpp.block_size = given.block_size;
+    cpp.normals = given.normals != 0;
+    cpp.inside_below = given.inside_below != 0;
+    cpp.strength_scale = given.strength_scale;
+    cpp.backend = backend(given.backend, who);
+    cpp.device = given.device;
+    cpp.log = [warnings](const std::string& message) { *warnings += message + "\n"; };
+    return cpp;
+}
+
+voxmesh::Units units(int code, const char* who) {
+    if (code == VOXMESH_UNITS_SAMPLES) return voxmesh::Units::Samples;
+    if (code == VOXMESH_UNITS_WORLD) return voxmesh::Units::World;
+    throw voxmesh::Error(std::string(who) + ": unknown units " + std::to_string(code) +
+                         " (VOXMESH_UNITS_SAMPLES or VOXMESH_UNITS_WORLD)");
+}
+
+std::array<double, 3> point(const double* xyz) { return {xyz[0], xyz[1], xyz[2]}; }
+
 }  // namespace
 
 extern "C" {
@@ -213,11 +248,11 @@ voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_
         const voxmesh_options given = options ? *options : voxmesh_default_options();
         voxmesh::VolumeView view;
         view.data = volume->data;
-        view.type = scalar_type(volume->type);
+        view.type = scalar_type(volume->type, "voxmesh_extract");
         copy_geometry(*volume, view);
         voxmesh::Options cpp;
         cpp.iso = given.iso;
-        cpp.backend = backend(given.backend);
+        cpp.backend = backend(given.backend, "voxmesh_extract");
         cpp.threads = given.threads;
         cpp.normals = given.normals != 0;
         cpp.inside_below = given.inside_below != 0;
@@ -359,6 +394,171 @@ voxmesh_volume_view voxmesh_volume_get_view(const voxmesh_volume* volume) {
 }
 
 void voxmesh_volume_free(voxmesh_volume* volume) { delete volume; }
+
+voxmesh_sculpt_options voxmesh_default_sculpt_options(void) {
+    const voxmesh::SculptOptions defaults;
+    voxmesh_sculpt_options options{};
+    options.iso = defaults.iso;
+    options.threads = defaults.threads;
+    options.block_size = defaults.block_size;
+    options.normals = defaults.normals;
+    options.inside_below = defaults.inside_below;
+    options.strength_scale = defaults.strength_scale;
+    options.backend = backend_code(defaults.backend);
+    options.device = defaults.device;
+    return options;
+}
+
+voxmesh_status voxmesh_sculpt_new(const voxmesh_volume_view* volume, const voxmesh_sculpt_options* options,
+                                  voxmesh_sculpt** sculpt) {
+    if (sculpt) *sculpt = nullptr;
+    return guarded([&] {
+        require(sculpt, "voxmesh_sculpt_new", "the sculpt pointer");
+        require(volume, "voxmesh_sculpt_new", "the volume");
+        voxmesh::VolumeView view;
+        view.data = volume->data;
+        view.type = scalar_type(volume->type, "voxmesh_sculpt_new");
+        copy_geometry(*volume, view);
+        auto warnings = std::make_shared<std::string>();
+        const voxmesh_sculpt_options given = options ? *options : voxmesh_default_sculpt_options();
+        voxmesh::Sculpt made(view, sculpt_options(given, warnings, "voxmesh_sculpt_new"));
+        *sculpt = new voxmesh_sculpt{std::move(made), std::move(warnings)};
+    });
+}
+
+voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, size_t resolution,
+                                        const voxmesh_sculpt_options* options, voxmesh_sculpt** sculpt) {
+    if (sculpt) *sculpt = nullptr;
+    return guarded([&] {
+        require(sculpt, "voxmesh_sculpt_from_mesh", "the sculpt pointer");
+        require(model, "voxmesh_sculpt_from_mesh", "the model");
+        auto warnings = std::make_shared<std::string>();
+        const voxmesh_sculpt_options given = options ? *options : voxmesh_default_sculpt_options();
+        const voxmesh::SculptOptions cpp = sculpt_options(given, warnings, "voxmesh_sculpt_from_mesh");
+        voxmesh::Sculpt made = voxmesh::Sculpt::from_mesh(model->mesh, resolution, cpp);
+        *sculpt = new voxmesh_sculpt{std::move(made), std::move(warnings)};
+    });
+}
+
+void voxmesh_sculpt_free(voxmesh_sculpt* sculpt) { delete sculpt; }
+
+voxmesh_status voxmesh_sculpt_apply(voxmesh_sculpt* sculpt, int brush, const double center[3], double radius,
+                                    double strength, int units_code) {
+    return guarded([&] {
+        require(sculpt, "voxmesh_sculpt_apply", "the sculpt");
+        require(center, "voxmesh_sculpt_apply", "the center");
+        using voxmesh::BrushOp;
+        static constexpr BrushOp kOps[] = {BrushOp::Add, BrushOp::Subtract, BrushOp::Smooth, BrushOp::Set};
+        if (brush < 0 || brush >= static_cast<int>(std::size(kOps)))
+            throw voxmesh::Error("voxmesh_sculpt_apply: unknown brush " + std::to_string(brush) +
+                                 " (VOXMESH_BRUSH_ADD, _SUBTRACT, _SMOOTH or _SET)");
+        voxmesh::Dab dab;
+        dab.op = kOps[brush];
+        dab.center = point(center);
+        dab.radius = radius;
+        dab.strength = strength;
+        sculpt->sculpt.apply(dab, units(units_code, "voxmesh_sculpt_apply"));
+    });
+}
+
+voxmesh_status voxmesh_sculpt_set_region(voxmesh_sculpt* sculpt, const double lo[3], const double hi[3],
+                                         double value, int units_code) {
+    return guarded([&] {
+        require(sculpt, "voxmesh_sculpt_set_region", "the sculpt");
+        require(lo, "voxmesh_sculpt_set_region", "lo");
+        require(hi, "voxmesh_sculpt_set_region", "hi");
+        sculpt->sculpt.set_region(point(lo), point(hi), value, units(units_code, "voxmesh_sculpt_set_region"));
+    });
+}
+
+voxmesh_volume_view voxmesh_sculpt_get_view(const voxmesh_sculpt* sculpt) {
+    voxmesh_volume_view view{};
+    if (!sculpt) return view;
+    const voxmesh::VolumeView v = sculpt->sculpt.view();
+    view.data = v.data;
+    view.type = scalar_code(v.type);
+    copy_geometry(v, view);
+    return view;
+}
+
+void* voxmesh_sculpt_data(voxmesh_sculpt* sculpt) { return sculpt ? sculpt->sculpt.data() : nullptr; }
+
+voxmesh_status voxmesh_sculpt_invalidate_all(voxmesh_sculpt* sculpt) {
+    return guarded([&] {
+        require(sculpt, "voxmesh_sculpt_invalidate_all", "the sculpt");
+        sculpt->sculpt.invalidate_all();
+    });
+}
+
+voxmesh_status voxmesh_sculpt_update(voxmesh_sculpt* sculpt, voxmesh_update_result* result) {
+    if (result) *result = voxmesh_update_result{};
+    return guarded([&] {
+        require(sculpt, "voxmesh_sculpt_update", "the sculpt");
+        sculpt->last_update = sculpt->sculpt.update();
+        if (!result) return;
+        const voxmesh::UpdateResult& r = sculpt->last_update;
+        result->changed = data_or_null(r.changed);
+        result->changed_count = r.changed.size();
+        result->remeshed = r.remeshed;
+        result->seconds = r.seconds;
+    });
+}
+
+int voxmesh_sculpt_dirty(const voxmesh_sculpt* sculpt) { return sculpt && sculpt->sculpt.dirty(); }
+size_t voxmesh_sculpt_block_count(const voxmesh_sculpt* sculpt) { return sculpt ? sculpt->sculpt.block_count() : 0; }
+void voxmesh_sculpt_block_grid(const voxmesh_sculpt* sculpt, size_t grid[3]) {
+    if (!grid) return;
+    const std::array<std::size_t, 3> g = sculpt ? sculpt->sculpt.block_grid() : std::array<std::size_t, 3>{};
+    for (int a = 0; a < 3; ++a) grid[a] = g[a];
+}
+
+voxmesh_status voxmesh_sculpt_get_block(const voxmesh_sculpt* sculpt, size_t index, voxmesh_block* block) {
+    return guarded([&] {
+        require(sculpt, "voxmesh_sculpt_get_block", "the sculpt");
+        require(block, "voxmesh_sculpt_get_block", "the block pointer");
+        if (index >= sculpt->sculpt.block_count())
+            throw voxmesh::Error("voxmesh_sculpt_get_block: block " + std::to_string(index) + " does not exist (" +
+                                 std::to_string(sculpt->sculpt.block_count()) + " blocks)");
+        const voxmesh::BlockMesh b = sculpt->sculpt.block(index);
+        *block = voxmesh_block{};
+        block->index = b.index;
+        for (int a = 0; a < 3; ++a) {
+            block->coord[a] = b.coord[a];
+            block->cell_begin[a] = b.cell_begin[a];
+            block->cell_end[a] = b.cell_end[a];
+        }
+        block->positions = b.positions.empty() ? nullptr : b.positions.data();
+        block->normals = b.normals.empty() ? nullptr : b.normals.data();
+        block->indices = b.indices.empty() ? nullptr : b.indices.data();
+        block->vertex_count = b.vertex_count();
+        block->triangle_count = b.triangle_count();
+    });
+}
+
+voxmesh_status voxmesh_sculpt_mesh(voxmesh_sculpt* sculpt, voxmesh_mesh** mesh) {
+    if (mesh) *mesh = nullptr;
+    return guarded([&] {
+        require(mesh, "voxmesh_sculpt_mesh", "the mesh pointer");
+        require(sculpt, "voxmesh_sculpt_mesh", "the sculpt");
+        *mesh = new voxmesh_mesh{sculpt->sculpt.mesh()};  // no stats: not an extract
+    });
+}
+
+int voxmesh_sculpt_backend(const voxmesh_sculpt* sculpt) {
+    return sculpt ? backend_code(sculpt->sculpt.backend()) : VOXMESH_BACKEND_AUTO;
+}
+
+const char* voxmesh_sculpt_device_name(const voxmesh_sculpt* sculpt) {
+    if (!sculpt) return "";
+    try {
+        sculpt->device_name = sculpt->sculpt.device_name();
+    } catch (...) {
+        return "";
+    }
+    return sculpt->device_name.c_str();
+}
+
+const char* voxmesh_sculpt_warnings(const voxmesh_sculpt* sculpt) { return sculpt ? sculpt->warnings->c_str() : ""; }
 
 const char* voxmesh_last_error(void) { return g_last_error.c_str(); }
 
