@@ -402,6 +402,104 @@ class SculptTest(unittest.TestCase):
         self.assertTrue(np.array_equal(mesh.indices, want.indices))
 
 
+class BytesAndFilesTest(unittest.TestCase):
+    """Meshes and volumes to and from bytes, raw files, NRRD writes, the file's facts,
+    largest_components and per-device stats."""
+
+    def test_mesh_bytes_are_the_files_bytes_and_read_back(self):
+        mesh = voxmesh.extract(sphere(20, 6.0))
+        scratch = tempfile.mkdtemp(dir=os.environ.get("VOXMESH_TEST_SCRATCH"))
+        for fmt in ("stl", "ply", "obj"):
+            path = os.path.join(scratch, "mesh." + fmt)
+            mesh.write(path)
+            data = mesh.to_bytes(fmt)
+            with open(path, "rb") as f:
+                self.assertEqual(f.read(), data)
+            back = voxmesh.read_mesh(data, name="part." + fmt)
+            self.assertTrue(np.array_equal(back.indices, voxmesh.read_mesh(path).indices))
+            self.assertTrue(np.array_equal(back.positions, voxmesh.read_mesh(path).positions))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "xyz"):
+            mesh.to_bytes("xyz")
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "name="):
+            voxmesh.read_mesh(b"solid x\n")
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "'junk.stl'"):
+            voxmesh.read_mesh(b"solid x\nfacet normal 0 0\n", name="junk.stl")
+
+    def test_volumes_from_bytes_with_what_the_file_said(self):
+        path = os.path.join(DATA, "headsq.nrrd")
+        with open(path, "rb") as f:
+            data = f.read()
+        from_file = voxmesh.read_volume(path)
+        from_bytes = voxmesh.read_volume(data, name="headsq.nrrd")
+        self.assertTrue(np.array_equal(from_file.array, from_bytes.array))
+        self.assertEqual(from_file.spacing, from_bytes.spacing)
+        self.assertEqual(from_file.info, from_bytes.info)
+        self.assertEqual(from_file.info["format"], "nrrd")
+        self.assertEqual(from_file.info["flipped"], (False, False, False))
+        nifti = voxmesh.read_volume(os.path.join(DATA, "mri_someones_anatomy.nii.gz"))
+        self.assertEqual(nifti.info["format"], "nifti")
+        self.assertEqual(nifti.info["encoding"], "gzip")
+        self.assertIsNone(voxmesh.voxelize(voxmesh.read_mesh(os.path.join(DATA, "unit_sphere.stl")), resolution=16).info)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "'cut.nrrd'"):
+            voxmesh.read_volume(data[:200], name="cut.nrrd")
+
+    def test_raw_files_and_nrrd_writes(self):
+        scratch = tempfile.mkdtemp(dir=os.environ.get("VOXMESH_TEST_SCRATCH"))
+        samples = (np.arange(5 * 6 * 7) * 37 % 1000).astype(np.uint16).reshape(5, 6, 7)
+        raw = os.path.join(scratch, "samples.raw")
+        with open(raw, "wb") as f:
+            f.write(b"hdr" + samples.astype(">u2").tobytes())
+        volume = voxmesh.read_raw(raw, shape=(5, 6, 7), dtype=np.uint16, big_endian=True, offset=3,
+                                  spacing=(-0.5, 1.0, 2.0), origin=(3.0, 0.0, 0.0))
+        self.assertTrue(np.array_equal(volume.array, samples[:, :, ::-1]))  # x stored reversed
+        self.assertEqual(volume.info["flipped"], (True, False, False))
+        self.assertEqual(volume.spacing, (0.5, 1.0, 2.0))
+        self.assertEqual(volume.origin, (0.0, 0.0, 0.0))  # 3 - 0.5 * 6: the minimum corner
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "samples.raw"):
+            voxmesh.read_raw(raw, shape=(5, 6, 7), dtype=np.uint16, offset=4)
+
+        out = os.path.join(scratch, "out.nrrd")
+        voxmesh.write_nrrd(out, samples, spacing=(0.25, 0.5, 4.0), origin=(1.0, 2.0, 3.0))
+        back = voxmesh.read_volume(out)
+        self.assertTrue(np.array_equal(back.array, samples))
+        self.assertEqual(back.spacing, (0.25, 0.5, 4.0))
+        self.assertEqual(back.origin, (1.0, 2.0, 3.0))
+        with open(out, "rb") as f:
+            self.assertEqual(f.read(), voxmesh.write_nrrd(None, samples, spacing=(0.25, 0.5, 4.0),
+                                                          origin=(1.0, 2.0, 3.0)))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "spacing"):
+            voxmesh.write_nrrd(out, samples, spacing=(0.0, 1.0, 1.0))
+        self.assertTrue(np.array_equal(voxmesh.read_volume(out).array, samples))  # nothing lost
+
+    def test_largest_components_drops_the_small_ball(self):
+        z, y, x = np.mgrid[:24, :24, :40]
+        small = 4.0 - np.sqrt((x - 8) ** 2 + (y - 12) ** 2 + (z - 12) ** 2)
+        large = 8.0 - np.sqrt((x - 27) ** 2 + (y - 12) ** 2 + (z - 12) ** 2)
+        mesh = voxmesh.extract(np.maximum(small, large).astype(np.float32))
+        self.assertEqual(mesh.topology().components, 2)
+        kept = mesh.largest_components()
+        self.assertEqual(kept.topology().components, 1)
+        self.assertGreater(kept.positions[:, 0].min(), 18)  # the large ball's
+        self.assertEqual(mesh.largest_components(2).triangle_count, mesh.triangle_count)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "at least 1"):
+            mesh.largest_components(0)
+
+    def test_chunks_and_per_device_stats(self):
+        volume = sphere(32, 10.0)
+        if voxmesh.devices():
+            mesh = voxmesh.extract(volume, backend="opencl", chunk_planes=4)
+            device = mesh.stats["devices"][0]
+            self.assertEqual(device["name"], voxmesh.devices()[0]["name"])
+            self.assertGreaterEqual(device["chunks"], 31 // 4)
+        else:
+            mesh = voxmesh.extract(volume, backend="cpu")
+            self.assertEqual(mesh.stats["devices"][0]["name"], "cpu")
+        self.assertGreaterEqual(sum(d["voxels"] for d in mesh.stats["devices"]), volume.size)
+        self.assertTrue(np.array_equal(mesh.indices, voxmesh.extract(volume, backend="cpu").indices))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "chunk_planes"):
+            voxmesh.extract(volume, chunk_planes=-1)
+
+
 class FilesTest(unittest.TestCase):
     def test_head_ct_gives_vtks_count_and_the_tools_bytes(self):
         volume = voxmesh.read_volume(os.path.join(DATA, "headsq.nrrd"))

@@ -62,8 +62,8 @@ typedef enum voxmesh_device_type {
     VOXMESH_DEVICE_ACCELERATOR = 3
 } voxmesh_device_type;
 
-/* The C++ voxmesh::Options without chunk_planes, memory_budget and the log (warnings are kept
- * with the mesh: voxmesh_mesh_warnings). */
+/* The C++ voxmesh::Options without the log (warnings are kept with the mesh:
+ * voxmesh_mesh_warnings). */
 typedef struct voxmesh_options {
     double iso;           /* a sample is inside when value >= iso */
     int backend;          /* a voxmesh_backend */
@@ -73,9 +73,12 @@ typedef struct voxmesh_options {
     const int* devices;   /* OpenCL devices by index (voxmesh_get_device); NULL: every device */
     size_t device_count;  /*   of device_type */
     int device_type;      /* a voxmesh_device_type */
+    size_t chunk_planes;  /* OpenCL and Hybrid: z-planes per chunk; 0: automatic */
+    size_t memory_budget; /* OpenCL and Hybrid: bytes per device for one chunk; 0: the device's limits */
 } voxmesh_options;
 
-/* iso 0, backend auto, threads 0, normals on, inside_below off, every device of any type. */
+/* iso 0, backend auto, threads 0, normals on, inside_below off, every device of any type,
+ * automatic chunks. */
 voxmesh_options voxmesh_default_options(void);
 
 /* The OpenCL devices (voxmesh::list_devices; none without OpenCL or a platform). */
@@ -120,6 +123,17 @@ typedef struct voxmesh_stats {
     double classify_s, scan_s, generate_s, total_s; /* seconds per pass, and in all */
 } voxmesh_stats;
 voxmesh_stats voxmesh_mesh_stats(const voxmesh_mesh* mesh);
+/* Per device of that extract (voxmesh::DeviceStats): "cpu" or an OpenCL device, its chunks and
+ * samples, and seconds; voxmesh_mesh_device_stats_count is 0 for a mesh no extract made. */
+typedef struct voxmesh_device_stats {
+    char name[128];              /* "cpu" or the OpenCL device's name (truncated, terminated) */
+    size_t chunks, voxels;       /* chunks meshed, samples in them */
+    double kernel_s, transfer_s, wall_s, setup_s; /* device time, copies, wall, program builds */
+    size_t programs_built;       /* OpenCL programs compiled in this call (0 once cached) */
+    size_t chunks_handed_over;   /* Hybrid: this device's chunks the CPU meshed instead */
+} voxmesh_device_stats;
+size_t voxmesh_mesh_device_stats_count(const voxmesh_mesh* mesh);
+voxmesh_status voxmesh_mesh_get_device_stats(const voxmesh_mesh* mesh, size_t index, voxmesh_device_stats* stats);
 /* That extract's warnings (a fallback to the CPU engine, a spacing too fine for float vertices,
  * ...), one a line; "" when there were none. Valid until voxmesh_mesh_free. */
 const char* voxmesh_mesh_warnings(const voxmesh_mesh* mesh);
@@ -132,6 +146,22 @@ voxmesh_status voxmesh_read_mesh(const char* path, voxmesh_mesh** mesh);
  * (normals none). Not checked here: the calls that use a mesh check it (indices in range). */
 voxmesh_status voxmesh_mesh_from_arrays(const float* positions, size_t vertex_count, const uint32_t* indices,
                                         size_t triangle_count, voxmesh_mesh** mesh);
+
+/* Bytes made in memory (voxmesh_write_mesh_to_memory, voxmesh_write_nrrd_to_memory). */
+typedef struct voxmesh_bytes voxmesh_bytes;
+const unsigned char* voxmesh_bytes_data(const voxmesh_bytes* bytes); /* NULL when empty */
+size_t voxmesh_bytes_size(const voxmesh_bytes* bytes);
+void voxmesh_bytes_free(voxmesh_bytes* bytes);
+
+/* The bytes voxmesh_write_mesh would write; `name` ("part.stl") picks the format by extension
+ * and names the output in errors. */
+voxmesh_status voxmesh_write_mesh_to_memory(const voxmesh_mesh* mesh, const char* name, voxmesh_bytes** bytes);
+/* voxmesh_read_mesh over `size` bytes at `data`; `name` stands for the file's path. */
+voxmesh_status voxmesh_read_mesh_from_memory(const void* data, size_t size, const char* name, voxmesh_mesh** mesh);
+
+/* The `count` connected pieces with the most triangles, in their order (see
+ * voxmesh::keep_largest_components): a CT's surface without the specks around it. */
+voxmesh_status voxmesh_keep_largest_components(const voxmesh_mesh* mesh, size_t count, voxmesh_mesh** kept);
 
 /* voxmesh::MeshTopology: closed when both edge counts are 0. */
 typedef struct voxmesh_topology {
@@ -161,6 +191,40 @@ voxmesh_status voxmesh_voxelize(const voxmesh_mesh* mesh, const voxmesh_voxelize
 
 /* NRRD, MetaImage, NIfTI-1 or legacy VTK, by extension (as voxmesh::read_volume). */
 voxmesh_status voxmesh_read_volume(const char* path, voxmesh_volume** volume);
+/* The same over `size` bytes at `data` (copied); `name` ("scan.nii.gz") stands for the path. */
+voxmesh_status voxmesh_read_volume_from_memory(const void* data, size_t size, const char* name,
+                                               voxmesh_volume** volume);
+
+/* Headerless samples, described by the caller (voxmesh::RawLayout): the file holds exactly
+ * offset + nx * ny * nz * sample size bytes. */
+typedef struct voxmesh_raw_layout {
+    size_t dims[3];
+    int type;          /* a voxmesh_scalar_type */
+    int big_endian;    /* nonzero: samples stored big-endian */
+    size_t offset;     /* bytes before the first sample */
+    double spacing[3];
+    double origin[3];
+} voxmesh_raw_layout;
+/* dims 0, u8, little-endian, offset 0, spacing 1, origin 0. */
+voxmesh_raw_layout voxmesh_default_raw_layout(void);
+voxmesh_status voxmesh_read_raw(const char* path, const voxmesh_raw_layout* layout, voxmesh_volume** volume);
+
+/* What the file said beyond the samples (voxmesh::VolumeInfo), for a volume read from a file
+ * or bytes; all zero (value_scale 1) for a voxelized one. */
+typedef struct voxmesh_volume_info {
+    char format[16];      /* "nrrd", "metaimage", "nifti", "vtk", "raw"; "" when not read */
+    char encoding[16];    /* "raw", "gzip" or "ascii" */
+    int big_endian;       /* the stored samples' byte order */
+    int flipped[3];       /* axes stored in the negative direction, reversed on load */
+    int rotation_dropped; /* a direction matrix that is not diagonal was dropped */
+    double value_scale, value_offset; /* NIfTI scl_slope / scl_inter (not applied): 1 and 0 elsewhere */
+} voxmesh_volume_info;
+voxmesh_volume_info voxmesh_volume_get_info(const voxmesh_volume* volume);
+
+/* NRRD (raw, host byte order) through a temporary renamed into place (voxmesh::write_nrrd). */
+voxmesh_status voxmesh_write_nrrd(const char* path, const voxmesh_volume_view* volume);
+voxmesh_status voxmesh_write_nrrd_to_memory(const voxmesh_volume_view* volume, const char* name,
+                                            voxmesh_bytes** bytes);
 /* The samples, valid until voxmesh_volume_free. */
 voxmesh_volume_view voxmesh_volume_get_view(const voxmesh_volume* volume);
 void voxmesh_volume_free(voxmesh_volume* volume);

@@ -30,7 +30,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["extract", "read_volume", "read_mesh", "voxelize", "devices", "Mesh", "Volume", "Topology", "Sculpt",
+__all__ = ["extract", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices", "Mesh", "Volume", "Topology", "Sculpt",
            "Block", "UpdateResult", "VoxmeshError", "VoxmeshMemoryError", "version"]
 
 _DTYPES = [np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32, np.float32, np.float64]
@@ -72,7 +72,8 @@ class _Stats(ctypes.Structure):
 class _Options(ctypes.Structure):
     _fields_ = [("iso", ctypes.c_double), ("backend", ctypes.c_int), ("threads", ctypes.c_uint),
                 ("normals", ctypes.c_int), ("inside_below", ctypes.c_int), ("devices", ctypes.POINTER(ctypes.c_int)),
-                ("device_count", ctypes.c_size_t), ("device_type", ctypes.c_int)]
+                ("device_count", ctypes.c_size_t), ("device_type", ctypes.c_int), ("chunk_planes", ctypes.c_size_t),
+                ("memory_budget", ctypes.c_size_t)]
 
 
 class _Device(ctypes.Structure):
@@ -80,6 +81,24 @@ class _Device(ctypes.Structure):
                 ("global_memory", ctypes.c_uint64), ("max_allocation", ctypes.c_uint64), ("fp64", ctypes.c_int),
                 ("host_memory", ctypes.c_int), ("platform", ctypes.c_char * 128), ("name", ctypes.c_char * 128),
                 ("version", ctypes.c_char * 128)]
+
+
+class _DeviceStats(ctypes.Structure):
+    _fields_ = [("name", ctypes.c_char * 128), ("chunks", ctypes.c_size_t), ("voxels", ctypes.c_size_t),
+                ("kernel_s", ctypes.c_double), ("transfer_s", ctypes.c_double), ("wall_s", ctypes.c_double),
+                ("setup_s", ctypes.c_double), ("programs_built", ctypes.c_size_t),
+                ("chunks_handed_over", ctypes.c_size_t)]
+
+
+class _RawLayout(ctypes.Structure):
+    _fields_ = [("dims", ctypes.c_size_t * 3), ("type", ctypes.c_int), ("big_endian", ctypes.c_int),
+                ("offset", ctypes.c_size_t), ("spacing", ctypes.c_double * 3), ("origin", ctypes.c_double * 3)]
+
+
+class _VolumeInfo(ctypes.Structure):
+    _fields_ = [("format", ctypes.c_char * 16), ("encoding", ctypes.c_char * 16), ("big_endian", ctypes.c_int),
+                ("flipped", ctypes.c_int * 3), ("rotation_dropped", ctypes.c_int), ("value_scale", ctypes.c_double),
+                ("value_offset", ctypes.c_double)]
 
 
 class _SculptOptions(ctypes.Structure):
@@ -151,11 +170,44 @@ def _load():
     lib.voxmesh_get_device.restype = ctypes.c_int
     lib.voxmesh_get_device.argtypes = [ctypes.c_size_t, ctypes.POINTER(_Device)]
     _declare_sculpt(lib, handle)
+    _declare_io(lib, handle)
     lib.voxmesh_last_error.restype = ctypes.c_char_p
     lib.voxmesh_last_error.argtypes = []
     lib.voxmesh_version.restype = ctypes.c_char_p
     lib.voxmesh_version.argtypes = []
     return lib
+
+
+def _declare_io(lib, handle):
+    status, size = ctypes.c_int, ctypes.c_size_t
+    lib.voxmesh_mesh_device_stats_count.restype = size
+    lib.voxmesh_mesh_device_stats_count.argtypes = [handle]
+    lib.voxmesh_mesh_get_device_stats.restype = status
+    lib.voxmesh_mesh_get_device_stats.argtypes = [handle, size, ctypes.POINTER(_DeviceStats)]
+    lib.voxmesh_bytes_data.restype = ctypes.c_void_p
+    lib.voxmesh_bytes_data.argtypes = [handle]
+    lib.voxmesh_bytes_size.restype = size
+    lib.voxmesh_bytes_size.argtypes = [handle]
+    lib.voxmesh_bytes_free.restype = None
+    lib.voxmesh_bytes_free.argtypes = [handle]
+    lib.voxmesh_write_mesh_to_memory.restype = status
+    lib.voxmesh_write_mesh_to_memory.argtypes = [handle, ctypes.c_char_p, ctypes.POINTER(handle)]
+    lib.voxmesh_read_mesh_from_memory.restype = status
+    lib.voxmesh_read_mesh_from_memory.argtypes = [ctypes.c_void_p, size, ctypes.c_char_p, ctypes.POINTER(handle)]
+    lib.voxmesh_keep_largest_components.restype = status
+    lib.voxmesh_keep_largest_components.argtypes = [handle, size, ctypes.POINTER(handle)]
+    lib.voxmesh_read_volume_from_memory.restype = status
+    lib.voxmesh_read_volume_from_memory.argtypes = [ctypes.c_void_p, size, ctypes.c_char_p, ctypes.POINTER(handle)]
+    lib.voxmesh_default_raw_layout.restype = _RawLayout
+    lib.voxmesh_default_raw_layout.argtypes = []
+    lib.voxmesh_read_raw.restype = status
+    lib.voxmesh_read_raw.argtypes = [ctypes.c_char_p, ctypes.POINTER(_RawLayout), ctypes.POINTER(handle)]
+    lib.voxmesh_volume_get_info.restype = _VolumeInfo
+    lib.voxmesh_volume_get_info.argtypes = [handle]
+    lib.voxmesh_write_nrrd.restype = status
+    lib.voxmesh_write_nrrd.argtypes = [ctypes.c_char_p, ctypes.POINTER(_VolumeView)]
+    lib.voxmesh_write_nrrd_to_memory.restype = status
+    lib.voxmesh_write_nrrd_to_memory.argtypes = [ctypes.POINTER(_VolumeView), ctypes.c_char_p, ctypes.POINTER(handle)]
 
 
 def _declare_sculpt(lib, handle):
@@ -306,9 +358,23 @@ class Mesh:
         self.stats = None if stats.backend == 0 else {
             "backend": _BACKEND_NAMES[stats.backend], "threads": stats.threads, "workers": stats.workers,
             "classify_s": stats.classify_s, "scan_s": stats.scan_s, "generate_s": stats.generate_s,
-            "total_s": stats.total_s}
+            "total_s": stats.total_s, "devices": _device_stats(pointer)}
         # Its warnings (also issued as RuntimeWarning by extract).
         self.warnings = _lib.voxmesh_mesh_warnings(pointer).decode(errors="replace").splitlines()
+
+    def to_bytes(self, format="stl"):
+        """The bytes write() would write for a file of that format ("stl", "ply" or "obj")."""
+        return _take_bytes(lambda out: _lib.voxmesh_write_mesh_to_memory(self._handle.pointer,
+                                                                          f"mesh.{format}".encode(), out))
+
+    def largest_components(self, count=1):
+        """The `count` connected pieces with the most triangles, in their order (a CT's surface
+        without the specks of noise around it); normals kept."""
+        if int(count) < 0:
+            raise VoxmeshError(f"count must be at least 1; got {count}")
+        pointer = ctypes.c_void_p()
+        _check(_lib.voxmesh_keep_largest_components(self._handle.pointer, int(count), ctypes.byref(pointer)))
+        return Mesh(pointer.value)
 
     @property
     def vertex_count(self):
@@ -329,9 +395,35 @@ class Mesh:
         return Topology(found)
 
 
+def _device_stats(pointer):
+    """Per device of an extract: "cpu" or an OpenCL device, with its chunks and seconds."""
+    found = []
+    for i in range(_lib.voxmesh_mesh_device_stats_count(pointer)):
+        d = _DeviceStats()
+        _check(_lib.voxmesh_mesh_get_device_stats(pointer, i, ctypes.byref(d)))
+        found.append({"name": d.name.decode(errors="replace"), "chunks": d.chunks, "voxels": d.voxels,
+                      "kernel_s": d.kernel_s, "transfer_s": d.transfer_s, "wall_s": d.wall_s, "setup_s": d.setup_s,
+                      "programs_built": d.programs_built, "chunks_handed_over": d.chunks_handed_over})
+    return found
+
+
+def _take_bytes(write):
+    """Runs write(&bytes) and returns the library's bytes as a Python bytes object."""
+    pointer = ctypes.c_void_p()
+    _check(write(ctypes.byref(pointer)))
+    try:
+        size = _lib.voxmesh_bytes_size(pointer)
+        return ctypes.string_at(_lib.voxmesh_bytes_data(pointer), size) if size else b""
+    finally:
+        _lib.voxmesh_bytes_free(pointer)
+
+
 class Volume:
     """A volume read from a file or voxelized: `array` [z, y, x], `spacing` and `origin` as
-    (x, y, z). A file's samples are read-only (they may be the file itself, mapped)."""
+    (x, y, z). A file's samples are read-only (they may be the file itself, mapped). `info`
+    is what the file said beyond the samples (None for a voxelized volume): format, encoding,
+    big_endian, flipped (axes stored reversed, turned on load), rotation_dropped, and NIfTI's
+    value_scale and value_offset (not applied: a physical iso p is (p - offset) / scale)."""
 
     def __init__(self, pointer, readonly=True):
         handle = _Handle(pointer, _lib.voxmesh_volume_free)
@@ -341,12 +433,34 @@ class Volume:
         self.array = _view(view.data, (nz, ny, nx), _DTYPES[view.type], handle, readonly=readonly)
         self.spacing = tuple(view.spacing)
         self.origin = tuple(view.origin)
+        info = _lib.voxmesh_volume_get_info(pointer)
+        self.info = None if not info.format else {
+            "format": info.format.decode(), "encoding": info.encoding.decode(), "big_endian": bool(info.big_endian),
+            "flipped": tuple(bool(f) for f in info.flipped), "rotation_dropped": bool(info.rotation_dropped),
+            "value_scale": info.value_scale, "value_offset": info.value_offset}
 
 
-def read_mesh(path):
-    """STL (binary or ASCII), PLY or OBJ, chosen by extension, as voxmesh::read_mesh."""
+def _is_bytes(source):
+    return isinstance(source, (bytes, bytearray, memoryview))
+
+
+def _bytes_call(source, name, call):
+    """call(address, size, name, &object) over the bytes of `source`; `name` says the format."""
+    if not name:
+        raise VoxmeshError("reading bytes needs name=, whose extension says the format (e.g. 'scan.nrrd')")
+    data = np.frombuffer(source, dtype=np.uint8)  # no copy; the library copies what it keeps
     pointer = ctypes.c_void_p()
-    _check(_lib.voxmesh_read_mesh(os.fsencode(path), ctypes.byref(pointer)))
+    _check(call(data.ctypes.data if data.size else None, data.size, os.fsencode(name), ctypes.byref(pointer)))
+    return pointer.value
+
+
+def read_mesh(source, name=None):
+    """STL (binary or ASCII), PLY or OBJ, chosen by extension, as voxmesh::read_mesh. `source`
+    is a path, or the file's bytes with `name` ("part.stl") standing for its path."""
+    if _is_bytes(source):
+        return Mesh(_bytes_call(source, name, _lib.voxmesh_read_mesh_from_memory))
+    pointer = ctypes.c_void_p()
+    _check(_lib.voxmesh_read_mesh(os.fsencode(source), ctypes.byref(pointer)))
     return Mesh(pointer.value)
 
 
@@ -410,30 +524,71 @@ def _as_view(volume, spacing, origin):
     return view, array
 
 
-def read_volume(path):
-    """NRRD, MetaImage, NIfTI-1 or legacy VTK, chosen by extension, as voxmesh::read_volume."""
+def read_volume(source, name=None):
+    """NRRD, MetaImage, NIfTI-1 or legacy VTK, chosen by extension, as voxmesh::read_volume.
+    `source` is a path, or the file's bytes with `name` ("scan.nii.gz") standing for its path."""
+    if _is_bytes(source):
+        return Volume(_bytes_call(source, name, _lib.voxmesh_read_volume_from_memory), readonly=False)
     pointer = ctypes.c_void_p()
-    _check(_lib.voxmesh_read_volume(os.fsencode(path), ctypes.byref(pointer)))
+    _check(_lib.voxmesh_read_volume(os.fsencode(source), ctypes.byref(pointer)))
     return Volume(pointer.value)
 
 
+def read_raw(path, shape, dtype, big_endian=False, offset=0, spacing=None, origin=None):
+    """Headerless samples: `shape` is the array's (nz, ny, nx), `dtype` one of the eight sample
+    types; the file holds exactly offset + nx * ny * nz samples' bytes. spacing and origin are
+    (x, y, z); a negative spacing runs its axis the other way (reversed on load)."""
+    shape = [int(n) for n in shape]
+    if len(shape) != 3 or min(shape) < 0:
+        raise VoxmeshError(f"shape must be three sizes (nz, ny, nx); got {shape}")
+    native = np.dtype(dtype).newbyteorder("=")
+    if native.type not in _DTYPES:
+        raise VoxmeshError(f"unsupported sample type {np.dtype(dtype)} (uint8, int8, uint16, int16, uint32, "
+                           "int32, float32, float64)")
+    if int(offset) < 0:
+        raise VoxmeshError(f"offset must not be negative; got {offset}")
+    layout = _lib.voxmesh_default_raw_layout()
+    layout.dims[:] = shape[::-1]
+    layout.type = _DTYPES.index(native.type)
+    layout.big_endian = 1 if big_endian else 0
+    layout.offset = int(offset)
+    layout.spacing[:] = _triple("spacing", spacing, 1.0)
+    layout.origin[:] = _triple("origin", origin, 0.0)
+    pointer = ctypes.c_void_p()
+    _check(_lib.voxmesh_read_raw(os.fsencode(path), ctypes.byref(layout), ctypes.byref(pointer)))
+    return Volume(pointer.value)
+
+
+def write_nrrd(path, volume, spacing=None, origin=None):
+    """A volume (an array [z, y, x] or a Volume) as NRRD, through a temporary file renamed into
+    place; path None returns the bytes instead. spacing and origin are (x, y, z)."""
+    view, array = _as_view(volume, spacing, origin)  # `array` keeps the samples alive for the call
+    if path is None:
+        return _take_bytes(lambda out: _lib.voxmesh_write_nrrd_to_memory(ctypes.byref(view), b"volume.nrrd", out))
+    _check(_lib.voxmesh_write_nrrd(os.fsencode(path), ctypes.byref(view)))
+    del array
+
+
 def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=0, normals=True,
-            inside_below=False, devices=None, device_type="any"):
+            inside_below=False, devices=None, device_type="any", chunk_planes=0, memory_budget=0):
     """The iso-surface of `volume` (a 3-D array [z, y, x] or a Volume) at `iso` as a Mesh.
 
     A sample is inside when value >= iso (value < iso with inside_below, for signed distance
     fields). backend: "auto", "cpu", "opencl" or "hybrid"; threads 0: every CPU this process may
     use. spacing and origin are (x, y, z); a Volume brings its own unless they are given.
     devices: OpenCL device indices (voxmesh.devices()); device_type: "any", "cpu", "gpu" or
-    "accelerator". Every backend, thread count and device gives the same mesh.
+    "accelerator". chunk_planes (z-planes per chunk) and memory_budget (bytes per device for one
+    chunk) size the OpenCL chunks; 0: automatic. Every backend, thread count, device and chunk
+    size gives the same mesh.
     """
     if backend not in _BACKENDS:
         raise VoxmeshError(f"unknown backend '{backend}' (auto, cpu, opencl, hybrid)")
     if device_type not in _DEVICE_TYPES:
         raise VoxmeshError(f"unknown device type '{device_type}' (any, cpu, gpu, accelerator)")
     chosen = [int(d) for d in (devices or [])]
-    if int(threads) < 0:
-        raise VoxmeshError(f"threads must be 0 (every CPU) or more; got {threads}")
+    for name, value in (("threads", threads), ("chunk_planes", chunk_planes), ("memory_budget", memory_budget)):
+        if int(value) < 0:
+            raise VoxmeshError(f"{name} must be 0 (automatic) or more; got {value}")
     view, array = _as_view(volume, spacing, origin)  # `array` keeps the samples alive for the call
     options = _lib.voxmesh_default_options()
     options.iso = float(iso)
@@ -445,6 +600,8 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     options.devices = ctypes.cast(device_array, ctypes.POINTER(ctypes.c_int)) if chosen else None
     options.device_count = len(chosen)
     options.device_type = _DEVICE_TYPES[device_type]
+    options.chunk_planes = int(chunk_planes)
+    options.memory_budget = int(memory_budget)
     pointer = ctypes.c_void_p()
     _check(_lib.voxmesh_extract(ctypes.byref(view), ctypes.byref(options), ctypes.byref(pointer)))
     mesh = Mesh(pointer.value)

@@ -25,6 +25,11 @@ struct voxmesh_mesh {
 
 struct voxmesh_volume {
     voxmesh::Volume volume;
+    voxmesh::VolumeInfo info{};  // what the file said; format "" when not read from one
+};
+
+struct voxmesh_bytes {
+    std::vector<unsigned char> bytes;
 };
 
 struct voxmesh_sculpt {
@@ -166,6 +171,15 @@ const T* data_or_null(const std::vector<T>& array) {
     return array.empty() ? nullptr : array.data();
 }
 
+// A C view as the C++ one (the type checked).
+voxmesh::VolumeView cpp_view(const voxmesh_volume_view& volume, const char* who) {
+    voxmesh::VolumeView view;
+    view.data = volume.data;
+    view.type = scalar_type(volume.type, who);
+    copy_geometry(volume, view);
+    return view;
+}
+
 // C sculpt options to the C++ ones, with a log that keeps the warnings for the C caller.
 voxmesh::SculptOptions sculpt_options(const voxmesh_sculpt_options& given, const std::shared_ptr<std::string>& warnings,
                                       const char* who) {
@@ -206,6 +220,8 @@ voxmesh_options voxmesh_default_options(void) {
     options.devices = nullptr;
     options.device_count = 0;
     options.device_type = device_type_code(defaults.device_type);
+    options.chunk_planes = defaults.chunk_planes;
+    options.memory_budget = defaults.memory_budget;
     return options;
 }
 
@@ -246,10 +262,7 @@ voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_
         require(mesh, "voxmesh_extract", "the mesh pointer");
         require(volume, "voxmesh_extract", "the volume");
         const voxmesh_options given = options ? *options : voxmesh_default_options();
-        voxmesh::VolumeView view;
-        view.data = volume->data;
-        view.type = scalar_type(volume->type, "voxmesh_extract");
-        copy_geometry(*volume, view);
+        const voxmesh::VolumeView view = cpp_view(*volume, "voxmesh_extract");
         voxmesh::Options cpp;
         cpp.iso = given.iso;
         cpp.backend = backend(given.backend, "voxmesh_extract");
@@ -259,6 +272,8 @@ voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_
         if (given.device_count) require(given.devices, "voxmesh_extract", "options->devices");
         cpp.devices.assign(given.devices, given.devices + given.device_count);
         cpp.device_type = device_type(given.device_type);
+        cpp.chunk_planes = given.chunk_planes;
+        cpp.memory_budget = given.memory_budget;
         voxmesh::Stats stats;
         voxmesh::Mesh made = voxmesh::extract(view, cpp, stats);
         std::string warnings;
@@ -272,7 +287,9 @@ size_t voxmesh_mesh_triangle_count(const voxmesh_mesh* mesh) { return mesh ? mes
 const float* voxmesh_mesh_positions(const voxmesh_mesh* mesh) {
     return mesh ? data_or_null(mesh->mesh.positions) : nullptr;
 }
-const float* voxmesh_mesh_normals(const voxmesh_mesh* mesh) { return mesh ? data_or_null(mesh->mesh.normals) : nullptr; }
+const float* voxmesh_mesh_normals(const voxmesh_mesh* mesh) {
+    return mesh ? data_or_null(mesh->mesh.normals) : nullptr;
+}
 const uint32_t* voxmesh_mesh_indices(const voxmesh_mesh* mesh) {
     return mesh ? data_or_null(mesh->mesh.indices) : nullptr;
 }
@@ -294,6 +311,67 @@ voxmesh_stats voxmesh_mesh_stats(const voxmesh_mesh* mesh) {
 }
 
 const char* voxmesh_mesh_warnings(const voxmesh_mesh* mesh) { return mesh ? mesh->warnings.c_str() : ""; }
+
+size_t voxmesh_mesh_device_stats_count(const voxmesh_mesh* mesh) {
+    return mesh && mesh->extracted ? mesh->stats.devices.size() : 0;
+}
+
+voxmesh_status voxmesh_mesh_get_device_stats(const voxmesh_mesh* mesh, size_t index, voxmesh_device_stats* stats) {
+    return guarded([&] {
+        require(mesh, "voxmesh_mesh_get_device_stats", "the mesh");
+        require(stats, "voxmesh_mesh_get_device_stats", "the stats pointer");
+        const std::size_t count = voxmesh_mesh_device_stats_count(mesh);
+        if (index >= count)
+            throw voxmesh::Error("voxmesh_mesh_get_device_stats: device " + std::to_string(index) +
+                                 " did not take part (" + std::to_string(count) + " device(s) in the extract)");
+        const voxmesh::DeviceStats& d = mesh->stats.devices[index];
+        *stats = voxmesh_device_stats{};
+        copy_text(stats->name, d.name);
+        stats->chunks = d.chunks;
+        stats->voxels = d.voxels;
+        stats->kernel_s = d.kernel_s;
+        stats->transfer_s = d.transfer_s;
+        stats->wall_s = d.wall_s;
+        stats->setup_s = d.setup_s;
+        stats->programs_built = d.programs_built;
+        stats->chunks_handed_over = d.chunks_handed_over;
+    });
+}
+
+const unsigned char* voxmesh_bytes_data(const voxmesh_bytes* bytes) {
+    return bytes ? data_or_null(bytes->bytes) : nullptr;
+}
+size_t voxmesh_bytes_size(const voxmesh_bytes* bytes) { return bytes ? bytes->bytes.size() : 0; }
+void voxmesh_bytes_free(voxmesh_bytes* bytes) { delete bytes; }
+
+voxmesh_status voxmesh_write_mesh_to_memory(const voxmesh_mesh* mesh, const char* name, voxmesh_bytes** bytes) {
+    if (bytes) *bytes = nullptr;
+    return guarded([&] {
+        require(bytes, "voxmesh_write_mesh_to_memory", "the bytes pointer");
+        require(mesh, "voxmesh_write_mesh_to_memory", "the mesh");
+        require(name, "voxmesh_write_mesh_to_memory", "the name");
+        *bytes = new voxmesh_bytes{voxmesh::write_mesh_to_memory(mesh->mesh, name)};
+    });
+}
+
+voxmesh_status voxmesh_read_mesh_from_memory(const void* data, size_t size, const char* name, voxmesh_mesh** mesh) {
+    if (mesh) *mesh = nullptr;
+    return guarded([&] {
+        require(mesh, "voxmesh_read_mesh_from_memory", "the mesh pointer");
+        require(name, "voxmesh_read_mesh_from_memory", "the name");
+        if (size) require(data, "voxmesh_read_mesh_from_memory", "the data");
+        *mesh = new voxmesh_mesh{voxmesh::read_mesh_from_memory(data, size, name)};
+    });
+}
+
+voxmesh_status voxmesh_keep_largest_components(const voxmesh_mesh* mesh, size_t count, voxmesh_mesh** kept) {
+    if (kept) *kept = nullptr;
+    return guarded([&] {
+        require(kept, "voxmesh_keep_largest_components", "the result pointer");
+        require(mesh, "voxmesh_keep_largest_components", "the mesh");
+        *kept = new voxmesh_mesh{voxmesh::keep_largest_components(mesh->mesh, count)};
+    });
+}
 
 voxmesh_status voxmesh_write_mesh(const char* path, const voxmesh_mesh* mesh) {
     return guarded([&] {
@@ -379,7 +457,83 @@ voxmesh_status voxmesh_read_volume(const char* path, voxmesh_volume** volume) {
     return guarded([&] {
         require(volume, "voxmesh_read_volume", "the volume pointer");
         require(path, "voxmesh_read_volume", "the path");
-        *volume = new voxmesh_volume{voxmesh::read_volume(path)};
+        voxmesh::VolumeInfo info;
+        voxmesh::Volume read = voxmesh::read_volume(path, info);
+        *volume = new voxmesh_volume{std::move(read), std::move(info)};
+    });
+}
+
+voxmesh_status voxmesh_read_volume_from_memory(const void* data, size_t size, const char* name,
+                                               voxmesh_volume** volume) {
+    if (volume) *volume = nullptr;
+    return guarded([&] {
+        require(volume, "voxmesh_read_volume_from_memory", "the volume pointer");
+        require(name, "voxmesh_read_volume_from_memory", "the name");
+        if (size) require(data, "voxmesh_read_volume_from_memory", "the data");
+        voxmesh::VolumeInfo info;
+        voxmesh::Volume read = voxmesh::read_volume_from_memory(data, size, name, info);
+        *volume = new voxmesh_volume{std::move(read), std::move(info)};
+    });
+}
+
+voxmesh_raw_layout voxmesh_default_raw_layout(void) {
+    const voxmesh::RawLayout defaults;
+    voxmesh_raw_layout layout{};
+    copy_geometry(defaults, layout);
+    layout.type = scalar_code(defaults.type);
+    layout.big_endian = defaults.big_endian;
+    layout.offset = defaults.offset;
+    return layout;
+}
+
+voxmesh_status voxmesh_read_raw(const char* path, const voxmesh_raw_layout* layout, voxmesh_volume** volume) {
+    if (volume) *volume = nullptr;
+    return guarded([&] {
+        require(volume, "voxmesh_read_raw", "the volume pointer");
+        require(path, "voxmesh_read_raw", "the path");
+        require(layout, "voxmesh_read_raw", "the layout");
+        voxmesh::RawLayout cpp;
+        copy_geometry(*layout, cpp);
+        cpp.type = scalar_type(layout->type, "voxmesh_read_raw");
+        cpp.big_endian = layout->big_endian != 0;
+        cpp.offset = layout->offset;
+        voxmesh::Volume read = voxmesh::read_raw(path, cpp);
+        *volume = new voxmesh_volume{std::move(read), voxmesh::read_raw_info(path, cpp)};
+    });
+}
+
+voxmesh_volume_info voxmesh_volume_get_info(const voxmesh_volume* volume) {
+    voxmesh_volume_info out{};
+    out.value_scale = 1;
+    if (!volume) return out;
+    const voxmesh::VolumeInfo& info = volume->info;
+    copy_text(out.format, info.format);
+    copy_text(out.encoding, info.encoding);
+    out.big_endian = info.big_endian;
+    for (int a = 0; a < 3; ++a) out.flipped[a] = info.flipped[a];
+    out.rotation_dropped = info.rotation_dropped;
+    out.value_scale = info.value_scale;
+    out.value_offset = info.value_offset;
+    return out;
+}
+
+voxmesh_status voxmesh_write_nrrd(const char* path, const voxmesh_volume_view* volume) {
+    return guarded([&] {
+        require(path, "voxmesh_write_nrrd", "the path");
+        require(volume, "voxmesh_write_nrrd", "the volume");
+        voxmesh::write_nrrd(path, cpp_view(*volume, "voxmesh_write_nrrd"));
+    });
+}
+
+voxmesh_status voxmesh_write_nrrd_to_memory(const voxmesh_volume_view* volume, const char* name,
+                                            voxmesh_bytes** bytes) {
+    if (bytes) *bytes = nullptr;
+    return guarded([&] {
+        require(bytes, "voxmesh_write_nrrd_to_memory", "the bytes pointer");
+        require(volume, "voxmesh_write_nrrd_to_memory", "the volume");
+        require(name, "voxmesh_write_nrrd_to_memory", "the name");
+        const voxmesh::VolumeView view = cpp_view(*volume, "voxmesh_write_nrrd_to_memory");
+        *bytes = new voxmesh_bytes{voxmesh::write_nrrd_to_memory(view, name)};
     });
 }
 
@@ -415,10 +569,7 @@ voxmesh_status voxmesh_sculpt_new(const voxmesh_volume_view* volume, const voxme
     return guarded([&] {
         require(sculpt, "voxmesh_sculpt_new", "the sculpt pointer");
         require(volume, "voxmesh_sculpt_new", "the volume");
-        voxmesh::VolumeView view;
-        view.data = volume->data;
-        view.type = scalar_type(volume->type, "voxmesh_sculpt_new");
-        copy_geometry(*volume, view);
+        const voxmesh::VolumeView view = cpp_view(*volume, "voxmesh_sculpt_new");
         auto warnings = std::make_shared<std::string>();
         const voxmesh_sculpt_options given = options ? *options : voxmesh_default_sculpt_options();
         voxmesh::Sculpt made(view, sculpt_options(given, warnings, "voxmesh_sculpt_new"));
