@@ -12,6 +12,11 @@ packages=(
 if [[ "${VOXMESH_PEERS:-0}" == 1 ]]; then
   packages+=(python3-vtk9 python3-skimage python3-matplotlib)
 fi
+# VOXMESH_ORACLES=1 (CI sets it): scikit-image, which tests/test_python_skimage.py compares
+# voxmesh.marching_cubes with (those cases skip without it).
+if [[ "${VOXMESH_ORACLES:-0}" == 1 ]]; then
+  packages+=(python3-skimage)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -29,10 +29,14 @@ if(TARGET voxmesh_c)
   if(NOT VOXMESH_SANITIZE)
     find_program(VOXMESH_TEST_PYTHON NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
     if(VOXMESH_TEST_PYTHON)
-      add_test(NAME voxmesh_python COMMAND ${VOXMESH_TEST_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/test_python.py)
-      set_tests_properties(voxmesh_python PROPERTIES
-        ENVIRONMENT "PYTHONPATH=${CMAKE_BINARY_DIR}/python;VOXMESH_TEST_DATA=${CMAKE_CURRENT_SOURCE_DIR}/data;VOXMESH_TEST_SCRATCH=${_capi_scratch};VOXMESH_CLI=$<$<TARGET_EXISTS:voxmesh_cli>:$<TARGET_FILE:voxmesh_cli>>"
-        SKIP_RETURN_CODE 77)
+      # test_python.py: the package against the mesh's properties and the CLI.
+      # test_python_skimage.py: voxmesh.marching_cubes against its own expectations, and against
+      # scikit-image where python3-skimage is installed (those cases skip without it).
+      foreach(_script python python_skimage)
+        add_test(NAME voxmesh_${_script} COMMAND ${VOXMESH_TEST_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/test_${_script}.py)
+        set_tests_properties(voxmesh_${_script} PROPERTIES SKIP_RETURN_CODE 77 ENVIRONMENT
+          "PYTHONPATH=${CMAKE_BINARY_DIR}/python;VOXMESH_TEST_DATA=${CMAKE_CURRENT_SOURCE_DIR}/data;VOXMESH_TEST_SCRATCH=${_capi_scratch};VOXMESH_CLI=$<$<TARGET_EXISTS:voxmesh_cli>:$<TARGET_FILE:voxmesh_cli>>")
+      endforeach()
     endif()
   endif()
 endif()

@@ -439,7 +439,8 @@ class BytesAndFilesTest(unittest.TestCase):
         nifti = voxmesh.read_volume(os.path.join(DATA, "mri_someones_anatomy.nii.gz"))
         self.assertEqual(nifti.info["format"], "nifti")
         self.assertEqual(nifti.info["encoding"], "gzip")
-        self.assertIsNone(voxmesh.voxelize(voxmesh.read_mesh(os.path.join(DATA, "unit_sphere.stl")), resolution=16).info)
+        model = voxmesh.read_mesh(os.path.join(DATA, "unit_sphere.stl"))
+        self.assertIsNone(voxmesh.voxelize(model, resolution=16).info)  # no file said anything
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "'cut.nrrd'"):
             voxmesh.read_volume(data[:200], name="cut.nrrd")
 

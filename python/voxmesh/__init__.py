@@ -30,8 +30,9 @@ import warnings
 
 import numpy as np
 
-__all__ = ["extract", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices", "Mesh", "Volume", "Topology", "Sculpt",
-           "Block", "UpdateResult", "VoxmeshError", "VoxmeshMemoryError", "version"]
+__all__ = ["extract", "marching_cubes", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices",
+           "Mesh", "Volume", "Topology", "Sculpt", "Block", "UpdateResult", "VoxmeshError", "VoxmeshMemoryError",
+           "version"]
 
 _DTYPES = [np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32, np.float32, np.float64]
 _BACKENDS = {"auto": 0, "cpu": 1, "opencl": 2, "hybrid": 3}
@@ -798,3 +799,6 @@ class Sculpt:
     def warnings(self):
         """The library's warnings so far (a fallback to the CPU), also issued as RuntimeWarning."""
         return _lib.voxmesh_sculpt_warnings(self._handle.pointer).decode(errors="replace").splitlines()
+
+
+from ._skimage import marching_cubes  # noqa: E402  (uses extract, defined above)

@@ -1,0 +1,299 @@
+"""voxmesh.marching_cubes: a drop-in for skimage.measure.marching_cubes (scikit-image 0.19),
+meshed by voxmesh.extract. Kept apart from __init__.py because it is only a translation of
+arguments and results; the meshing is extract's."""
+
+import numpy as np
+
+from . import VoxmeshError, extract, _BACKENDS
+
+_METHODS = ("lewiner", "lorensen")
+_NO_SURFACE = "No surface found at the given iso value."  # skimage's RuntimeError, word for word
+# Types whose every value float32 holds: skimage converts to float32 first, and meshing these
+# as they are gives the same crossings and the same t without the copy.
+_EXACT_IN_FLOAT32 = (np.uint8, np.int8, np.uint16, np.int16, np.float32)
+_case_triangles = None  # triangles per cell case, for `mask`; filled on first use
+
+
+def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_direction="descent", step_size=1,
+                   allow_degenerate=True, method="lewiner", mask=None, threads=0, backend="auto"):
+    """The iso-surface of `volume` at `level` as skimage.measure.marching_cubes gives it:
+    (verts, faces, normals, values).
+
+    Arguments and results mean what they mean in scikit-image 0.19; threads and backend are
+    extract's. volume is indexed (M, N, P) and verts come in that axis order (z, y, x for a
+    [z, y, x] volume), times spacing, given in the same order. A sample is inside when it is
+    greater than level (skimage's rule: one equal to level is outside). level defaults to the
+    midpoint of the data range and must lie within it. gradient_direction "descent" (the
+    object is greater than its exterior) or "ascent" only reverses the faces' winding; the
+    normals point toward lower values either way, as skimage's do. step_size n meshes every
+    n-th sample along each axis. values: for each vertex, the largest spread (maximum minus
+    minimum sample) of the cells its triangles lie in. mask: a cell is meshed when mask is
+    True at its far corner (its +1, +1, +1 sample), which is where skimage looks.
+    allow_degenerate=False merges vertices that coincide in a triangle and drops the
+    triangles that had them.
+
+    Where it differs from skimage:
+    - Vertex order (and so the numbers in faces and the rows of normals and values): the
+      same vertex set, one per crossed edge, in voxmesh's canonical order.
+    - The triangles are voxmesh's table (VTK's, the classic Lorensen-Cline one): for
+      method="lorensen" the same triangles with the same winding as skimage's. method
+      "lewiner" gives that mesh too; skimage's Lewiner tables resolve ambiguous cells by the
+      trilinear interpolant and may triangulate them differently, with an extra vertex
+      inside the cell. Ours is still closed and crack-free: a face two cells share is cut
+      the same way in both.
+    - normals are the field's gradient (central differences, in sample units as skimage's
+      are, so spacing does not change them) at the vertex; skimage sums corner differences
+      of the (masked-in) cells around it. They agree closely on smooth fields, not bit for
+      bit, least at a mask's edge.
+    - allow_degenerate=False merges each group of coincident vertices into one, the first
+      in our order (its normal and value stay); skimage, merging face by face, sometimes
+      keeps a second copy of such a point. The triangles left are the same.
+    - A NaN or infinite sample is refused (ValueError) rather than meshed into garbage, and
+      method="_lorensen" (skimage's deprecated older implementation) is not offered.
+
+    Bad arguments raise ValueError naming the problem; no surface (level at the data's
+    maximum, or everything masked out) raises RuntimeError, as skimage does.
+    """
+    if method not in _METHODS:
+        raise ValueError(f"method should be 'lewiner' or 'lorensen'; got {method!r}")
+    if gradient_direction not in ("descent", "ascent"):
+        raise ValueError(f"gradient_direction should be 'descent' or 'ascent'; got {gradient_direction!r}")
+    if backend not in _BACKENDS:
+        raise ValueError(f"unknown backend {backend!r} (auto, cpu, opencl, hybrid)")
+    volume = np.asarray(volume)
+    if volume.ndim != 3:
+        raise ValueError(f"volume should be a 3-D array; got {volume.ndim} dimension(s)")
+    if min(volume.shape) < 2:
+        raise ValueError(f"volume must be at least 2x2x2; got {'x'.join(map(str, volume.shape))}")
+    if volume.dtype == np.bool_:
+        volume = volume.view(np.uint8)
+    if volume.dtype.type not in _EXACT_IN_FLOAT32 or not volume.dtype.isnative:
+        volume = volume.astype(np.float32)  # what skimage meshes: the float32 values
+    low, high = np.float32(volume.min()), np.float32(volume.max())
+    if not (np.isfinite(low) and np.isfinite(high)):
+        raise ValueError("volume holds NaN or infinite samples")
+    if level is None:
+        level = 0.5 * (low + high)
+    level = float(level)
+    if not low <= level <= high:  # NaN fails too
+        raise ValueError(f"level {level} is outside the volume's data range [{low}, {high}]")
+    if len(spacing) != 3:
+        raise ValueError(f"spacing must be three numbers, one per array axis; got {len(spacing)}")
+    step = int(step_size)
+    if step < 1:
+        raise ValueError(f"step_size must be at least one; got {step_size}")
+    if mask is not None:
+        mask = np.asarray(mask)
+        if mask.shape != volume.shape:
+            raise ValueError(f"mask must have the volume's shape {volume.shape}; got {mask.shape}")
+        # skimage tests the mask at each cell's far corner (see the docstring).
+        mask = mask[step::step, step::step, step::step].astype(bool)
+
+    data = np.ascontiguousarray(volume[::step, ::step, ::step])
+    if min(data.shape) < 2:
+        raise RuntimeError(_NO_SURFACE)  # a step past the volume leaves no cell, as in skimage
+    inside = _greater(data, level)
+    # voxmesh's inside is value >= iso; only a sample exactly at level tells that from
+    # skimage's value > level. Nudged one float below level it is outside, and its edges'
+    # vertices, a hair off the sample, are put back on it below.
+    at_level = _equal(data, level)
+    meshed = data
+    if at_level is not None:
+        meshed = data.astype(np.float32)
+        meshed[at_level] = np.nextafter(np.float32(level), np.float32(-np.inf))
+    try:
+        # spacing = step: positions come out as skimage's, index * step + t * step, rounded once.
+        mesh = extract(meshed, iso=level, spacing=(step, step, step), threads=threads, backend=backend)
+    except VoxmeshError as error:
+        if isinstance(error, MemoryError):
+            raise
+        raise ValueError(str(error)) from error
+    if mesh.triangle_count == 0:
+        raise RuntimeError(_NO_SURFACE)
+    positions = np.array(mesh.positions[:, ::-1])  # x, y, z -> array axis order
+    normals = np.array(mesh.normals[:, ::-1])
+    faces = mesh.indices.astype(np.int64)
+    del mesh
+
+    owner, axis = _crossed_edges(inside)
+    if len(owner) != len(positions):  # the canonical order is what ties a vertex to its edge
+        raise RuntimeError(f"voxmesh gave {len(positions)} vertices for {len(owner)} crossed edges")
+    if at_level is not None:
+        _snap_to_samples(positions, data, level, owner, axis, step)
+    if mask is not None:
+        faces = faces[mask.ravel()[_triangle_cells(inside, len(faces))]]
+    if len(faces) == 0:
+        raise RuntimeError(_NO_SURFACE)
+    values = _spreads(data, level, owner, axis, mask)
+    if mask is not None:  # vertices of the dropped cells only go, keeping the others' order
+        used = np.zeros(len(positions), dtype=bool)
+        used[faces.ravel()] = True
+        renumber = np.cumsum(used) - 1
+        faces = renumber[faces]
+        positions, normals, values = positions[used], normals[used], values[used]
+
+    if gradient_direction == "ascent":
+        faces = faces[:, ::-1]
+    faces = np.ascontiguousarray(faces, dtype=np.int32)  # skimage's type
+    verts = positions
+    if not np.array_equal(spacing, (1, 1, 1)):
+        verts = positions * np.asarray(spacing)  # float64, as in skimage
+    if allow_degenerate:
+        return verts, faces, normals, values
+    return _without_degenerate(verts.astype(np.float32), faces, normals, values)
+
+
+def _greater(data, level):
+    """data > level, exactly: numpy compares float32 data with a float level in float32,
+    where level rounded up would make a sample equal to it outside."""
+    if data.dtype.kind in "iu":
+        return data > int(np.floor(level))
+    below = np.float32(level)
+    if below > level:
+        below = np.nextafter(below, np.float32(-np.inf))
+    return data > below  # for float32 v: v > level exactly when v > the float at or below it
+
+
+def _equal(data, level):
+    """Where data == level exactly, or None where no sample is (the usual case)."""
+    if data.dtype.kind in "iu":
+        if level != int(level):
+            return None
+        found = data == int(level)
+    else:
+        if level != float(np.float32(level)):
+            return None
+        found = data == np.float32(level)
+    return found if found.any() else None
+
+
+def _crossed_edges(inside):
+    """Each crossed edge's owning sample (linear index) and axis (0 x, 1 y, 2 z), in voxmesh's
+    vertex order: by owning sample, then axis."""
+    nz, ny, nx = inside.shape
+    keys = []
+    for axis, (a, b) in enumerate(((inside[:, :, :-1], inside[:, :, 1:]), (inside[:, :-1], inside[:, 1:]),
+                                   (inside[:-1], inside[1:]))):
+        found = np.flatnonzero(a != b)  # linear index in the one-shorter shape
+        if axis == 0:
+            found += found // (nx - 1)
+        elif axis == 1:
+            found += found // ((ny - 1) * nx) * nx
+        keys.append(found * 3 + axis)
+    keys = np.sort(np.concatenate(keys), kind="stable")  # three sorted runs merged
+    return keys // 3, keys % 3
+
+
+def _coordinates(owner, shape):
+    nz, ny, nx = shape
+    return np.stack([owner % nx, owner // nx % ny, owner // (nx * ny)])  # x, y, z
+
+
+def _snap_to_samples(positions, data, level, owner, axis, step):
+    """Vertices of edges with an end exactly at level go onto that sample, where skimage puts
+    them (so that allow_degenerate=False finds them coincident). Except from an array's first
+    plane: skimage's weights (1 / (2.2e-16 + |v - level|) at each end) leave such a vertex
+    about 1e-16 off index 0, which float32 keeps, so there it is not coincident, and neither
+    is ours."""
+    flat = data.ravel()
+    strides = np.array([1, data.shape[2], data.shape[1] * data.shape[2]])
+    for end in (0, 1):
+        far = flat[owner + strides[axis]].astype(np.float64)
+        hit = np.flatnonzero((far if end else flat[owner].astype(np.float64)) == level)
+        if len(hit):
+            xyz = _coordinates(owner[hit], data.shape)
+            column = 2 - axis[hit]  # the edge's axis among positions' z, y, x
+            rows = np.arange(len(hit))
+            first = (xyz[axis[hit], rows] == 0) if end == 0 else np.zeros(len(hit), dtype=bool)
+            xyz[axis[hit], rows] += end
+            positions[hit] = (xyz[::-1].T * step).astype(np.float32)
+            if first.any():
+                epsilon = np.finfo(np.float64).eps
+                weight = 1.0 / (epsilon + np.abs(far[hit[first]] - level))
+                positions[hit[first], column[first]] = (step * (weight / (1.0 / epsilon + weight))).astype(np.float32)
+
+
+def _spreads(data, level, owner, axis, mask):
+    """skimage's values: per vertex, the largest (max - level) - (min - level) over the
+    (masked-in) cells around its edge, every one of which uses the vertex."""
+    flat = data.ravel()
+    dims = data.shape[::-1]  # x, y, z
+    strides = (1, dims[0], dims[0] * dims[1])
+    xyz = _coordinates(owner, data.shape)
+    best = np.zeros(len(owner), dtype=np.float32)
+    for along in range(3):  # one pass per edge axis, so that the offsets are plain numbers
+        chosen = np.flatnonzero(axis == along)
+        start = owner[chosen]
+        p, q = (along + 1) % 3, (along + 2) % 3  # the axes across the edge
+        # The 3 x 3 sample pairs parallel to the edge around it: the four cells around the
+        # edge are 2 x 2 blocks of them. Offsets past the border are clipped; the cells that
+        # would need them are left out below.
+        high, low = {}, {}
+        for i in (-1, 0, 1):
+            for j in (-1, 0, 1):
+                at = start + (i * strides[p] + j * strides[q])
+                near = np.take(flat, at, mode="clip")
+                far = np.take(flat, at + strides[along], mode="clip")
+                high[i, j], low[i, j] = np.maximum(near, far), np.minimum(near, far)
+        cp, cq = xyz[p, chosen], xyz[q, chosen]
+        spread_max = best[chosen]
+        for i in (-1, 0):
+            for j in (-1, 0):
+                ok = (cp + i >= 0) & (cp + i <= dims[p] - 2) & (cq + j >= 0) & (cq + j <= dims[q] - 2)
+                if mask is not None:
+                    cell = xyz[:, chosen].copy()
+                    cell[p] = np.clip(cp + i, 0, dims[p] - 2)
+                    cell[q] = np.clip(cq + j, 0, dims[q] - 2)
+                    ok &= mask[cell[2], cell[1], cell[0]]  # along the edge it is the owner's cell
+                block = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
+                top = np.maximum.reduce([high[k] for k in block]).astype(np.float64)
+                bottom = np.minimum.reduce([low[k] for k in block]).astype(np.float64)
+                spread = ((top - level) - (bottom - level)).astype(np.float32)
+                spread_max = np.where(ok & (spread > spread_max), spread, spread_max)
+        best[chosen] = spread_max
+    return best
+
+
+def _triangle_cells(inside, count):
+    """The cell (linear index in the cell grid) of each triangle: voxmesh writes them by cell,
+    so each cell's run is as long as its case's triangle count."""
+    global _case_triangles
+    if _case_triangles is None:
+        cube, counts = np.empty((2, 2, 2), dtype=np.float32), []
+        for case in range(256):
+            for corner in range(8):
+                cube[corner >> 2, corner >> 1 & 1, corner & 1] = 1.0 if case >> corner & 1 else -1.0
+            counts.append(extract(cube, 0.0, threads=1, normals=False).triangle_count)
+        _case_triangles = np.array(counts, dtype=np.int64)
+    nz, ny, nx = inside.shape
+    case = np.zeros((nz - 1, ny - 1, nx - 1), dtype=np.uint8)
+    for corner in range(8):
+        dz, dy, dx = corner >> 2, corner >> 1 & 1, corner & 1
+        case |= inside[dz:dz + nz - 1, dy:dy + ny - 1, dx:dx + nx - 1].astype(np.uint8) << corner
+    per_cell = _case_triangles[case.ravel()]
+    cells = np.flatnonzero(per_cell)
+    cell_of = np.repeat(cells, per_cell[cells])
+    if len(cell_of) != count:
+        raise RuntimeError(f"voxmesh gave {count} triangles where its cases make {len(cell_of)}")
+    return cell_of
+
+
+def _without_degenerate(verts, faces, normals, values):
+    """Triangles with two coincident corners go; their coincident corners become one vertex
+    (the lowest numbered), which the other triangles then use. Other vertices stay."""
+    a, b, c = (verts[faces[:, k]] for k in range(3))
+    same = [np.all(a == b, axis=1), np.all(b == c, axis=1), np.all(a == c, axis=1)]
+    pairs = np.concatenate([faces[same[0]][:, [0, 1]], faces[same[1]][:, [1, 2]], faces[same[2]][:, [0, 2]]])
+    target = np.arange(len(verts))
+    while len(pairs):  # lowest number over each group of coincident vertices
+        low = np.minimum(target[pairs[:, 0]], target[pairs[:, 1]])
+        changed = (target[pairs[:, 0]] != low) | (target[pairs[:, 1]] != low)
+        if not changed.any():
+            break
+        np.minimum.at(target, pairs[:, 0], low)
+        np.minimum.at(target, pairs[:, 1], low)
+        target = target[target]
+    kept = target == np.arange(len(verts))
+    renumber = np.cumsum(kept) - 1
+    faces = renumber[target[faces[~(same[0] | same[1] | same[2])]]]  # int64, as skimage's
+    return verts[kept], faces, normals[kept], values[kept]
