@@ -15,15 +15,15 @@ import voxmesh
 if len(sys.argv) < 2:
     sys.exit("usage: sculpt_model.py model.stl [out.ply]")
 model = voxmesh.read_mesh(sys.argv[1])
-sculpt = voxmesh.Sculpt.from_mesh(model, resolution=96, block_size=16)
+# padding: room around the model for material added on top (past it the volume's border would
+# cut the surface open).
+sculpt = voxmesh.Sculpt.from_mesh(model, resolution=96, padding=6, block_size=16)
 first = sculpt.update()
 before = sculpt.mesh()
 print(f"{sculpt.array.shape[::-1]} samples in {sculpt.block_count} blocks; first update "
       f"{first.seconds * 1e3:.1f} ms, {before.triangle_count} triangles")
 
-# Dabs along a line over the model's top: a groove carved, then smoothed, in model units.
-# (Carved, not raised: from_mesh leaves two samples of room around the model, and a surface
-# pushed past the volume's border is cut open there.)
+# Dabs along a line over the model's top, in model units: a ridge raised, then smoothed.
 low, high = before.positions.min(axis=0), before.positions.max(axis=0)
 radius = 0.08 * float((high - low).max())
 latencies = []
@@ -33,7 +33,7 @@ for t in np.linspace(0.1, 0.9, 12):
     if len(top) == 0:
         continue
     peak = top[np.argmax(top[:, 2])]
-    sculpt.subtract(peak, radius, strength=2, units="world")
+    sculpt.add(peak, radius, strength=2, units="world")
     sculpt.smooth(peak, radius, strength=0.5, units="world")
     result = sculpt.update()
     latencies.append(result.seconds * 1e3)

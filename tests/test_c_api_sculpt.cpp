@@ -219,8 +219,11 @@ TEST_CASE("C API sculpt: a model voxelized is the C++ from_mesh's", "[capi][scul
     MeshPtr model_ptr(model, voxmesh_mesh_free);
     voxmesh_sculpt_options options = voxmesh_default_sculpt_options();
     options.block_size = 16;
+    voxmesh_voxelize_options grid = voxmesh_default_voxelize_options();
+    grid.resolution = 32;
+    grid.band = 4;
     voxmesh_sculpt* made = nullptr;
-    REQUIRE(voxmesh_sculpt_from_mesh(model, 32, &options, &made) == VOXMESH_OK);
+    REQUIRE(voxmesh_sculpt_from_mesh(model, &grid, &options, &made) == VOXMESH_OK);
     SculptPtr c(made, voxmesh_sculpt_free);
     voxmesh::SculptOptions cpp_options;
     cpp_options.block_size = 16;
@@ -240,6 +243,25 @@ TEST_CASE("C API sculpt: a model voxelized is the C++ from_mesh's", "[capi][scul
     CHECK(topology.boundary_edges == 0);
     CHECK(topology.nonmanifold_edges == 0);
     CHECK(topology.euler == 2);
+
+    // NULL: from_mesh(model, 128)'s grid. More padding: a larger volume around the same model.
+    REQUIRE(voxmesh_sculpt_from_mesh(model, nullptr, &options, &made) == VOXMESH_OK);
+    c.reset(made);
+    const voxmesh::Sculpt default_grid = voxmesh::Sculpt::from_mesh(voxmesh::read_mesh(path), 128, cpp_options);
+    const voxmesh_volume_view view = voxmesh_sculpt_get_view(c.get());
+    for (int a = 0; a < 3; ++a) CHECK(view.dims[a] == default_grid.view().dims[a]);
+    CHECK(std::memcmp(view.data, default_grid.view().data, 4 * view.dims[0] * view.dims[1] * view.dims[2]) == 0);
+    grid.padding = 7;
+    REQUIRE(voxmesh_sculpt_from_mesh(model, &grid, &options, &made) == VOXMESH_OK);
+    c.reset(made);
+    CHECK(voxmesh_sculpt_get_view(c.get()).dims[0] == 32 + 2 * 7);
+    grid.field = VOXMESH_FIELD_OCCUPANCY;
+    CHECK(voxmesh_sculpt_from_mesh(model, &grid, &options, &made) == VOXMESH_ERROR);
+    CHECK(made == nullptr);
+    CHECK_THAT(std::string(voxmesh_last_error()), Catch::Contains("distance field"));
+    grid.field = 5;
+    CHECK(voxmesh_sculpt_from_mesh(model, &grid, &options, &made) == VOXMESH_ERROR);
+    CHECK_THAT(std::string(voxmesh_last_error()), Catch::StartsWith("voxmesh_sculpt_from_mesh: unknown field 5"));
 }
 
 TEST_CASE("C API sculpt: refusals give the C++ messages, a status and no object", "[capi][sculpt]") {
@@ -281,7 +303,7 @@ TEST_CASE("C API sculpt: refusals give the C++ messages, a status and no object"
     view.type = VOXMESH_F32;
     CHECK(voxmesh_sculpt_new(nullptr, &options, &made) == VOXMESH_ERROR);
     CHECK(std::string(voxmesh_last_error()) == "voxmesh_sculpt_new: the volume is NULL");
-    CHECK(voxmesh_sculpt_from_mesh(nullptr, 32, &options, &made) == VOXMESH_ERROR);
+    CHECK(voxmesh_sculpt_from_mesh(nullptr, nullptr, &options, &made) == VOXMESH_ERROR);
     CHECK(std::string(voxmesh_last_error()) == "voxmesh_sculpt_from_mesh: the model is NULL");
 
     REQUIRE(voxmesh_sculpt_new(&view, nullptr, &made) == VOXMESH_OK);

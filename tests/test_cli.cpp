@@ -775,6 +775,25 @@ TEST_CASE("cli: sculpt a real STL model with a stroke script", "[cli]") {
     CHECK(iotest::read_file(cpu_out) == iotest::read_file(cl_out));
 }
 
+// A bump built up 3 voxels on the top of the sphere: with the default 2 samples of padding the
+// surface meets the volume's border and is cut open there; --padding 6 gives it room.
+TEST_CASE("cli: sculpt --padding leaves a surface room to be built up", "[cli]") {
+    Scratch s;
+    const std::string strokes = s.write("bump.txt", "units world\nadd 0 0 1 0.4 3\n");
+    const std::string common =
+        "sculpt " + quote(data_file("unit_sphere.stl")) + " --resolution 32 --strokes " + quote(strokes) + " -o ";
+    const Result tight = run(s, common + quote(s.path("tight.ply")));
+    const Result roomy = run(s, common + quote(s.path("roomy.ply")) + " --padding 6");
+    INFO(tight.out << tight.err << roomy.out << roomy.err);
+    REQUIRE(tight.code == 0);
+    REQUIRE(roomy.code == 0);
+    CHECK(tight.out.find("36x36x36 volume") != std::string::npos);
+    CHECK(tight.out.find(", open") != std::string::npos);
+    CHECK(roomy.out.find("44x44x44 volume") != std::string::npos);
+    CHECK(roomy.out.find("closed (euler 2)") != std::string::npos);
+    expect_rejected(s, common + quote(s.path("never.ply")) + " --padding 300", "padding", s.path("never.ply"));
+}
+
 // Without strokes, sculpt is the paper's pipeline in one step: the file it writes is the one
 // voxelize and mesh write in two (the same distance field near the surface, meshed at iso 0).
 TEST_CASE("cli: sculpt without strokes voxelizes and meshes the model again", "[cli]") {

@@ -367,6 +367,14 @@ class SculptTest(unittest.TestCase):
         self.assertTrue(topology.closed)
         self.assertEqual(topology.euler, 2)
 
+        # Built up past the two samples of padding the surface is cut open at the border; with
+        # more padding it has room and stays closed.
+        for padding, closed in ((2, False), (8, True)):
+            s = voxmesh.Sculpt.from_mesh((corners, faces), resolution=24, padding=padding, block_size=8)
+            self.assertEqual(s.array.shape, (24 + 2 * padding,) * 3)
+            s.add((2.0, 2.0, 4.0), 1.5, strength=5, units="world")
+            self.assertEqual(s.mesh().topology().closed, closed)
+
     def test_refusals_name_the_problem(self):
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "3-D"):
             voxmesh.Sculpt(np.zeros((8, 8)))

@@ -1,8 +1,11 @@
 // Sculpting a model loaded from STL (read_stl + voxelize into a distance field).
 #include <catch2/catch.hpp>
 
+#include <voxmesh/io.hpp>
 #include <voxmesh/sculpt.hpp>
+#include <voxmesh/voxelize.hpp>
 
+#include <array>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -49,4 +52,32 @@ TEST_CASE("sculpt: an STL model is voxelized, sculpted in world units and stays 
     REQUIRE(std::memcmp(m.positions.data(), want.positions.data(), 4 * m.positions.size()) == 0);
     REQUIRE(voxmesh::analyze_topology(m).closed());
     REQUIRE_THROWS_AS(voxmesh::Sculpt::from_stl("/nonexistent/model.stl", 32), voxmesh::Error);
+}
+
+TEST_CASE("sculpt: a model voxelized with options of its own: padding, band, and only a distance field", "[sculpt]") {
+    const voxmesh::Mesh model = voxmesh::read_mesh(std::string(VOXMESH_TEST_DATA) + "/unit_sphere.stl");
+    voxmesh::SculptOptions o;
+    o.block_size = 8;
+    // The resolution-only form is this one with padding 2 and band 4.
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 24;
+    vo.band = 4;
+    const voxmesh::Sculpt plain = voxmesh::Sculpt::from_mesh(model, 24, o);
+    const voxmesh::Sculpt same = voxmesh::Sculpt::from_mesh(model, vo, o);
+    REQUIRE(same.view().dims == plain.view().dims);
+    REQUIRE(std::memcmp(same.view().data, plain.view().data, 4 * 28 * 28 * 28) == 0);
+    REQUIRE(same.options().strength_scale == plain.options().strength_scale);
+
+    // A bump of 4 voxels on top: cut open by the border with 2 samples of padding, closed with 8.
+    vo.padding = 8;
+    voxmesh::Sculpt roomy = voxmesh::Sculpt::from_mesh(model, vo, o);
+    REQUIRE(roomy.view().dims == std::array<std::size_t, 3>{40, 40, 40});
+    voxmesh::Sculpt tight = voxmesh::Sculpt::from_mesh(model, 24, o);
+    for (voxmesh::Sculpt* s : {&roomy, &tight}) s->add({0, 0, 1}, 0.4, 4, voxmesh::Units::World);
+    CHECK(voxmesh::analyze_topology(roomy.mesh()).closed());
+    CHECK(voxmesh::analyze_topology(roomy.mesh()).euler == 2);
+    CHECK_FALSE(voxmesh::analyze_topology(tight.mesh()).closed());
+
+    vo.field = voxmesh::VoxelField::Occupancy;
+    REQUIRE_THROWS_WITH(voxmesh::Sculpt::from_mesh(model, vo, o), Catch::Contains("distance field"));
 }

@@ -41,6 +41,8 @@
 
 namespace voxmesh {
 
+struct VoxelizeOptions;  // voxelize.hpp
+
 struct SculptOptions {
     double iso = 0;               // inside where value >= iso
     unsigned threads = 0;         // update() workers; 0 = all cores
@@ -118,6 +120,10 @@ public:
     // iso 0, in the model's units; strength_scale defaults to the voxel spacing (strength =
     // samples of displacement).
     static Sculpt from_mesh(const Mesh& model, std::size_t resolution, const SculptOptions& options = {});
+    // The same with the voxelization chosen (voxelize.hpp): more `padding` gives a surface room
+    // to be built up before it meets the volume's border, where its mesh is cut open (the
+    // resolution-only form leaves 2 samples, and uses band 4). The field must be Distance.
+    static Sculpt from_mesh(const Mesh& model, const VoxelizeOptions& voxelize, const SculptOptions& options = {});
     // from_mesh(read_stl(path)); read_mesh (io.hpp) also reads .ply and .obj models.
     static Sculpt from_stl(const std::string& path, std::size_t resolution, const SculptOptions& options = {});
 

@@ -252,9 +252,11 @@ voxmesh_sculpt_options voxmesh_default_sculpt_options(void);
 /* A copy of `volume` (u8, u16 or f32 samples; convert others first). */
 voxmesh_status voxmesh_sculpt_new(const voxmesh_volume_view* volume, const voxmesh_sculpt_options* options,
                                   voxmesh_sculpt** sculpt);
-/* A closed model voxelized to a signed distance field (f32, positive inside, iso 0) with
- * `resolution` voxels along its longest side, in the model's units. */
-voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, size_t resolution,
+/* A closed model voxelized to a signed distance field (f32, positive inside, iso 0) in the
+ * model's units. voxelize NULL: resolution 128, padding 2, band 4; its field must be
+ * VOXMESH_FIELD_DISTANCE. More padding leaves a surface room to be built up before the
+ * volume's border cuts it open. */
+voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, const voxmesh_voxelize_options* voxelize,
                                         const voxmesh_sculpt_options* options, voxmesh_sculpt** sculpt);
 void voxmesh_sculpt_free(voxmesh_sculpt* sculpt);
 

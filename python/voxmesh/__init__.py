@@ -219,7 +219,7 @@ def _declare_sculpt(lib, handle):
     lib.voxmesh_sculpt_new.argtypes = [ctypes.POINTER(_VolumeView), ctypes.POINTER(_SculptOptions),
                                        ctypes.POINTER(handle)]
     lib.voxmesh_sculpt_from_mesh.restype = ctypes.c_int
-    lib.voxmesh_sculpt_from_mesh.argtypes = [handle, ctypes.c_size_t, ctypes.POINTER(_SculptOptions),
+    lib.voxmesh_sculpt_from_mesh.argtypes = [handle, ctypes.POINTER(_VoxelizeOptions), ctypes.POINTER(_SculptOptions),
                                              ctypes.POINTER(handle)]
     lib.voxmesh_sculpt_free.restype = None
     lib.voxmesh_sculpt_free.argtypes = [handle]
@@ -696,18 +696,26 @@ class Sculpt:
             warnings.warn(message, RuntimeWarning, stacklevel=3)
 
     @classmethod
-    def from_mesh(cls, model, resolution=128, threads=0, block_size=32, normals=True, strength_scale=0.0,
-                  backend="cpu", device=-1):
+    def from_mesh(cls, model, resolution=128, padding=2, band=4.0, threads=0, block_size=32, normals=True,
+                  strength_scale=0.0, backend="cpu", device=-1):
         """A closed model (a Mesh, or a (positions, indices) pair) voxelized to a signed distance
-        field with `resolution` voxels along its longest side: float32, positive inside, iso 0, in
-        the model's units; brush strengths are in voxels of surface displacement."""
+        field with `resolution` voxels along its longest side and `padding` samples around it:
+        float32, positive inside, iso 0, in the model's units; brush strengths are in voxels of
+        surface displacement. A surface built up past the padding is cut open at the border."""
         if not isinstance(model, Mesh):
             model = Mesh.from_arrays(*model)
-        if int(resolution) < 0:
-            raise VoxmeshError(f"resolution must not be negative; got {resolution}")
+        for name, value in (("resolution", resolution), ("padding", padding)):
+            if int(value) < 0:
+                raise VoxmeshError(f"{name} must not be negative; got {value}")
+        grid = _lib.voxmesh_default_voxelize_options()
+        grid.resolution = int(resolution)
+        grid.padding = int(padding)
+        grid.field = _FIELDS["distance"]
+        grid.band = float(band)
+        grid.threads = int(threads)
         options = _sculpt_options(0.0, threads, block_size, normals, False, strength_scale, backend, device)
         pointer = ctypes.c_void_p()
-        _check(_lib.voxmesh_sculpt_from_mesh(model._handle.pointer, int(resolution), ctypes.byref(options),
+        _check(_lib.voxmesh_sculpt_from_mesh(model._handle.pointer, ctypes.byref(grid), ctypes.byref(options),
                                              ctypes.byref(pointer)))
         sculpt = cls.__new__(cls)
         sculpt._adopt(pointer.value)

@@ -205,6 +205,20 @@ voxmesh::Units units(int code, const char* who) {
 
 std::array<double, 3> point(const double* xyz) { return {xyz[0], xyz[1], xyz[2]}; }
 
+voxmesh::VoxelizeOptions voxelize_options(const voxmesh_voxelize_options& given, const char* who) {
+    voxmesh::VoxelizeOptions cpp;
+    cpp.resolution = given.resolution;
+    cpp.padding = given.padding;
+    if (given.field == VOXMESH_FIELD_OCCUPANCY) cpp.field = voxmesh::VoxelField::Occupancy;
+    else if (given.field == VOXMESH_FIELD_DISTANCE) cpp.field = voxmesh::VoxelField::Distance;
+    else
+        throw voxmesh::Error(std::string(who) + ": unknown field " + std::to_string(given.field) +
+                             " (VOXMESH_FIELD_OCCUPANCY or VOXMESH_FIELD_DISTANCE)");
+    cpp.band = given.band;
+    cpp.threads = given.threads;
+    return cpp;
+}
+
 }  // namespace
 
 extern "C" {
@@ -438,17 +452,7 @@ voxmesh_status voxmesh_voxelize(const voxmesh_mesh* mesh, const voxmesh_voxelize
         require(volume, "voxmesh_voxelize", "the volume pointer");
         require(mesh, "voxmesh_voxelize", "the mesh");
         const voxmesh_voxelize_options given = options ? *options : voxmesh_default_voxelize_options();
-        voxmesh::VoxelizeOptions cpp;
-        cpp.resolution = given.resolution;
-        cpp.padding = given.padding;
-        if (given.field == VOXMESH_FIELD_OCCUPANCY) cpp.field = voxmesh::VoxelField::Occupancy;
-        else if (given.field == VOXMESH_FIELD_DISTANCE) cpp.field = voxmesh::VoxelField::Distance;
-        else
-            throw voxmesh::Error("voxmesh_voxelize: unknown field " + std::to_string(given.field) +
-                                 " (VOXMESH_FIELD_OCCUPANCY or VOXMESH_FIELD_DISTANCE)");
-        cpp.band = given.band;
-        cpp.threads = given.threads;
-        *volume = new voxmesh_volume{voxmesh::voxelize(mesh->mesh, cpp)};
+        *volume = new voxmesh_volume{voxmesh::voxelize(mesh->mesh, voxelize_options(given, "voxmesh_voxelize"))};
     });
 }
 
@@ -577,7 +581,7 @@ voxmesh_status voxmesh_sculpt_new(const voxmesh_volume_view* volume, const voxme
     });
 }
 
-voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, size_t resolution,
+voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, const voxmesh_voxelize_options* voxelize,
                                         const voxmesh_sculpt_options* options, voxmesh_sculpt** sculpt) {
     if (sculpt) *sculpt = nullptr;
     return guarded([&] {
@@ -586,7 +590,11 @@ voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, size_t resolu
         auto warnings = std::make_shared<std::string>();
         const voxmesh_sculpt_options given = options ? *options : voxmesh_default_sculpt_options();
         const voxmesh::SculptOptions cpp = sculpt_options(given, warnings, "voxmesh_sculpt_from_mesh");
-        voxmesh::Sculpt made = voxmesh::Sculpt::from_mesh(model->mesh, resolution, cpp);
+        voxmesh::VoxelizeOptions grid;  // Sculpt::from_mesh(model, resolution)'s
+        grid.band = 4;
+        grid.threads = cpp.threads;
+        if (voxelize) grid = voxelize_options(*voxelize, "voxmesh_sculpt_from_mesh");
+        voxmesh::Sculpt made = voxmesh::Sculpt::from_mesh(model->mesh, grid, cpp);
         *sculpt = new voxmesh_sculpt{std::move(made), std::move(warnings)};
     });
 }

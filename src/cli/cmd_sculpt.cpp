@@ -1,11 +1,12 @@
-// voxmesh sculpt MODEL.stl|.ply|.obj --resolution N [--strokes FILE] -o OUT.ply [--backend cpu|opencl|auto]
-//                [--device I] [--threads T] [--frames] [--largest N]
+// voxmesh sculpt MODEL.stl|.ply|.obj --resolution N [--padding P] [--strokes FILE] -o OUT.ply
+//                [--backend cpu|opencl|auto] [--device I] [--threads T] [--frames] [--largest N]
 // The paper's loop: voxelize a model, apply brush dabs, re-mesh only what each dab touched.
 // Without strokes, the paper's pipeline in one step: the model voxelized and meshed again.
 #include "common.hpp"
 #include "stdin_input.hpp"
 
 #include <voxmesh/sculpt.hpp>
+#include <voxmesh/voxelize.hpp>
 
 #include <chrono>
 #include <cstdio>
@@ -21,6 +22,7 @@ namespace {
 struct SculptArgs {
     std::string input, strokes, output, format;
     std::size_t resolution = 0;
+    std::size_t padding = 2;  // samples of room around the model
     unsigned threads = 0;
     std::string backend = "cpu";
     int device = -1;  // -1: a GPU/accelerator, else the first device
@@ -49,7 +51,13 @@ int run_sculpt(const SculptArgs& a) {
     options.log = [](const std::string& message) { std::cerr << "voxmesh: warning: " << message << "\n"; };
     const auto t0 = std::chrono::steady_clock::now();
     const Mesh model = load_model(a.input, "sculpt");
-    Sculpt sculpt = about_file(input_name(a.input), [&] { return Sculpt::from_mesh(model, a.resolution, options); });
+    VoxelizeOptions voxelize_options;
+    voxelize_options.resolution = a.resolution;
+    voxelize_options.padding = a.padding;
+    voxelize_options.band = 4;  // as Sculpt::from_mesh(model, resolution): a smooth field for the brushes
+    voxelize_options.threads = a.threads;
+    Sculpt sculpt =
+        about_file(input_name(a.input), [&] { return Sculpt::from_mesh(model, voxelize_options, options); });
     const UpdateResult first = sculpt.update();
     const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -99,6 +107,10 @@ Command add_sculpt(CLI::App& app) {
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (8..2048)")
         ->required()
         ->check(CLI::Range(std::size_t(8), std::size_t(2048)));
+    sub->add_option("--padding", a->padding,
+                    "samples of room around the model (0..256, default 2): a surface built up past it is cut open at "
+                    "the volume's border")
+        ->check(CLI::Range(std::size_t(0), std::size_t(256)));
     sub->add_option("--backend", a->backend,
                     "where each update re-meshes: cpu (threads), opencl (a device; the CPU with a warning when there "
                     "is none) or auto (a GPU when there is one); default cpu")

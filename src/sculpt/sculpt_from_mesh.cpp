@@ -10,10 +10,16 @@ namespace voxmesh {
 Sculpt Sculpt::from_mesh(const Mesh& model, std::size_t resolution, const SculptOptions& options) {
     VoxelizeOptions vo;
     vo.resolution = resolution;
-    vo.field = VoxelField::Distance;
     vo.band = 4;  // a little wider than the default, so brushes have a smooth field to work on
     vo.threads = options.threads;
-    const Volume volume = voxelize(model, vo);
+    return from_mesh(model, vo, options);
+}
+
+Sculpt Sculpt::from_mesh(const Mesh& model, const VoxelizeOptions& voxelize_options, const SculptOptions& options) {
+    // Brush strengths and the iso value 0 are in distance units; occupancy has neither.
+    if (voxelize_options.field != VoxelField::Distance)
+        throw Error("sculpt: a model is sculpted as a distance field; voxelize it with field Distance");
+    const Volume volume = voxelize(model, voxelize_options);
     SculptOptions so = options;
     if (so.strength_scale == 0) so.strength_scale = volume.spacing[0];
     return Sculpt(volume.view(), so);
