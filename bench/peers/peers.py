@@ -143,9 +143,9 @@ def skimage_peer(vol, iso, repeat):
             "note": "lewiner method, 1 thread; resolves ambiguous cases differently"}
 
 
-def voxmesh_python_peer(vol, iso, threads, repeat, normals, bench):
-    """voxmesh through its Python package on the same array, in this process (as skimage): the
-    package importable as it is, else the one of voxmesh-bench's build, else the newest build's."""
+def import_voxmesh(bench):
+    """The voxmesh Python package: importable as it is, else the one of voxmesh-bench's build,
+    else the newest build's; None where there is none."""
     try:
         import voxmesh
     except ImportError:
@@ -161,6 +161,14 @@ def voxmesh_python_peer(vol, iso, threads, repeat, normals, bench):
             return None
         sys.path.insert(0, os.path.join(found[0], "python"))
         import voxmesh
+    return voxmesh
+
+
+def voxmesh_python_peer(vol, iso, threads, repeat, normals, bench):
+    """voxmesh through its Python package on the same array, in this process (as skimage)."""
+    voxmesh = import_voxmesh(bench)
+    if voxmesh is None:
+        return None
 
     def run():
         mesh = voxmesh.extract(vol, iso=iso, backend="cpu", threads=threads, normals=normals)
@@ -169,6 +177,22 @@ def voxmesh_python_peer(vol, iso, threads, repeat, normals, bench):
     times, (tris, verts) = time_runs(run, repeat)
     return {"tool": f"voxmesh (python, {threads} thr)", "times": times, "triangles": tris, "vertices": verts,
             "note": "voxmesh.extract on the numpy array, this process"}
+
+
+def voxmesh_marching_cubes_peer(vol, iso, threads, repeat, bench):
+    """voxmesh.marching_cubes, the drop-in for skimage's: the same four arrays (verts in array
+    axis order, int32 faces, normals, values), so the same work for the caller as skimage."""
+    voxmesh = import_voxmesh(bench)
+    if voxmesh is None:
+        return None
+
+    def run():
+        verts, faces, _n, _v = voxmesh.marching_cubes(vol, level=iso, threads=threads, backend="cpu")
+        return len(faces), len(verts)
+
+    times, (tris, verts) = time_runs(run, repeat)
+    return {"tool": f"voxmesh.marching_cubes ({threads} thr)", "times": times, "triangles": tris,
+            "vertices": verts, "note": "skimage's arguments and results, this process"}
 
 
 def find_bench(explicit):
@@ -209,7 +233,8 @@ def main():
     ap.add_argument("--vtk-backend", default="", help="vtkSMPTools backend (TBB, STDThread, Sequential)")
     ap.add_argument("--bench", help="path to voxmesh-bench (default: newest build*/bench/voxmesh-bench)")
     ap.add_argument("--tools", default="voxmesh,py,fe,mc,skimage",
-                    help="comma list of voxmesh (voxmesh-bench), py (the voxmesh Python package), fe, mc, skimage")
+                    help="comma list of voxmesh (voxmesh-bench), py (the voxmesh Python package), pymc "
+                         "(voxmesh.marching_cubes, skimage's drop-in), fe, mc, skimage")
     ap.add_argument("--no-normals", action="store_true", help="every tool without normals")
     ap.add_argument("--fe-scaling", action="store_true", help="also time Flying Edges on 1 thread")
     ap.add_argument("--json", action="store_true", help="one JSON object per tool")
@@ -249,6 +274,10 @@ def main():
             vtk.vtkSMPTools.Initialize(args.threads)
     if "py" in tools:
         r = voxmesh_python_peer(vol, iso, args.threads, args.repeat, normals, find_bench(args.bench))
+        if r:
+            results.append(r)
+    if "pymc" in tools:
+        r = voxmesh_marching_cubes_peer(vol, iso, args.threads, args.repeat, find_bench(args.bench))
         if r:
             results.append(r)
     if "skimage" in tools:
