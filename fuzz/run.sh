@@ -15,7 +15,7 @@ build=${FUZZ_BUILD_DIR:-$root/build-fuzz}
 seconds=${FUZZ_SECONDS:-30}
 jobs=${FUZZ_JOBS:-2}
 targets=("$@")
-[ ${#targets[@]} -eq 0 ] && targets=(nrrd metaimage nifti vtk stl ply obj strokes voxelize extract nrrd_roundtrip mesh_roundtrip components)
+[ ${#targets[@]} -eq 0 ] && targets=(nrrd metaimage nifti vtk npy stl ply obj strokes voxelize extract nrrd_roundtrip mesh_roundtrip components)
 
 cmake -S "$root/fuzz" -B "$build" -DCMAKE_CXX_COMPILER="${CXX_FUZZ:-clang++}" -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 cmake --build "$build" -j"$jobs" --target $(printf 'fuzz_%s ' "${targets[@]}")

@@ -249,6 +249,12 @@ TEST_CASE("cli: every input format from standard input", "[cli]") {
     CHECK(legacy_vtk.code == 0);
     CHECK(legacy_vtk.out.find("format:    vtk (raw, big endian)") != std::string::npos);
     CHECK(legacy_vtk.out.find("range:     -100 .. 61") != std::string::npos);
+    const std::string npy = std::string(VOXMESH_TEST_DATA) + "/../fuzz_corpus/npy/i2_big_c.npy";  // numpy's own
+    const Result numpy_file = piped(cat(npy), "info -");
+    CHECK(numpy_file.code == 0);
+    CHECK(numpy_file.out.find("format:    npy (raw, big endian)") != std::string::npos);
+    CHECK(numpy_file.out.find("5x4x3") != std::string::npos);
+    CHECK(numpy_file.out.find("range:     -100 .. 145") != std::string::npos);
     const Result nii_plain = piped("gunzip -c " + quote(data_file("mri_someones_anatomy.nii.gz")), "info -");
     CHECK(nii_plain.code == 0);
     CHECK(nii_plain.out.find("57x67x56") != std::string::npos);

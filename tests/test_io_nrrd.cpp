@@ -386,7 +386,7 @@ TEST_CASE("nrrd: bad headers and data are errors naming the file", "[io][nrrd][e
 
 TEST_CASE("read_volume: unknown extensions, directories and missing files", "[io][errors]") {
     Scratch s;
-    CHECK_THROWS_WITH(read_volume(s.file("x.vti", "abc")), Contains("x.vti") && Contains("unknown volume format") && Contains(".vtk)"));
+    CHECK_THROWS_WITH(read_volume(s.file("x.vti", "abc")), Contains("x.vti") && Contains("unknown volume format") && Contains(".vtk or .npy)"));
     CHECK_THROWS_WITH(read_volume(s.file("x.raw", "abc")), Contains("x.raw") && Contains("--dims"));
     std::filesystem::create_directory(s.dir + "/d.nrrd");
     CHECK_THROWS_WITH(read_volume(s.dir + "/d.nrrd"), Contains("d.nrrd") && Contains("directory"));

@@ -452,6 +452,24 @@ class BytesAndFilesTest(unittest.TestCase):
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "'cut.nrrd'"):
             voxmesh.read_volume(data[:200], name="cut.nrrd")
 
+    def test_numpy_files_read_as_the_array_saved(self):
+        scratch = tempfile.mkdtemp(dir=os.environ.get("VOXMESH_TEST_SCRATCH"))
+        volume = sphere(20, 6.0)
+        for name, array in (("c.npy", volume), ("fortran.npy", np.asfortranarray(volume)),
+                            ("big.npy", volume.astype(">f4")), ("mask.npy", volume > 0)):
+            path = os.path.join(scratch, name)
+            np.save(path, array)
+            read = voxmesh.read_volume(path)
+            self.assertEqual(read.info["format"], "npy")
+            self.assertTrue(np.array_equal(read.array, array), name)  # [z, y, x] whatever the order
+            with open(path, "rb") as f:
+                self.assertTrue(np.array_equal(voxmesh.read_volume(f.read(), name="sent.npy").array, array))
+        self.assertTrue(np.array_equal(voxmesh.extract(voxmesh.read_volume(os.path.join(scratch, "c.npy"))).indices,
+                                       voxmesh.extract(volume).indices))
+        np.save(os.path.join(scratch, "int64.npy"), volume.astype(np.int64))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "int64.npy.*unsupported .npy dtype '<i8'"):
+            voxmesh.read_volume(os.path.join(scratch, "int64.npy"))
+
     def test_raw_files_and_nrrd_writes(self):
         scratch = tempfile.mkdtemp(dir=os.environ.get("VOXMESH_TEST_SCRATCH"))
         samples = (np.arange(5 * 6 * 7) * 37 % 1000).astype(np.uint16).reshape(5, 6, 7)

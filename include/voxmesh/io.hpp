@@ -70,7 +70,7 @@ Volume read_raw(std::istream& in, const std::string& name, const RawLayout& layo
 
 // What a volume file holds, read from its header only.
 struct VolumeInfo {
-    std::string format;  // "nrrd", "metaimage", "nifti", "vtk", "raw"
+    std::string format;  // "nrrd", "metaimage", "nifti", "vtk", "npy", "raw"
     ScalarType type = ScalarType::U8;
     std::array<std::size_t, 3> dims{0, 0, 0};
     std::array<double, 3> spacing{1, 1, 1};
@@ -92,12 +92,16 @@ struct VolumeInfo {
 };
 
 // NRRD (.nrrd, .nhdr), MetaImage (.mhd, .mha), NIfTI-1 (.nii, .nii.gz), legacy VTK (.vtk),
-// chosen by extension (case-insensitive). A .nii that is gzip-compressed is detected by content.
+// NumPy (.npy), chosen by extension (case-insensitive). A .nii that is gzip-compressed is detected by content.
 // Legacy VTK: DATASET STRUCTURED_POINTS (DIMENSIONS, SPACING or ASPECT_RATIO, ORIGIN; a
 // negative spacing flips its axis) whose POINT_DATA's first array is the volume: SCALARS or
 // COLOR_SCALARS (unsigned char; ASCII writes byte b as b/255) of one component, or a FIELD's
 // first array; BINARY (big-endian, copied) or ASCII (numbers that must fit the type); arrays
 // after it are ignored. read_volume_info checks ASCII data only for length.
+// NumPy: numpy.save's format 1.0 to 3.0 of a 3-D array (axes of size 1 beyond those allowed):
+// [z, y, x] in C order, [x, y, z] in Fortran order, so that x varies fastest either way; bool
+// (read as u8 0 and 1), 8/16/32-bit integers, float32 or float64 in either byte order; spacing
+// 1 and origin 0, as the format has no geometry.
 Volume read_volume(const std::string& path);
 VolumeInfo read_volume_info(const std::string& path);
 // read_volume, also filling `info` as read_volume_info would, from the one reading of the header.

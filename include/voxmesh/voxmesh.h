@@ -189,7 +189,7 @@ voxmesh_voxelize_options voxmesh_default_voxelize_options(void);
 voxmesh_status voxmesh_voxelize(const voxmesh_mesh* mesh, const voxmesh_voxelize_options* options,
                                 voxmesh_volume** volume);
 
-/* NRRD, MetaImage, NIfTI-1 or legacy VTK, by extension (as voxmesh::read_volume). */
+/* NRRD, MetaImage, NIfTI-1, legacy VTK or NumPy .npy, by extension (as voxmesh::read_volume). */
 voxmesh_status voxmesh_read_volume(const char* path, voxmesh_volume** volume);
 /* The same over `size` bytes at `data` (copied); `name` ("scan.nii.gz") stands for the path. */
 voxmesh_status voxmesh_read_volume_from_memory(const void* data, size_t size, const char* name,

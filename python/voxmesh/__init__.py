@@ -526,7 +526,7 @@ def _as_view(volume, spacing, origin):
 
 
 def read_volume(source, name=None):
-    """NRRD, MetaImage, NIfTI-1 or legacy VTK, chosen by extension, as voxmesh::read_volume.
+    """NRRD, MetaImage, NIfTI-1, legacy VTK or NumPy .npy, chosen by extension, as voxmesh::read_volume.
     `source` is a path, or the file's bytes with `name` ("scan.nii.gz") standing for its path."""
     if _is_bytes(source):
         return Volume(_bytes_call(source, name, _lib.voxmesh_read_volume_from_memory), readonly=False)

@@ -137,7 +137,7 @@ Command add_info(CLI::App& app) {
     CLI::App* sub = app.add_subcommand(
         "info", "Print a volume file's dims, type, spacing, origin, value range, size; or a model's size and topology");
     sub->add_option("FILE", a->input,
-                    "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, .vtk, or .raw with --dims --type; model: .stl, .ply, .obj; "
+                    "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, .vtk, .npy, or .raw with --dims --type; model: .stl, .ply, .obj; "
                     "-: standard input (the format told from its content, or raw with --dims --type)")
         ->required();
     add_raw_flags(sub, a->raw);

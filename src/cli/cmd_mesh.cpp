@@ -134,7 +134,7 @@ int run_mesh(const MeshArgs& a) {
 Command add_mesh(CLI::App& app) {
     auto a = std::make_shared<MeshArgs>();
     CLI::App* sub = app.add_subcommand("mesh", "Extract the iso-surface of a volume file into a mesh file");
-    sub->add_option("INPUT", a->input, "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, .vtk, or .raw with --dims --type (-: standard input, a format told from its content, or raw samples with --dims --type)")
+    sub->add_option("INPUT", a->input, "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, .vtk, .npy, or .raw with --dims --type (-: standard input, a format told from its content, or raw samples with --dims --type)")
         ->required();
     sub->add_option("-o,--output", a->output, "mesh file: .stl (binary), .ply (binary) or .obj; -: standard output (with --format)")
         ->required();

@@ -117,6 +117,7 @@ std::string sniff_format(const std::string& head, std::size_t size, InputKind ki
     if (volume) {
         if (starts_with(head, "NRRD000")) return ".nrrd";
         if (starts_with(head, "# vtk DataFile")) return ".vtk";
+        if (starts_with(head, std::string("\x93NUMPY", 6))) return ".npy";
         if (head.size() >= 2 && static_cast<unsigned char>(head[0]) == 0x1f && static_cast<unsigned char>(head[1]) == 0x8b)
             return ".nii.gz";
         if (head.size() >= 348 && head.compare(344, 4, std::string("n+1\0", 4)) == 0) return ".nii";

@@ -23,7 +23,7 @@ inline std::string input_name(const std::string& arg) { return arg == "-" ? kStd
 enum class InputKind { Volume, Model, VolumeOrModel, Raw, Text };
 
 // The extension of the format the first bytes (`head`) of a file of `size` bytes show, or ""
-// when none of `kind`: ".nrrd", ".vtk", ".nii.gz", ".nii", ".mha" (volumes), ".ply", ".stl", ".obj"
+// when none of `kind`: ".nrrd", ".vtk", ".npy", ".nii.gz", ".nii", ".mha" (volumes), ".ply", ".stl", ".obj"
 // (models).
 std::string sniff_format(const std::string& head, std::size_t size, InputKind kind);
 

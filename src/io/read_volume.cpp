@@ -97,9 +97,10 @@ VolumeHeader parse_header(const InputFile& file) {
     if (ends_with_nocase(path, ".mhd") || ends_with_nocase(path, ".mha")) return read_metaimage_header(file);
     if (ends_with_nocase(path, ".nii") || ends_with_nocase(path, ".nii.gz")) return read_nifti_header(file);
     if (ends_with_nocase(path, ".vtk")) return read_vtk_header(file);
+    if (ends_with_nocase(path, ".npy")) return read_npy_header(file);
     if (ends_with_nocase(path, ".raw"))
         fail(path, "a headerless .raw volume needs its dims and type (read_raw / --dims --type)");
-    fail(path, "unknown volume format (expected .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz or .vtk)");
+    fail(path, "unknown volume format (expected .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, .vtk or .npy)");
 }
 
 VolumeHeader read_header(const InputFile& file) {

@@ -23,6 +23,7 @@ VolumeHeader read_nrrd_header(const InputFile& file);
 VolumeHeader read_metaimage_header(const InputFile& file);
 VolumeHeader read_nifti_header(const InputFile& file);
 VolumeHeader read_vtk_header(const InputFile& file);
+VolumeHeader read_npy_header(const InputFile& file);
 
 // N-D sizes as 3-D dims: N must be at least 3, and axes past the third must have size 1.
 std::array<std::size_t, 3> volume_dims(const std::string& path, const std::vector<std::size_t>& sizes);
