@@ -8,6 +8,7 @@
 #include <voxmesh/voxmesh.h>
 #include <voxmesh/voxmesh.hpp>
 
+#include "support/c_api.hpp"
 #include "support/io_scratch.hpp"
 
 #include <cstring>
@@ -18,46 +19,10 @@
 
 namespace {
 
-using MeshPtr = std::unique_ptr<voxmesh_mesh, decltype(&voxmesh_mesh_free)>;
-
-voxmesh_volume_view c_view(const voxmesh::VolumeView& v) {
-    voxmesh_volume_view view{};
-    view.data = v.data;
-    view.type = static_cast<int>(v.type);  // checked against the C names below
-    for (int a = 0; a < 3; ++a) {
-        view.dims[a] = v.dims[a];
-        view.spacing[a] = v.spacing[a];
-        view.origin[a] = v.origin[a];
-    }
-    return view;
-}
-
-template <class T>
-bool same_bytes(const T* c, const std::vector<T>& cpp) {
-    if (cpp.empty()) return c == nullptr;
-    return c && std::memcmp(c, cpp.data(), cpp.size() * sizeof(T)) == 0;
-}
-
-void require_same(const voxmesh_mesh* c, const voxmesh::Mesh& cpp) {
-    REQUIRE(voxmesh_mesh_vertex_count(c) == cpp.vertex_count());
-    REQUIRE(voxmesh_mesh_triangle_count(c) == cpp.triangle_count());
-    CHECK(same_bytes(voxmesh_mesh_positions(c), cpp.positions));
-    CHECK(same_bytes(voxmesh_mesh_normals(c), cpp.normals));
-    CHECK(same_bytes(voxmesh_mesh_indices(c), cpp.indices));
-}
-
-using VolumePtr = std::unique_ptr<voxmesh_volume, decltype(&voxmesh_volume_free)>;
-
-// A C API volume's view against the C++ volume: type, geometry and every sample byte.
-void require_same(const voxmesh_volume_view& c, const voxmesh::Volume& cpp) {
-    REQUIRE(c.type == static_cast<int>(cpp.type));
-    for (int a = 0; a < 3; ++a) {
-        CHECK(c.dims[a] == cpp.dims[a]);
-        CHECK(c.spacing[a] == cpp.spacing[a]);
-        CHECK(c.origin[a] == cpp.origin[a]);
-    }
-    CHECK(std::memcmp(c.data, cpp.data, cpp.byte_size()) == 0);
-}
+using capitest::c_view;
+using capitest::MeshPtr;
+using capitest::require_same;
+using capitest::VolumePtr;
 
 std::string cpp_error(const voxmesh::VolumeView& view, const voxmesh::Options& options) {
     try {

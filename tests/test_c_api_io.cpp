@@ -7,6 +7,7 @@
 #include <voxmesh/voxmesh.h>
 #include <voxmesh/voxmesh.hpp>
 
+#include "support/c_api.hpp"
 #include "support/io_scratch.hpp"
 
 #include <algorithm>
@@ -19,21 +20,12 @@
 
 namespace {
 
-using MeshPtr = std::unique_ptr<voxmesh_mesh, decltype(&voxmesh_mesh_free)>;
-using VolumePtr = std::unique_ptr<voxmesh_volume, decltype(&voxmesh_volume_free)>;
-using BytesPtr = std::unique_ptr<voxmesh_bytes, decltype(&voxmesh_bytes_free)>;
-
-voxmesh_volume_view c_view(const voxmesh::VolumeView& v) {
-    voxmesh_volume_view view{};
-    view.data = v.data;
-    view.type = static_cast<int>(v.type);  // the enums' order is checked in test_c_api.cpp
-    for (int a = 0; a < 3; ++a) {
-        view.dims[a] = v.dims[a];
-        view.spacing[a] = v.spacing[a];
-        view.origin[a] = v.origin[a];
-    }
-    return view;
-}
+using capitest::BytesPtr;
+using capitest::c_view;
+using capitest::extract_c;
+using capitest::MeshPtr;
+using capitest::require_same;
+using capitest::VolumePtr;
 
 std::string text(const voxmesh_bytes* bytes) {
     const unsigned char* data = voxmesh_bytes_data(bytes);
@@ -42,27 +34,8 @@ std::string text(const voxmesh_bytes* bytes) {
 
 std::string text(const std::vector<unsigned char>& bytes) { return std::string(bytes.begin(), bytes.end()); }
 
-void require_same(const voxmesh_mesh* c, const voxmesh::Mesh& cpp) {
-    REQUIRE(voxmesh_mesh_vertex_count(c) == cpp.vertex_count());
-    REQUIRE(voxmesh_mesh_triangle_count(c) == cpp.triangle_count());
-    if (cpp.vertex_count())
-        CHECK(std::memcmp(voxmesh_mesh_positions(c), cpp.positions.data(), cpp.positions.size() * 4) == 0);
-    if (cpp.triangle_count())
-        CHECK(std::memcmp(voxmesh_mesh_indices(c), cpp.indices.data(), cpp.indices.size() * 4) == 0);
-    CHECK((voxmesh_mesh_normals(c) != nullptr) == !cpp.normals.empty());
-    if (!cpp.normals.empty())
-        CHECK(std::memcmp(voxmesh_mesh_normals(c), cpp.normals.data(), cpp.normals.size() * 4) == 0);
-}
-
 void require_same(const voxmesh_volume* c, const voxmesh::Volume& cpp) {
-    const voxmesh_volume_view view = voxmesh_volume_get_view(c);
-    REQUIRE(view.type == static_cast<int>(cpp.type));
-    for (int a = 0; a < 3; ++a) {
-        CHECK(view.dims[a] == cpp.dims[a]);
-        CHECK(view.spacing[a] == cpp.spacing[a]);
-        CHECK(view.origin[a] == cpp.origin[a]);
-    }
-    CHECK(std::memcmp(view.data, cpp.data, cpp.byte_size()) == 0);
+    require_same(voxmesh_volume_get_view(c), cpp);
 }
 
 void require_same(const voxmesh_volume_info& c, const voxmesh::VolumeInfo& cpp) {
@@ -79,12 +52,10 @@ void require_same(const voxmesh_volume_info& c, const voxmesh::VolumeInfo& cpp) 
 
 TEST_CASE("C API: meshes to and from bytes are write_mesh_to_memory's and read_mesh_from_memory's", "[capi]") {
     voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Sphere, 20, voxmesh::ScalarType::F32);
-    const voxmesh_volume_view view = c_view(field.volume.view());
     voxmesh_options options = voxmesh_default_options();
     options.iso = field.iso;
+    const MeshPtr mesh = extract_c(c_view(field.volume.view()), options);
     voxmesh_mesh* made = nullptr;
-    REQUIRE(voxmesh_extract(&view, &options, &made) == VOXMESH_OK);
-    const MeshPtr mesh(made, voxmesh_mesh_free);
     voxmesh::Options cpp;
     cpp.iso = field.iso;
     const voxmesh::Mesh expected = voxmesh::extract(field.volume.view(), cpp);

@@ -8,6 +8,8 @@
 #include <voxmesh/voxmesh.h>
 #include <voxmesh/voxmesh.hpp>
 
+#include "support/c_api.hpp"
+
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -18,33 +20,15 @@
 
 namespace {
 
-using SculptPtr = std::unique_ptr<voxmesh_sculpt, decltype(&voxmesh_sculpt_free)>;
-using MeshPtr = std::unique_ptr<voxmesh_mesh, decltype(&voxmesh_mesh_free)>;
-
-voxmesh_volume_view c_view(const voxmesh::VolumeView& v) {
-    voxmesh_volume_view view{};
-    view.data = v.data;
-    view.type = static_cast<int>(v.type);  // the enums' order is checked in test_c_api.cpp
-    for (int a = 0; a < 3; ++a) {
-        view.dims[a] = v.dims[a];
-        view.spacing[a] = v.spacing[a];
-        view.origin[a] = v.origin[a];
-    }
-    return view;
-}
+using capitest::c_view;
+using capitest::MeshPtr;
+using capitest::require_same;
+using capitest::SculptPtr;
 
 template <class T>
 bool same_bytes(const T* c, std::size_t count, std::span<const T> cpp) {
     if (cpp.empty()) return c == nullptr && count == 0;
     return c && count == cpp.size() && std::memcmp(c, cpp.data(), cpp.size_bytes()) == 0;
-}
-
-void require_same(const voxmesh_mesh* c, const voxmesh::Mesh& cpp) {
-    REQUIRE(voxmesh_mesh_vertex_count(c) == cpp.vertex_count());
-    REQUIRE(voxmesh_mesh_triangle_count(c) == cpp.triangle_count());
-    CHECK(same_bytes(voxmesh_mesh_positions(c), cpp.positions.size(), std::span<const float>(cpp.positions)));
-    CHECK(same_bytes(voxmesh_mesh_normals(c), cpp.normals.size(), std::span<const float>(cpp.normals)));
-    CHECK(same_bytes(voxmesh_mesh_indices(c), cpp.indices.size(), std::span<const std::uint32_t>(cpp.indices)));
 }
 
 // Every block of the C sculpt against the C++ one's: place, cells and mesh bytes.
