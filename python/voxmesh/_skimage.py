@@ -219,10 +219,11 @@ def _spreads(data, level, owner, axis, mask):
     flat = data.ravel()
     dims = data.shape[::-1]  # x, y, z
     strides = (1, dims[0], dims[0] * dims[1])
-    xyz = _coordinates(owner, data.shape)
     best = np.zeros(len(owner), dtype=np.float32)
     for along in range(3):  # one pass per edge axis, so that the offsets are plain numbers
         chosen = np.flatnonzero(axis == along)
+        if len(chosen) == 0:
+            continue
         start = owner[chosen]
         p, q = (along + 1) % 3, (along + 2) % 3  # the axes across the edge
         # The 3 x 3 sample pairs parallel to the edge around it: the four cells around the
@@ -235,21 +236,25 @@ def _spreads(data, level, owner, axis, mask):
                 near = np.take(flat, at, mode="clip")
                 far = np.take(flat, at + strides[along], mode="clip")
                 high[i, j], low[i, j] = np.maximum(near, far), np.minimum(near, far)
-        cp, cq = xyz[p, chosen], xyz[q, chosen]
-        spread_max = best[chosen]
+        # Each block's extremes from halves two blocks share: across q first, then across p.
+        high_q = {(i, j): np.maximum(high[i, j], high[i, j + 1]) for i in (-1, 0, 1) for j in (-1, 0)}
+        low_q = {(i, j): np.minimum(low[i, j], low[i, j + 1]) for i in (-1, 0, 1) for j in (-1, 0)}
+        cp, cq = start // strides[p] % dims[p], start // strides[q] % dims[q]
+        inside_p = {-1: cp >= 1, 0: cp <= dims[p] - 2}  # the block's cell lies in the volume
+        inside_q = {-1: cq >= 1, 0: cq <= dims[q] - 2}
+        spread_max = np.zeros(len(chosen), dtype=np.float32)
         for i in (-1, 0):
             for j in (-1, 0):
-                ok = (cp + i >= 0) & (cp + i <= dims[p] - 2) & (cq + j >= 0) & (cq + j <= dims[q] - 2)
+                ok = inside_p[i] & inside_q[j]
                 if mask is not None:
-                    cell = xyz[:, chosen].copy()
+                    cell = [start // strides[a] % dims[a] for a in range(3)]
                     cell[p] = np.clip(cp + i, 0, dims[p] - 2)
                     cell[q] = np.clip(cq + j, 0, dims[q] - 2)
                     ok &= mask[cell[2], cell[1], cell[0]]  # along the edge it is the owner's cell
-                block = [(i, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
-                top = np.maximum.reduce([high[k] for k in block]).astype(np.float64)
-                bottom = np.minimum.reduce([low[k] for k in block]).astype(np.float64)
-                spread = ((top - level) - (bottom - level)).astype(np.float32)
-                spread_max = np.where(ok & (spread > spread_max), spread, spread_max)
+                top = np.maximum(high_q[i, j], high_q[i + 1, j]).astype(np.float64)
+                bottom = np.minimum(low_q[i, j], low_q[i + 1, j]).astype(np.float64)
+                spread = ((top - level) - (bottom - level)).astype(np.float32)  # >= 0
+                np.maximum(spread_max, np.where(ok, spread, np.float32(0)), out=spread_max)
         best[chosen] = spread_max
     return best
 
