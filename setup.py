@@ -32,6 +32,9 @@ class BuildWithLibrary(build_py):
         build = os.path.join(os.path.abspath(self.get_finalized_command("build").build_temp), "cmake")
         configure = ["cmake", "-S", ROOT, "-B", build, "-DCMAKE_BUILD_TYPE=Release", "-DVOXMESH_BUILD_TESTS=OFF",
                      "-DVOXMESH_BUILD_BENCH=OFF", "-DVOXMESH_BUILD_CLI=OFF", "-DVOXMESH_BUILD_C_API=ON"]
+        if shutil.which("cmake") is None:
+            raise RuntimeError("building voxmesh needs CMake and a C++20 compiler, with the OpenCL ICD loader and "
+                               "zlib headers (Debian: bash scripts/install-deps.sh)")
         subprocess.check_call(configure + shlex.split(os.environ.get("VOXMESH_CMAKE_ARGS", "")))
         jobs = os.environ.get("VOXMESH_BUILD_JOBS") or str(os.cpu_count() or 1)
         subprocess.check_call(["cmake", "--build", build, "--target", "voxmesh_c", "-j", jobs])
