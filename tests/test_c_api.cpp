@@ -97,6 +97,59 @@ TEST_CASE("C API: extract gives the C++ API's mesh bit for bit", "[capi]") {
     }
 }
 
+TEST_CASE("C API: extract_into replaces a mesh's arrays, stats and warnings, reusing its memory", "[capi]") {
+    voxmesh::FieldVolume gyroid = voxmesh::make_field(voxmesh::Field::Gyroid, 32, voxmesh::ScalarType::F32);
+    voxmesh::FieldVolume sphere = voxmesh::make_field(voxmesh::Field::Sphere, 32, voxmesh::ScalarType::U8);
+    voxmesh_options options = voxmesh_default_options();
+    options.backend = VOXMESH_BACKEND_CPU;
+    options.iso = gyroid.iso;
+    MeshPtr mesh = capitest::extract_c(c_view(gyroid.volume.view()), options);
+    REQUIRE(voxmesh_mesh_triangle_count(mesh.get()) > 0);
+
+    // The sphere into the gyroid's mesh: the C++ extract's mesh, its stats.
+    options.iso = sphere.iso;
+    const voxmesh_volume_view view = c_view(sphere.volume.view());
+    REQUIRE(voxmesh_extract_into(&view, &options, mesh.get()) == VOXMESH_OK);
+    voxmesh::Options cpp;
+    cpp.iso = sphere.iso;
+    cpp.backend = voxmesh::Backend::Cpu;
+    const voxmesh::Mesh want = voxmesh::extract(sphere.volume.view(), cpp);
+    require_same(mesh.get(), want);
+    CHECK(voxmesh_mesh_stats(mesh.get()).backend == VOXMESH_BACKEND_CPU);
+    CHECK(voxmesh_mesh_device_stats_count(mesh.get()) == 1);
+    // Again: the arrays it has are large enough, so they stay where they are.
+    const float* positions = voxmesh_mesh_positions(mesh.get());
+    const uint32_t* indices = voxmesh_mesh_indices(mesh.get());
+    REQUIRE(voxmesh_extract_into(&view, &options, mesh.get()) == VOXMESH_OK);
+    CHECK(voxmesh_mesh_positions(mesh.get()) == positions);
+    CHECK(voxmesh_mesh_indices(mesh.get()) == indices);
+    require_same(mesh.get(), want);
+
+    // A mesh read from a file can be meshed into too.
+    const std::string path = std::string(VOXMESH_TEST_DATA) + "/unit_sphere.stl";
+    voxmesh_mesh* read = nullptr;
+    REQUIRE(voxmesh_read_mesh(path.c_str(), &read) == VOXMESH_OK);
+    MeshPtr model(read, voxmesh_mesh_free);
+    REQUIRE(voxmesh_extract_into(&view, &options, model.get()) == VOXMESH_OK);
+    require_same(model.get(), want);
+    CHECK(voxmesh_mesh_stats(model.get()).backend == VOXMESH_BACKEND_CPU);
+
+    // Failures leave the mesh empty, with no stats, and say why.
+    voxmesh_volume_view bad = view;
+    bad.type = 77;
+    CHECK(voxmesh_extract_into(&bad, &options, mesh.get()) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()) == "voxmesh_extract_into: unknown scalar type 77 (VOXMESH_U8 .. VOXMESH_F64)");
+    CHECK(voxmesh_mesh_vertex_count(mesh.get()) == 0);
+    CHECK(voxmesh_mesh_triangle_count(mesh.get()) == 0);
+    CHECK(voxmesh_mesh_positions(mesh.get()) == nullptr);
+    CHECK(voxmesh_mesh_stats(mesh.get()).backend == VOXMESH_BACKEND_AUTO);
+    options.device_type = 9;
+    CHECK(voxmesh_extract_into(&view, &options, mesh.get()) == VOXMESH_ERROR);
+    CHECK_THAT(std::string(voxmesh_last_error()), Catch::StartsWith("voxmesh_extract_into: unknown device type 9"));
+    CHECK(voxmesh_extract_into(&view, nullptr, nullptr) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()) == "voxmesh_extract_into: the mesh is NULL");
+}
+
 TEST_CASE("C API: options NULL means the defaults", "[capi]") {
     voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Sphere, 24, voxmesh::ScalarType::F32);
     const voxmesh_volume_view view = c_view(field.volume.view());

@@ -104,6 +104,13 @@ typedef struct voxmesh_mesh voxmesh_mesh;
 voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_options* options,
                                voxmesh_mesh** mesh);
 
+/* As voxmesh_extract, into an existing mesh (one this API made), reusing the memory its arrays
+ * already have: meshing again and again (a sculpting loop, an animation) writes pages already
+ * mapped instead of fresh ones. The mesh's previous arrays, stats and warnings are replaced
+ * (pointers taken from it before may no longer be valid); on failure it is left empty. */
+voxmesh_status voxmesh_extract_into(const voxmesh_volume_view* volume, const voxmesh_options* options,
+                                    voxmesh_mesh* mesh);
+
 size_t voxmesh_mesh_vertex_count(const voxmesh_mesh* mesh);
 size_t voxmesh_mesh_triangle_count(const voxmesh_mesh* mesh);
 /* xyz per vertex; NULL for a mesh without vertices. Valid until voxmesh_mesh_free. */

@@ -124,7 +124,7 @@ int backend_code(voxmesh::Backend backend) {
     return VOXMESH_BACKEND_AUTO;
 }
 
-voxmesh::DeviceType device_type(int code) {
+voxmesh::DeviceType device_type(int code, const char* who) {
     using voxmesh::DeviceType;
     switch (code) {
         case VOXMESH_DEVICE_ANY: return DeviceType::Any;
@@ -132,7 +132,7 @@ voxmesh::DeviceType device_type(int code) {
         case VOXMESH_DEVICE_GPU: return DeviceType::Gpu;
         case VOXMESH_DEVICE_ACCELERATOR: return DeviceType::Accelerator;
         default:
-            throw voxmesh::Error("voxmesh_extract: unknown device type " + std::to_string(code) +
+            throw voxmesh::Error(std::string(who) + ": unknown device type " + std::to_string(code) +
                                  " (VOXMESH_DEVICE_ANY, _CPU, _GPU or _ACCELERATOR)");
     }
 }
@@ -178,6 +178,35 @@ voxmesh::VolumeView cpp_view(const voxmesh_volume_view& volume, const char* who)
     view.type = scalar_type(volume.type, who);
     copy_geometry(volume, view);
     return view;
+}
+
+// voxmesh::extract_into behind voxmesh_extract and voxmesh_extract_into: `mesh` gets the
+// canonical mesh, what the extract did and its warnings; on an exception it is left empty.
+void extract_into(const voxmesh_volume_view* volume, const voxmesh_options* options, voxmesh_mesh& mesh,
+                  const char* who) {
+    mesh.extracted = false;
+    mesh.stats = voxmesh::Stats{};
+    mesh.warnings.clear();
+    mesh.mesh.positions.clear();  // left empty if a check below throws, as extract_into leaves it
+    mesh.mesh.normals.clear();
+    mesh.mesh.indices.clear();
+    require(volume, who, "the volume");
+    const voxmesh_options given = options ? *options : voxmesh_default_options();
+    const voxmesh::VolumeView view = cpp_view(*volume, who);
+    voxmesh::Options cpp;
+    cpp.iso = given.iso;
+    cpp.backend = backend(given.backend, who);
+    cpp.threads = given.threads;
+    cpp.normals = given.normals != 0;
+    cpp.inside_below = given.inside_below != 0;
+    if (given.device_count) require(given.devices, who, "options->devices");
+    cpp.devices.assign(given.devices, given.devices + given.device_count);
+    cpp.device_type = device_type(given.device_type, who);
+    cpp.chunk_planes = given.chunk_planes;
+    cpp.memory_budget = given.memory_budget;
+    voxmesh::extract_into(view, cpp, mesh.mesh, mesh.stats);
+    for (const std::string& w : mesh.stats.warnings) mesh.warnings += w + "\n";
+    mesh.extracted = true;
 }
 
 // C sculpt options to the C++ ones, with a log that keeps the warnings for the C caller.
@@ -274,25 +303,17 @@ voxmesh_status voxmesh_extract(const voxmesh_volume_view* volume, const voxmesh_
     if (mesh) *mesh = nullptr;
     return guarded([&] {
         require(mesh, "voxmesh_extract", "the mesh pointer");
-        require(volume, "voxmesh_extract", "the volume");
-        const voxmesh_options given = options ? *options : voxmesh_default_options();
-        const voxmesh::VolumeView view = cpp_view(*volume, "voxmesh_extract");
-        voxmesh::Options cpp;
-        cpp.iso = given.iso;
-        cpp.backend = backend(given.backend, "voxmesh_extract");
-        cpp.threads = given.threads;
-        cpp.normals = given.normals != 0;
-        cpp.inside_below = given.inside_below != 0;
-        if (given.device_count) require(given.devices, "voxmesh_extract", "options->devices");
-        cpp.devices.assign(given.devices, given.devices + given.device_count);
-        cpp.device_type = device_type(given.device_type);
-        cpp.chunk_planes = given.chunk_planes;
-        cpp.memory_budget = given.memory_budget;
-        voxmesh::Stats stats;
-        voxmesh::Mesh made = voxmesh::extract(view, cpp, stats);
-        std::string warnings;
-        for (const std::string& w : stats.warnings) warnings += w + "\n";
-        *mesh = new voxmesh_mesh{std::move(made), std::move(stats), std::move(warnings), true};
+        auto made = std::make_unique<voxmesh_mesh>();
+        extract_into(volume, options, *made, "voxmesh_extract");
+        *mesh = made.release();
+    });
+}
+
+voxmesh_status voxmesh_extract_into(const voxmesh_volume_view* volume, const voxmesh_options* options,
+                                    voxmesh_mesh* mesh) {
+    return guarded([&] {
+        require(mesh, "voxmesh_extract_into", "the mesh");
+        extract_into(volume, options, *mesh, "voxmesh_extract_into");
     });
 }
 
