@@ -108,6 +108,8 @@ VolumeInfo read_volume_info(const std::string& path);
 Volume read_volume(const std::string& path, VolumeInfo& info);
 // The same checks as read_raw, without loading the samples.
 VolumeInfo read_raw_info(const std::string& path, const RawLayout& layout);
+// read_raw, also filling `info` (format "raw", flipped axes, ...) as read_volume(path, info) does.
+Volume read_raw(const std::string& path, const RawLayout& layout, VolumeInfo& info);
 
 // NRRD with raw encoding in host byte order (spacing and origin written as `space
 // directions` / `space origin` with `space dimension: 3`), through a temporary file renamed

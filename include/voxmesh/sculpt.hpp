@@ -122,8 +122,11 @@ public:
     static Sculpt from_mesh(const Mesh& model, std::size_t resolution, const SculptOptions& options = {});
     // The same with the voxelization chosen (voxelize.hpp): more `padding` gives a surface room
     // to be built up before it meets the volume's border, where its mesh is cut open (the
-    // resolution-only form leaves 2 samples, and uses band 4). The field must be Distance.
+    // resolution-only form leaves 2 samples). The field must be Distance.
     static Sculpt from_mesh(const Mesh& model, const VoxelizeOptions& voxelize, const SculptOptions& options = {});
+    // The voxelization the resolution-only from_mesh uses, to start from: `resolution`, the
+    // default padding, band 4 (a smooth field for the brushes), options.threads.
+    static VoxelizeOptions model_voxelization(std::size_t resolution, const SculptOptions& options = {});
     // from_mesh(read_stl(path)); read_mesh (io.hpp) also reads .ply and .obj models.
     static Sculpt from_stl(const std::string& path, std::size_t resolution, const SculptOptions& options = {});
 

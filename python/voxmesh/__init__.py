@@ -468,12 +468,7 @@ def read_mesh(source, name=None):
 _FIELDS = {"occupancy": 0, "distance": 1}
 
 
-def voxelize(mesh, resolution=128, padding=2, field="distance", band=3.0, threads=0):
-    """A closed mesh (a Mesh, or a (positions, indices) pair) as a Volume, as voxmesh::voxelize:
-    field "distance" (float32, positive inside: extract it at iso 0) or "occupancy" (uint8, 255
-    inside: extract it at iso 127.5); spacing and origin put its mesh back in the model's units."""
-    if not isinstance(mesh, Mesh):
-        mesh = Mesh.from_arrays(*mesh)
+def _voxelize_options(resolution, padding, field, band, threads):
     if field not in _FIELDS:
         raise VoxmeshError(f"unknown field '{field}' (distance, occupancy)")
     for name, value in (("resolution", resolution), ("padding", padding), ("threads", threads)):
@@ -485,6 +480,16 @@ def voxelize(mesh, resolution=128, padding=2, field="distance", band=3.0, thread
     options.field = _FIELDS[field]
     options.band = float(band)
     options.threads = int(threads)
+    return options
+
+
+def voxelize(mesh, resolution=128, padding=2, field="distance", band=3.0, threads=0):
+    """A closed mesh (a Mesh, or a (positions, indices) pair) as a Volume, as voxmesh::voxelize:
+    field "distance" (float32, positive inside: extract it at iso 0) or "occupancy" (uint8, 255
+    inside: extract it at iso 127.5); spacing and origin put its mesh back in the model's units."""
+    if not isinstance(mesh, Mesh):
+        mesh = Mesh.from_arrays(*mesh)
+    options = _voxelize_options(resolution, padding, field, band, threads)
     pointer = ctypes.c_void_p()
     _check(_lib.voxmesh_voxelize(mesh._handle.pointer, ctypes.byref(options), ctypes.byref(pointer)))
     return Volume(pointer.value, readonly=False)
@@ -499,14 +504,19 @@ def _triple(name, value, default):
     return values
 
 
-def _as_view(volume, spacing, origin):
-    """A C view of a 3-D array [z, y, x] or a Volume, and the array it points into (keep it
-    alive while the view is used)."""
+def _unwrap(volume, spacing, origin):
+    """The samples of an array or a Volume, with a Volume's spacing and origin where none are given."""
     if isinstance(volume, Volume):
         spacing = volume.spacing if spacing is None else spacing
         origin = volume.origin if origin is None else origin
         volume = volume.array
-    array = np.asarray(volume)
+    return np.asarray(volume), spacing, origin
+
+
+def _as_view(volume, spacing, origin):
+    """A C view of a 3-D array [z, y, x] or a Volume, and the array it points into (keep it
+    alive while the view is used)."""
+    array, spacing, origin = _unwrap(volume, spacing, origin)
     if array.ndim != 3:
         raise VoxmeshError(f"volume must be 3-D, indexed [z, y, x]; got {array.ndim} dimension(s)")
     if array.dtype == np.bool_:
@@ -670,18 +680,13 @@ class Sculpt:
     def __init__(self, volume, iso=0.0, spacing=None, origin=None, threads=0, block_size=32, normals=True,
                  inside_below=False, strength_scale=0.0, backend="cpu", device=-1):
         options = _sculpt_options(iso, threads, block_size, normals, inside_below, strength_scale, backend, device)
-        if isinstance(volume, Volume):
-            spacing = volume.spacing if spacing is None else spacing
-            origin = volume.origin if origin is None else origin
-            volume = volume.array
-        volume = np.asarray(volume)
+        volume, spacing, origin = _unwrap(volume, spacing, origin)
         if volume.dtype.type not in (np.uint8, np.uint16, np.float32, np.bool_):
             # The sculpt keeps u8, u16 or f32 samples in a copy of its own: make that copy float32.
             volume = volume.astype(np.float32)
-        view, array = _as_view(volume, spacing, origin)  # the library copies the samples
+        view, _samples = _as_view(volume, spacing, origin)  # alive for the call; the library copies them
         pointer = ctypes.c_void_p()
         _check(_lib.voxmesh_sculpt_new(ctypes.byref(view), ctypes.byref(options), ctypes.byref(pointer)))
-        del array
         self._adopt(pointer.value)
 
     def _adopt(self, pointer):
@@ -704,15 +709,7 @@ class Sculpt:
         surface displacement. A surface built up past the padding is cut open at the border."""
         if not isinstance(model, Mesh):
             model = Mesh.from_arrays(*model)
-        for name, value in (("resolution", resolution), ("padding", padding)):
-            if int(value) < 0:
-                raise VoxmeshError(f"{name} must not be negative; got {value}")
-        grid = _lib.voxmesh_default_voxelize_options()
-        grid.resolution = int(resolution)
-        grid.padding = int(padding)
-        grid.field = _FIELDS["distance"]
-        grid.band = float(band)
-        grid.threads = int(threads)
+        grid = _voxelize_options(resolution, padding, "distance", band, threads)
         options = _sculpt_options(0.0, threads, block_size, normals, False, strength_scale, backend, device)
         pointer = ctypes.c_void_p()
         _check(_lib.voxmesh_sculpt_from_mesh(model._handle.pointer, ctypes.byref(grid), ctypes.byref(options),

@@ -166,8 +166,9 @@ void copy_geometry(const From& from, To& to) {
     }
 }
 
-template <class T>
-const T* data_or_null(const std::vector<T>& array) {
+// A vector's or span's first element; NULL when it is empty (the C API's "no array").
+template <class Array>
+auto data_or_null(const Array& array) -> decltype(array.data()) {
     return array.empty() ? nullptr : array.data();
 }
 
@@ -177,6 +178,15 @@ voxmesh::VolumeView cpp_view(const voxmesh_volume_view& volume, const char* who)
     view.data = volume.data;
     view.type = scalar_type(volume.type, who);
     copy_geometry(volume, view);
+    return view;
+}
+
+// A C++ view as the C one (volume_get_view, sculpt_get_view).
+voxmesh_volume_view c_view(const voxmesh::VolumeView& v) {
+    voxmesh_volume_view view{};
+    view.data = v.data;
+    view.type = scalar_code(v.type);
+    copy_geometry(v, view);
     return view;
 }
 
@@ -522,8 +532,9 @@ voxmesh_status voxmesh_read_raw(const char* path, const voxmesh_raw_layout* layo
         cpp.type = scalar_type(layout->type, "voxmesh_read_raw");
         cpp.big_endian = layout->big_endian != 0;
         cpp.offset = layout->offset;
-        voxmesh::Volume read = voxmesh::read_raw(path, cpp);
-        *volume = new voxmesh_volume{std::move(read), voxmesh::read_raw_info(path, cpp)};
+        voxmesh::VolumeInfo info;
+        voxmesh::Volume read = voxmesh::read_raw(path, cpp, info);
+        *volume = new voxmesh_volume{std::move(read), std::move(info)};
     });
 }
 
@@ -563,13 +574,7 @@ voxmesh_status voxmesh_write_nrrd_to_memory(const voxmesh_volume_view* volume, c
 }
 
 voxmesh_volume_view voxmesh_volume_get_view(const voxmesh_volume* volume) {
-    voxmesh_volume_view view{};
-    if (!volume) return view;
-    const voxmesh::Volume& v = volume->volume;
-    view.data = v.data;
-    view.type = scalar_code(v.type);
-    copy_geometry(v, view);
-    return view;
+    return volume ? c_view(volume->volume.view()) : voxmesh_volume_view{};
 }
 
 void voxmesh_volume_free(voxmesh_volume* volume) { delete volume; }
@@ -611,10 +616,9 @@ voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, const voxmesh
         auto warnings = std::make_shared<std::string>();
         const voxmesh_sculpt_options given = options ? *options : voxmesh_default_sculpt_options();
         const voxmesh::SculptOptions cpp = sculpt_options(given, warnings, "voxmesh_sculpt_from_mesh");
-        voxmesh::VoxelizeOptions grid;  // Sculpt::from_mesh(model, resolution)'s
-        grid.band = 4;
-        grid.threads = cpp.threads;
-        if (voxelize) grid = voxelize_options(*voxelize, "voxmesh_sculpt_from_mesh");
+        const voxmesh::VoxelizeOptions grid =
+            voxelize ? voxelize_options(*voxelize, "voxmesh_sculpt_from_mesh")
+                     : voxmesh::Sculpt::model_voxelization(voxmesh::VoxelizeOptions{}.resolution, cpp);
         voxmesh::Sculpt made = voxmesh::Sculpt::from_mesh(model->mesh, grid, cpp);
         *sculpt = new voxmesh_sculpt{std::move(made), std::move(warnings)};
     });
@@ -652,13 +656,7 @@ voxmesh_status voxmesh_sculpt_set_region(voxmesh_sculpt* sculpt, const double lo
 }
 
 voxmesh_volume_view voxmesh_sculpt_get_view(const voxmesh_sculpt* sculpt) {
-    voxmesh_volume_view view{};
-    if (!sculpt) return view;
-    const voxmesh::VolumeView v = sculpt->sculpt.view();
-    view.data = v.data;
-    view.type = scalar_code(v.type);
-    copy_geometry(v, view);
-    return view;
+    return sculpt ? c_view(sculpt->sculpt.view()) : voxmesh_volume_view{};
 }
 
 void* voxmesh_sculpt_data(voxmesh_sculpt* sculpt) { return sculpt ? sculpt->sculpt.data() : nullptr; }
@@ -707,9 +705,9 @@ voxmesh_status voxmesh_sculpt_get_block(const voxmesh_sculpt* sculpt, size_t ind
             block->cell_begin[a] = b.cell_begin[a];
             block->cell_end[a] = b.cell_end[a];
         }
-        block->positions = b.positions.empty() ? nullptr : b.positions.data();
-        block->normals = b.normals.empty() ? nullptr : b.normals.data();
-        block->indices = b.indices.empty() ? nullptr : b.indices.data();
+        block->positions = data_or_null(b.positions);
+        block->normals = data_or_null(b.normals);
+        block->indices = data_or_null(b.indices);
         block->vertex_count = b.vertex_count();
         block->triangle_count = b.triangle_count();
     });

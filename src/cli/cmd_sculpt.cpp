@@ -51,11 +51,8 @@ int run_sculpt(const SculptArgs& a) {
     options.log = [](const std::string& message) { std::cerr << "voxmesh: warning: " << message << "\n"; };
     const auto t0 = std::chrono::steady_clock::now();
     const Mesh model = load_model(a.input, "sculpt");
-    VoxelizeOptions voxelize_options;
-    voxelize_options.resolution = a.resolution;
+    VoxelizeOptions voxelize_options = Sculpt::model_voxelization(a.resolution, options);
     voxelize_options.padding = a.padding;
-    voxelize_options.band = 4;  // as Sculpt::from_mesh(model, resolution): a smooth field for the brushes
-    voxelize_options.threads = a.threads;
     Sculpt sculpt =
         about_file(input_name(a.input), [&] { return Sculpt::from_mesh(model, voxelize_options, options); });
     const UpdateResult first = sculpt.update();

@@ -185,9 +185,11 @@ auto reading(const void* data, std::size_t size, const std::string& name, F&& f)
 }
 
 // The caller's layout as the header of `file`'s samples.
-Volume read_raw_from(const io::InputFile& file, const RawLayout& layout) {
+Volume read_raw_from(const io::InputFile& file, const RawLayout& layout, VolumeInfo& info) {
     const io::VolumeHeader h = io::raw_header(file.path(), layout);
-    return placed(io::load_samples(file, h.layout), h.info);
+    Volume v = placed(io::load_samples(file, h.layout), h.info);
+    info = h.info;
+    return v;
 }
 
 }  // namespace
@@ -205,8 +207,13 @@ VolumeInfo read_volume_info(const std::string& path) {
     return reading(path, read_volume_info_from);
 }
 
+Volume read_raw(const std::string& path, const RawLayout& layout, VolumeInfo& info) {
+    return reading(path, [&](const io::InputFile& file) { return read_raw_from(file, layout, info); });
+}
+
 Volume read_raw(const std::string& path, const RawLayout& layout) {
-    return reading(path, [&](const io::InputFile& file) { return read_raw_from(file, layout); });
+    VolumeInfo info;
+    return read_raw(path, layout, info);
 }
 
 Volume read_raw(std::istream& in, const std::string& name, const RawLayout& layout) {
@@ -253,7 +260,8 @@ VolumeInfo read_volume_info_from_memory(const void* data, std::size_t size, cons
 }
 
 Volume read_raw_from_memory(const void* data, std::size_t size, const std::string& name, const RawLayout& layout) {
-    return reading(data, size, name, [&](const io::InputFile& file) { return read_raw_from(file, layout); });
+    VolumeInfo info;
+    return reading(data, size, name, [&](const io::InputFile& file) { return read_raw_from(file, layout, info); });
 }
 
 }  // namespace voxmesh

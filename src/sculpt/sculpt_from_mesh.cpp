@@ -7,12 +7,16 @@
 
 namespace voxmesh {
 
-Sculpt Sculpt::from_mesh(const Mesh& model, std::size_t resolution, const SculptOptions& options) {
+VoxelizeOptions Sculpt::model_voxelization(std::size_t resolution, const SculptOptions& options) {
     VoxelizeOptions vo;
     vo.resolution = resolution;
     vo.band = 4;  // a little wider than the default, so brushes have a smooth field to work on
     vo.threads = options.threads;
-    return from_mesh(model, vo, options);
+    return vo;
+}
+
+Sculpt Sculpt::from_mesh(const Mesh& model, std::size_t resolution, const SculptOptions& options) {
+    return from_mesh(model, model_voxelization(resolution, options), options);
 }
 
 Sculpt Sculpt::from_mesh(const Mesh& model, const VoxelizeOptions& voxelize_options, const SculptOptions& options) {
