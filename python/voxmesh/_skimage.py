@@ -239,7 +239,8 @@ def _spreads(data, level, owner, axis, mask):
         # Each block's extremes from halves two blocks share: across q first, then across p.
         high_q = {(i, j): np.maximum(high[i, j], high[i, j + 1]) for i in (-1, 0, 1) for j in (-1, 0)}
         low_q = {(i, j): np.minimum(low[i, j], low[i, j + 1]) for i in (-1, 0, 1) for j in (-1, 0)}
-        cp, cq = start // strides[p] % dims[p], start // strides[q] % dims[q]
+        xyz = _coordinates(start, data.shape)
+        cp, cq = xyz[p], xyz[q]
         inside_p = {-1: cp >= 1, 0: cp <= dims[p] - 2}  # the block's cell lies in the volume
         inside_q = {-1: cq >= 1, 0: cq <= dims[q] - 2}
         spread_max = np.zeros(len(chosen), dtype=np.float32)
@@ -247,7 +248,7 @@ def _spreads(data, level, owner, axis, mask):
             for j in (-1, 0):
                 ok = inside_p[i] & inside_q[j]
                 if mask is not None:
-                    cell = [start // strides[a] % dims[a] for a in range(3)]
+                    cell = xyz.copy()
                     cell[p] = np.clip(cp + i, 0, dims[p] - 2)
                     cell[q] = np.clip(cq + j, 0, dims[q] - 2)
                     ok &= mask[cell[2], cell[1], cell[0]]  # along the edge it is the owner's cell
