@@ -527,6 +527,92 @@ class BytesAndFilesTest(unittest.TestCase):
             voxmesh.extract(volume, chunk_planes=-1)
 
 
+def crossed_edges_oracle(volume, iso):
+    """Every crossed edge by brute force: sample by sample in flat order, axis x, y, z."""
+    inside = volume >= iso
+    nz, ny, nx = volume.shape
+    found = []
+    for s in range(volume.size):
+        z, y, x = np.unravel_index(s, volume.shape)
+        for axis, (dz, dy, dx) in enumerate(((0, 0, 1), (0, 1, 0), (1, 0, 0))):
+            if z + dz < nz and y + dy < ny and x + dx < nx and inside[z, y, x] != inside[z + dz, y + dy, x + dx]:
+                found.append(3 * s + axis)
+    return np.array(found, dtype=np.uint64)
+
+
+def cell_ranges_oracle(volume, edges, offset, mask):
+    """Per edge, the largest (max - offset) - (min - offset) over the whole cells around it."""
+    nz, ny, nx = volume.shape
+    ranges = []
+    for edge in edges.tolist():
+        s, axis = divmod(edge, 3)
+        at = list(np.unravel_index(s, volume.shape))[::-1]  # x, y, z
+        best = np.float32(0)
+        p, q = (axis + 1) % 3, (axis + 2) % 3
+        for i in (-1, 0):
+            for j in (-1, 0):
+                corner = list(at)
+                corner[p] += i
+                corner[q] += j
+                if min(corner) < 0 or corner[0] > nx - 2 or corner[1] > ny - 2 or corner[2] > nz - 2:
+                    continue
+                x, y, z = corner
+                if mask is not None and not mask[z, y, x]:
+                    continue
+                cell = volume[z:z + 2, y:y + 2, x:x + 2]
+                spread = np.float32((float(cell.max()) - offset) - (float(cell.min()) - offset))
+                best = max(best, spread)
+        ranges.append(best)
+    return np.array(ranges, dtype=np.float32)
+
+
+class VertexEdgesTest(unittest.TestCase):
+    def test_each_vertex_lies_on_its_edge(self):
+        rng = np.random.default_rng(7)
+        for dtype in (np.uint8, np.int16, np.float32, np.float64):
+            volume = rng.integers(0, 6, size=(5, 7, 6)).astype(dtype)
+            edges = voxmesh.vertex_edges(volume, 2.5, threads=2)
+            np.testing.assert_array_equal(edges, crossed_edges_oracle(volume, 2.5))
+            np.testing.assert_array_equal(voxmesh.vertex_edges(volume, 2.5, threads=1, count=len(edges)), edges)
+            mesh = voxmesh.extract(volume, 2.5)
+            self.assertEqual(len(edges), mesh.vertex_count)
+            s, axis = np.divmod(edges.astype(np.int64), 3)
+            low = np.stack(np.unravel_index(s, volume.shape)[::-1], axis=1).astype(np.float64)  # x, y, z
+            step = np.eye(3)[axis]
+            # Off the edge's axis a vertex is at its lower end; along it between the two ends.
+            self.assertTrue(np.all((mesh.positions >= low) & (mesh.positions <= low + step)))
+            np.testing.assert_array_equal(mesh.positions * (1 - step), low * (1 - step))
+
+    def test_cell_ranges_match_the_cells(self):
+        rng = np.random.default_rng(8)
+        volume = rng.normal(size=(6, 5, 7)).astype(np.float32)
+        edges = voxmesh.vertex_edges(volume, 0.1)
+        mask = rng.random((5, 4, 6)) < 0.6
+        for offset, cell_mask in ((0.0, None), (0.1, None), (0.1, mask)):
+            got = voxmesh.edge_cell_ranges(volume, edges, offset=offset, cell_mask=cell_mask, threads=2)
+            np.testing.assert_array_equal(got, cell_ranges_oracle(volume, edges, offset, cell_mask))
+        every = np.arange(3 * volume.size, dtype=np.uint64)  # any edge the volume holds, crossed or not
+        every = every[[e % 3 != 0 or (e // 3) % 7 != 6 for e in every.tolist()]]
+        every = every[[e % 3 != 1 or (e // 3) // 7 % 5 != 4 for e in every.tolist()]]
+        every = every[[e % 3 != 2 or (e // 3) // 35 != 5 for e in every.tolist()]]
+        np.testing.assert_array_equal(voxmesh.edge_cell_ranges(volume, every), cell_ranges_oracle(volume, every, 0.0, None))
+
+    def test_refusals_name_the_problem(self):
+        volume = np.zeros((4, 4, 4), dtype=np.float32)
+        volume[2, 1, 3] = np.nan
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "NaN"):
+            voxmesh.vertex_edges(volume, 0.5)
+        ball = sphere(12, 4.0)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "crossed edges"):
+            voxmesh.vertex_edges(ball, 0.0, count=3)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "past the volume"):
+            voxmesh.edge_cell_ranges(ball, np.array([3 * ball.size], dtype=np.uint64))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "last sample"):
+            voxmesh.edge_cell_ranges(ball, np.array([3 * 11], dtype=np.uint64))  # x-edge from x = nx - 1
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "cells' shape"):
+            voxmesh.edge_cell_ranges(ball, np.array([0], dtype=np.uint64), cell_mask=np.ones((12, 12, 12), bool))
+
+
 class FilesTest(unittest.TestCase):
     def test_head_ct_gives_vtks_count_and_the_tools_bytes(self):
         volume = voxmesh.read_volume(os.path.join(DATA, "headsq.nrrd"))

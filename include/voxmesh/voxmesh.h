@@ -170,6 +170,20 @@ voxmesh_status voxmesh_read_mesh_from_memory(const void* data, size_t size, cons
  * voxmesh::keep_largest_components): a CT's surface without the specks around it. */
 voxmesh_status voxmesh_keep_largest_components(const voxmesh_mesh* mesh, size_t count, voxmesh_mesh** kept);
 
+/* The crossed edge under each vertex of voxmesh_extract(volume) at `iso` (voxmesh::vertex_edges):
+ * vertex i lies on edges[i] = 3 * (x + nx * (y + ny * z)) + axis (0 x, 1 y, 2 z), (x, y, z) the
+ * edge's lower end. *count gets how many there are (the mesh's vertex count). edges NULL asks for
+ * the count alone; otherwise capacity must be at least the count (an error naming both, nothing
+ * written). */
+voxmesh_status voxmesh_vertex_edges(const voxmesh_volume_view* volume, double iso, unsigned threads, uint64_t* edges,
+                                    size_t capacity, size_t* count);
+/* For each of `count` edges (that numbering), the largest range, maximum minus minimum sample, of
+ * the cells around it that the volume holds and cell_mask marks nonzero (NULL: every cell;
+ * otherwise (nx-1)(ny-1)(nz-1) bytes, x fastest, a cell by its lowest corner), into ranges[0 ..
+ * count-1]; see voxmesh::edge_cell_ranges (offset: scikit-image's level). */
+voxmesh_status voxmesh_edge_cell_ranges(const voxmesh_volume_view* volume, const uint64_t* edges, size_t count,
+                                        double offset, const uint8_t* cell_mask, unsigned threads, float* ranges);
+
 /* voxmesh::MeshTopology: closed when both edge counts are 0. */
 typedef struct voxmesh_topology {
     size_t boundary_edges;    /* edges in one triangle */

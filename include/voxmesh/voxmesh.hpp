@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -147,6 +148,25 @@ Mesh extract(const VolumeView& volume, const Options& options, Stats& stats);
 // std::vector zeroes again (5–12 % of a 512³ sphere or 256³ gyroid extract on the CPU engine
 // here). The previous contents are replaced; on an exception `mesh` is left empty.
 void extract_into(const VolumeView& volume, const Options& options, Mesh& mesh, Stats& stats);
+
+// The crossed edge under each vertex of extract(volume, options with this iso), for data kept
+// per sample or per cell (labels, a second field) carried onto the mesh without meshing again.
+// The canonical mesh has one vertex per edge whose ends lie on either side of iso, ordered by
+// the edge's lower end, then axis; so vertex i lies on the edge
+//   edges[i] = 3 * (x + nx * (y + ny * z)) + axis   (axis 0 x, 1 y, 2 z; (x, y, z) its lower end).
+// inside_below and the backend do not change it. Errors as extract's: dims below 2, NaN or
+// infinite samples (naming the first z-plane holding one); threads as Options::threads.
+std::vector<std::uint64_t> vertex_edges(const VolumeView& volume, double iso, unsigned threads = 0);
+
+// For each of `edges` (vertex_edges' numbering; an edge the volume does not hold is an Error),
+// the largest range, maximum sample minus minimum, over the cells around it: the up to four
+// cells the volume holds that share the edge, and of those only the ones `cell_mask` marks
+// nonzero when it is given ((nx-1)(ny-1)(nz-1) bytes, x fastest, a cell by its lowest corner);
+// 0 where no cell counts. Each range is (max - offset) - (min - offset) in double, rounded to
+// float: with offset = the level, scikit-image's `values` from marching_cubes.
+std::vector<float> edge_cell_ranges(const VolumeView& volume, std::span<const std::uint64_t> edges,
+                                    double offset = 0, const std::uint8_t* cell_mask = nullptr,
+                                    unsigned threads = 0);
 
 // The CPU engine keeps its scratch memory (per-row counts, the inside bits it keeps for 16-
 // to 64-bit samples, vertex-id tables) from one extract to the next, at most 512 MB, so that

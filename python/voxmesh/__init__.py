@@ -30,7 +30,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["extract", "marching_cubes", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices",
+__all__ = ["extract", "marching_cubes", "vertex_edges", "edge_cell_ranges", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices",
            "Mesh", "Volume", "Topology", "Sculpt", "Block", "UpdateResult", "VoxmeshError", "VoxmeshMemoryError",
            "version"]
 
@@ -209,6 +209,12 @@ def _declare_io(lib, handle):
     lib.voxmesh_write_nrrd.argtypes = [ctypes.c_char_p, ctypes.POINTER(_VolumeView)]
     lib.voxmesh_write_nrrd_to_memory.restype = status
     lib.voxmesh_write_nrrd_to_memory.argtypes = [ctypes.POINTER(_VolumeView), ctypes.c_char_p, ctypes.POINTER(handle)]
+    lib.voxmesh_vertex_edges.restype = status
+    lib.voxmesh_vertex_edges.argtypes = [ctypes.POINTER(_VolumeView), ctypes.c_double, ctypes.c_uint, ctypes.c_void_p,
+                                         size, ctypes.POINTER(size)]
+    lib.voxmesh_edge_cell_ranges.restype = status
+    lib.voxmesh_edge_cell_ranges.argtypes = [ctypes.POINTER(_VolumeView), ctypes.c_void_p, size, ctypes.c_double,
+                                             ctypes.c_void_p, ctypes.c_uint, ctypes.c_void_p]
 
 
 def _declare_sculpt(lib, handle):
@@ -619,6 +625,54 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     for message in mesh.warnings:
         warnings.warn(message, RuntimeWarning, stacklevel=2)
     return mesh
+
+
+def vertex_edges(volume, iso=0.0, threads=0, count=None):
+    """The crossed edge under each vertex of extract(volume, iso), as a uint64 array: vertex i
+    lies on edges[i] = 3 * s + axis, s the flat index of its lower end in the [z, y, x] array
+    (volume.ravel()'s) and axis 0 for x, 1 for y, 2 for z. For data kept per sample (labels, a
+    second field) carried onto the mesh: with `s, axis = np.divmod(edges, 3)`, a vertex's two
+    samples are s and s + (1, nx, nx * ny)[axis]. count: the mesh's vertex count when known
+    (saves a pass; a wrong one is an error)."""
+    if int(threads) < 0:
+        raise VoxmeshError(f"threads must be 0 (automatic) or more; got {threads}")
+    view, array = _as_view(volume, None, None)  # `array` keeps the samples alive for the call
+    found = ctypes.c_size_t()
+    if count is None:
+        _check(_lib.voxmesh_vertex_edges(ctypes.byref(view), float(iso), int(threads), None, 0, ctypes.byref(found)))
+        count = found.value
+    edges = np.empty(int(count), dtype=np.uint64)
+    _check(_lib.voxmesh_vertex_edges(ctypes.byref(view), float(iso), int(threads), edges.ctypes.data, len(edges),
+                                     ctypes.byref(found)))
+    if found.value != len(edges):
+        raise VoxmeshError(f"count {len(edges)} given, but the volume has {found.value} crossed edges")
+    del array
+    return edges
+
+
+def edge_cell_ranges(volume, edges, offset=0.0, cell_mask=None, threads=0):
+    """For each edge (vertex_edges' numbering), the largest range, maximum minus minimum sample,
+    over the cells around it (up to four) that the volume holds and `cell_mask` marks True, as
+    float32; 0 where none counts. cell_mask: None or an array of the cells' shape (nz-1, ny-1,
+    nx-1), a cell by its lowest corner. Each range is (max - offset) - (min - offset) in double:
+    with offset = the level, scikit-image's `values` from marching_cubes."""
+    if int(threads) < 0:
+        raise VoxmeshError(f"threads must be 0 (automatic) or more; got {threads}")
+    view, array = _as_view(volume, None, None)
+    edges = np.ascontiguousarray(edges, dtype=np.uint64)
+    if edges.ndim != 1:
+        raise VoxmeshError(f"edges must be a 1-D array; got {edges.ndim} dimension(s)")
+    mask = None
+    if cell_mask is not None:
+        cells = tuple(n - 1 for n in array.shape)
+        mask = np.ascontiguousarray(cell_mask, dtype=bool)
+        if mask.shape != cells:
+            raise VoxmeshError(f"cell_mask must have the cells' shape {cells}; got {mask.shape}")
+    ranges = np.empty(len(edges), dtype=np.float32)
+    _check(_lib.voxmesh_edge_cell_ranges(ctypes.byref(view), edges.ctypes.data, len(edges), float(offset),
+                                         None if mask is None else mask.ctypes.data, int(threads), ranges.ctypes.data))
+    del array, mask
+    return ranges
 
 
 _BRUSHES = {"add": 0, "subtract": 1, "smooth": 2, "set": 3}

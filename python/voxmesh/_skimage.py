@@ -4,7 +4,7 @@ arguments and results; the meshing is extract's."""
 
 import numpy as np
 
-from . import VoxmeshError, extract, _BACKENDS
+from . import VoxmeshError, extract, vertex_edges, edge_cell_ranges, _BACKENDS
 
 _METHODS = ("lewiner", "lorensen")
 _NO_SURFACE = "No surface found at the given iso value."  # skimage's RuntimeError, word for word
@@ -92,7 +92,6 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
     data = np.ascontiguousarray(volume[::step, ::step, ::step])
     if min(data.shape) < 2:
         raise RuntimeError(_NO_SURFACE)  # a step past the volume leaves no cell, as in skimage
-    inside = _greater(data, level)
     # voxmesh's inside is value >= iso; only a sample exactly at level tells that from
     # skimage's value > level. Nudged one float below level it is outside, and its edges'
     # vertices, a hair off the sample, are put back on it below.
@@ -115,16 +114,18 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
     faces = mesh.indices.astype(np.int64)
     del mesh
 
-    owner, axis = _crossed_edges(inside)
-    if len(owner) != len(positions):  # the canonical order is what ties a vertex to its edge
-        raise RuntimeError(f"voxmesh gave {len(positions)} vertices for {len(owner)} crossed edges")
+    # The canonical order ties vertex i to the i-th crossed edge of what extract meshed.
+    edges = vertex_edges(meshed, level, threads=threads, count=len(positions))
     if at_level is not None:
+        owner, axis = np.divmod(edges.astype(np.int64), 3)
         _snap_to_samples(positions, data, level, owner, axis, step)
     if mask is not None:
-        faces = faces[mask.ravel()[_triangle_cells(inside, len(faces))]]
+        faces = faces[mask.ravel()[_triangle_cells(_greater(data, level), len(faces))]]
     if len(faces) == 0:
         raise RuntimeError(_NO_SURFACE)
-    values = _spreads(data, level, owner, axis, mask)
+    # skimage's values: per vertex, the largest (max - level) - (min - level) over the
+    # (masked-in) cells around its edge, every one of which uses the vertex.
+    values = edge_cell_ranges(data, edges, offset=level, cell_mask=mask, threads=threads)
     if mask is not None:  # vertices of the dropped cells only go, keeping the others' order
         used = np.zeros(len(positions), dtype=bool)
         used[faces.ravel()] = True
@@ -167,23 +168,6 @@ def _equal(data, level):
     return found if found.any() else None
 
 
-def _crossed_edges(inside):
-    """Each crossed edge's owning sample (linear index) and axis (0 x, 1 y, 2 z), in voxmesh's
-    vertex order: by owning sample, then axis."""
-    nz, ny, nx = inside.shape
-    keys = []
-    for axis, (a, b) in enumerate(((inside[:, :, :-1], inside[:, :, 1:]), (inside[:, :-1], inside[:, 1:]),
-                                   (inside[:-1], inside[1:]))):
-        found = np.flatnonzero(a != b)  # linear index in the one-shorter shape
-        if axis == 0:
-            found += found // (nx - 1)
-        elif axis == 1:
-            found += found // ((ny - 1) * nx) * nx
-        keys.append(found * 3 + axis)
-    keys = np.sort(np.concatenate(keys), kind="stable")  # three sorted runs merged
-    return keys // 3, keys % 3
-
-
 def _coordinates(owner, shape):
     nz, ny, nx = shape
     return np.stack([owner % nx, owner // nx % ny, owner // (nx * ny)])  # x, y, z
@@ -211,53 +195,6 @@ def _snap_to_samples(positions, data, level, owner, axis, step):
                 epsilon = np.finfo(np.float64).eps
                 weight = 1.0 / (epsilon + np.abs(far[hit[first]] - level))
                 positions[hit[first], column[first]] = (step * (weight / (1.0 / epsilon + weight))).astype(np.float32)
-
-
-def _spreads(data, level, owner, axis, mask):
-    """skimage's values: per vertex, the largest (max - level) - (min - level) over the
-    (masked-in) cells around its edge, every one of which uses the vertex."""
-    flat = data.ravel()
-    dims = data.shape[::-1]  # x, y, z
-    strides = (1, dims[0], dims[0] * dims[1])
-    best = np.zeros(len(owner), dtype=np.float32)
-    for along in range(3):  # one pass per edge axis, so that the offsets are plain numbers
-        chosen = np.flatnonzero(axis == along)
-        if len(chosen) == 0:
-            continue
-        start = owner[chosen]
-        p, q = (along + 1) % 3, (along + 2) % 3  # the axes across the edge
-        # The 3 x 3 sample pairs parallel to the edge around it: the four cells around the
-        # edge are 2 x 2 blocks of them. Offsets past the border are clipped; the cells that
-        # would need them are left out below.
-        high, low = {}, {}
-        for i in (-1, 0, 1):
-            for j in (-1, 0, 1):
-                at = start + (i * strides[p] + j * strides[q])
-                near = np.take(flat, at, mode="clip")
-                far = np.take(flat, at + strides[along], mode="clip")
-                high[i, j], low[i, j] = np.maximum(near, far), np.minimum(near, far)
-        # Each block's extremes from halves two blocks share: across q first, then across p.
-        high_q = {(i, j): np.maximum(high[i, j], high[i, j + 1]) for i in (-1, 0, 1) for j in (-1, 0)}
-        low_q = {(i, j): np.minimum(low[i, j], low[i, j + 1]) for i in (-1, 0, 1) for j in (-1, 0)}
-        xyz = _coordinates(start, data.shape)
-        cp, cq = xyz[p], xyz[q]
-        inside_p = {-1: cp >= 1, 0: cp <= dims[p] - 2}  # the block's cell lies in the volume
-        inside_q = {-1: cq >= 1, 0: cq <= dims[q] - 2}
-        spread_max = np.zeros(len(chosen), dtype=np.float32)
-        for i in (-1, 0):
-            for j in (-1, 0):
-                ok = inside_p[i] & inside_q[j]
-                if mask is not None:
-                    cell = xyz.copy()
-                    cell[p] = np.clip(cp + i, 0, dims[p] - 2)
-                    cell[q] = np.clip(cq + j, 0, dims[q] - 2)
-                    ok &= mask[cell[2], cell[1], cell[0]]  # along the edge it is the owner's cell
-                top = np.maximum(high_q[i, j], high_q[i + 1, j]).astype(np.float64)
-                bottom = np.minimum(low_q[i, j], low_q[i + 1, j]).astype(np.float64)
-                spread = ((top - level) - (bottom - level)).astype(np.float32)  # >= 0
-                np.maximum(spread_max, np.where(ok, spread, np.float32(0)), out=spread_max)
-        best[chosen] = spread_max
-    return best
 
 
 def _triangle_cells(inside, count):

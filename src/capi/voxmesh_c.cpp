@@ -418,6 +418,35 @@ voxmesh_status voxmesh_keep_largest_components(const voxmesh_mesh* mesh, size_t 
     });
 }
 
+voxmesh_status voxmesh_vertex_edges(const voxmesh_volume_view* volume, double iso, unsigned threads, uint64_t* edges,
+                                    size_t capacity, size_t* count) {
+    if (count) *count = 0;
+    return guarded([&] {
+        const char* who = "voxmesh_vertex_edges";
+        require(count, who, "the count pointer");
+        require(volume, who, "the volume");
+        const std::vector<std::uint64_t> found = voxmesh::vertex_edges(cpp_view(*volume, who), iso, threads);
+        if (edges && capacity < found.size())
+            throw voxmesh::Error(std::string(who) + ": room for " + std::to_string(capacity) + " edges, but the volume has " +
+                                 std::to_string(found.size()) + " crossed edges");
+        if (edges) std::copy(found.begin(), found.end(), edges);
+        *count = found.size();
+    });
+}
+
+voxmesh_status voxmesh_edge_cell_ranges(const voxmesh_volume_view* volume, const uint64_t* edges, size_t count,
+                                        double offset, const uint8_t* cell_mask, unsigned threads, float* ranges) {
+    return guarded([&] {
+        const char* who = "voxmesh_edge_cell_ranges";
+        require(volume, who, "the volume");
+        if (count) require(edges, who, "the edges");
+        if (count) require(ranges, who, "the ranges");
+        const std::vector<float> found =
+            voxmesh::edge_cell_ranges(cpp_view(*volume, who), {edges, count}, offset, cell_mask, threads);
+        std::copy(found.begin(), found.end(), ranges);
+    });
+}
+
 voxmesh_status voxmesh_write_mesh(const char* path, const voxmesh_mesh* mesh) {
     return guarded([&] {
         require(path, "voxmesh_write_mesh", "the path");

@@ -1,0 +1,100 @@
+// voxmesh_vertex_edges and voxmesh_edge_cell_ranges against the C++ calls they wrap, and their
+// refusals (the C++ functions themselves: test_core_vertex_edges.cpp).
+#ifdef VOXMESH_TEST_C_API
+#include <catch2/catch.hpp>
+#include <voxmesh/voxmesh.h>
+#include <voxmesh/voxmesh.hpp>
+
+#include "support/c_api.hpp"
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using capitest::c_view;
+
+struct Ball {
+    std::vector<float> samples;
+    voxmesh::VolumeView view;
+};
+
+Ball ball(std::size_t n) {
+    Ball b;
+    b.samples.resize(n * n * n);
+    const double c = 0.5 * static_cast<double>(n - 1) + 0.13;
+    for (std::size_t z = 0; z < n; ++z)
+        for (std::size_t y = 0; y < n; ++y)
+            for (std::size_t x = 0; x < n; ++x)
+                b.samples[x + n * (y + n * z)] = static_cast<float>(
+                    0.35 * static_cast<double>(n) - std::sqrt((x - c) * (x - c) + (y - c) * (y - c) + (z - c) * (z - c)));
+    b.view.data = b.samples.data();
+    b.view.type = voxmesh::ScalarType::F32;
+    b.view.dims = {n, n, n};
+    return b;
+}
+
+}  // namespace
+
+TEST_CASE("C API: vertex edges and cell ranges are the C++ calls'", "[c_api][vertex_edges]") {
+    const Ball b = ball(21);
+    const voxmesh_volume_view view = c_view(b.view);
+    const std::vector<std::uint64_t> want = voxmesh::vertex_edges(b.view, 0.0, 2);
+    REQUIRE(!want.empty());
+
+    size_t count = 0;
+    REQUIRE(voxmesh_vertex_edges(&view, 0.0, 1, nullptr, 0, &count) == VOXMESH_OK);  // the count alone
+    REQUIRE(count == want.size());
+    std::vector<std::uint64_t> got(count + 2, 7);
+    REQUIRE(voxmesh_vertex_edges(&view, 0.0, 2, got.data(), got.size(), &count) == VOXMESH_OK);
+    REQUIRE(count == want.size());
+    REQUIRE(std::equal(want.begin(), want.end(), got.begin()));
+    REQUIRE(got[count] == 7);  // nothing past the edges written
+
+    std::vector<std::uint8_t> mask((20 * 20 * 20), 0);
+    std::mt19937 random(5);
+    for (auto& m : mask) m = static_cast<std::uint8_t>(random() % 3 != 0);
+    for (const std::uint8_t* cell_mask : {static_cast<const std::uint8_t*>(nullptr), static_cast<const std::uint8_t*>(mask.data())}) {
+        const std::vector<float> ranges = voxmesh::edge_cell_ranges(b.view, want, 0.25, cell_mask, 1);
+        std::vector<float> c(want.size(), -1.0f);
+        REQUIRE(voxmesh_edge_cell_ranges(&view, want.data(), want.size(), 0.25, cell_mask, 2, c.data()) == VOXMESH_OK);
+        REQUIRE(std::memcmp(c.data(), ranges.data(), ranges.size() * sizeof(float)) == 0);
+    }
+    REQUIRE(voxmesh_edge_cell_ranges(&view, nullptr, 0, 0.0, nullptr, 0, nullptr) == VOXMESH_OK);  // no edges, no work
+}
+
+TEST_CASE("C API: vertex edges and cell ranges refuse with the problem named", "[c_api][vertex_edges]") {
+    Ball b = ball(9);
+    voxmesh_volume_view view = c_view(b.view);
+    size_t count = 99;
+    std::vector<std::uint64_t> small(3);
+    REQUIRE(voxmesh_vertex_edges(&view, 0.0, 0, small.data(), small.size(), &count) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("room for 3 edges") && Catch::Contains("crossed edges"));
+    REQUIRE(count == 0);
+    REQUIRE(voxmesh_vertex_edges(&view, 0.0, 0, nullptr, 0, nullptr) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("count pointer"));
+    REQUIRE(voxmesh_vertex_edges(nullptr, 0.0, 0, nullptr, 0, &count) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("volume"));
+
+    b.samples[4 + 9 * (2 + 9 * 6)] = std::numeric_limits<float>::quiet_NaN();
+    REQUIRE(voxmesh_vertex_edges(&view, 0.0, 0, nullptr, 0, &count) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("NaN") && Catch::Contains("z-plane 6"));
+
+    const std::uint64_t past = 3 * 9 * 9 * 9;
+    float range = 0;
+    REQUIRE(voxmesh_edge_cell_ranges(&view, &past, 1, 0.0, nullptr, 0, &range) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("past the volume"));
+    const std::uint64_t last_z = 3 * (9 * 9 * 8) + 2;  // a z-edge from the last plane
+    REQUIRE(voxmesh_edge_cell_ranges(&view, &last_z, 1, 0.0, nullptr, 0, &range) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("last sample"));
+    REQUIRE(voxmesh_edge_cell_ranges(&view, nullptr, 1, 0.0, nullptr, 0, &range) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("edges"));
+    view.type = 42;
+    REQUIRE(voxmesh_vertex_edges(&view, 0.0, 0, nullptr, 0, &count) == VOXMESH_ERROR);
+}
+#endif
