@@ -167,6 +167,10 @@ std::vector<std::uint64_t> vertex_edges(const VolumeView& volume, double iso, un
 std::vector<float> edge_cell_ranges(const VolumeView& volume, std::span<const std::uint64_t> edges,
                                     double offset = 0, const std::uint8_t* cell_mask = nullptr,
                                     unsigned threads = 0);
+// As edge_cell_ranges, into `ranges` (one float per edge; another size is an Error), for a
+// caller whose memory is already there (a binding's array).
+void edge_cell_ranges_into(const VolumeView& volume, std::span<const std::uint64_t> edges, std::span<float> ranges,
+                           double offset = 0, const std::uint8_t* cell_mask = nullptr, unsigned threads = 0);
 
 // The CPU engine keeps its scratch memory (per-row counts, the inside bits it keeps for 16-
 // to 64-bit samples, vertex-id tables) from one extract to the next, at most 512 MB, so that

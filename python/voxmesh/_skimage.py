@@ -111,7 +111,7 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
         raise RuntimeError(_NO_SURFACE)
     positions = np.array(mesh.positions[:, ::-1])  # x, y, z -> array axis order
     normals = np.array(mesh.normals[:, ::-1])
-    faces = mesh.indices.astype(np.int64)
+    faces = mesh.indices  # uint32, converted once at the end (it keeps the mesh's memory until then)
     del mesh
 
     # The canonical order ties vertex i to the i-th crossed edge of what extract meshed.

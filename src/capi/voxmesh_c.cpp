@@ -441,9 +441,7 @@ voxmesh_status voxmesh_edge_cell_ranges(const voxmesh_volume_view* volume, const
         require(volume, who, "the volume");
         if (count) require(edges, who, "the edges");
         if (count) require(ranges, who, "the ranges");
-        const std::vector<float> found =
-            voxmesh::edge_cell_ranges(cpp_view(*volume, who), {edges, count}, offset, cell_mask, threads);
-        std::copy(found.begin(), found.end(), ranges);
+        voxmesh::edge_cell_ranges_into(cpp_view(*volume, who), {edges, count}, {ranges, count}, offset, cell_mask, threads);
     });
 }
 

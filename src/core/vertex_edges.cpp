@@ -1,7 +1,9 @@
 // vertex_edges and edge_cell_ranges: which edge each vertex of the canonical mesh lies on, and
 // a per-edge statistic of the cells around it (scikit-image's `values`). A pass of its own over
 // the volume, not the engines': the canonical order fixes the answer, so it needs no mesh.
+#include "bit_rows.hpp"
 #include "cpu_engine.hpp"
+#include "edge_vertex.hpp"  // prefetch
 #include "out_of_memory.hpp"
 #include "parallel.hpp"
 #include "scalar_dispatch.hpp"
@@ -10,8 +12,8 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <string>
 #include <type_traits>
@@ -22,62 +24,43 @@ namespace {
 
 using detail::run_slabs;
 
-// Inside bytes (0 or 1) of plane z, plus whether it holds a NaN or infinite sample.
-template <class T>
-bool inside_plane(const T* samples, std::size_t count, T threshold, std::uint8_t* inside) {
-    bool bad = false;
-    for (std::size_t i = 0; i < count; ++i) {
-        const T v = samples[i];
-        inside[i] = static_cast<std::uint8_t>(v >= threshold);
-        if constexpr (std::is_floating_point_v<T>) bad |= !(std::fabs(v) <= std::numeric_limits<T>::max());
-    }
-    return bad;
-}
-
-std::uint64_t load8(const std::uint8_t* p) {
-    std::uint64_t w;
-    std::memcpy(&w, p, sizeof w);
-    return w;
-}
-
 // The crossed edges owned by samples of planes [z0, z1), in canonical order, appended to `out`.
-// `planes` holds room for two planes of inside bytes plus 8 bytes of slack for word loads.
+// Rows are packed to inside bits 64 samples a word (the engine's packer and edge masks), so a
+// word without crossings costs a few operations. `planes` holds room for two planes of rows.
 template <class T>
-void slab_edges(const VolumeView& volume, T threshold, std::size_t z0, std::size_t z1, std::vector<std::uint8_t>& planes,
+void slab_edges(const VolumeView& volume, T threshold, std::size_t z0, std::size_t z1, std::vector<detail::Word>& planes,
                 std::vector<std::uint64_t>& out) {
+    using detail::Word;
     const std::size_t nx = volume.dims[0], ny = volume.dims[1], nz = volume.dims[2];
-    const std::size_t plane = nx * ny;
+    const std::size_t words = detail::words_per_row(nx), plane_words = words * ny;
     const T* data = static_cast<const T*>(volume.data);
-    std::uint8_t* cur = planes.data();
-    std::uint8_t* next = planes.data() + plane + 8;
-    if (inside_plane(data + z0 * plane, plane, threshold, cur)) detail::throw_non_finite(z0);
+    const detail::RowPacker<T> pack = detail::row_packer<T>();
+    const auto pack_plane = [&](std::size_t z, Word* bits) {
+        bool bad = false;
+        for (std::size_t y = 0; y < ny; ++y) bad |= pack(data + nx * (y + ny * z), nx, threshold, bits + y * words);
+        if (bad) detail::throw_non_finite(z);
+    };
+    Word* cur = planes.data();
+    Word* next = planes.data() + plane_words;
+    pack_plane(z0, cur);
     for (std::size_t z = z0; z < z1; ++z) {
         const bool has_next = z + 1 < nz;
-        if (has_next && inside_plane(data + (z + 1) * plane, plane, threshold, next)) detail::throw_non_finite(z + 1);
+        if (has_next) pack_plane(z + 1, next);
         for (std::size_t y = 0; y < ny; ++y) {
-            const std::uint8_t* row = cur + y * nx;
-            // A missing neighbour row is the row itself: no crossing toward it.
-            const std::uint8_t* up = y + 1 < ny ? row + nx : row;
-            const std::uint8_t* above = has_next ? next + y * nx : row;
+            const Word* row = cur + y * words;
+            // A missing neighbour row is the row itself: nothing crosses toward it.
+            const Word* up = y + 1 < ny ? row + words : row;
+            const Word* above = has_next ? next + y * words : row;
             const std::uint64_t base = 3 * (nx * (y + ny * z));
-            // Eight samples a step: flags per byte, bit a for an edge along axis a. Bytes are 0 or 1,
-            // so the shifted xors never carry into a neighbouring byte. The last sample has no
-            // x-edge: it is done on its own below.
-            std::size_t x = 0;
-            for (; x + 8 < nx; x += 8) {
-                const std::uint64_t a = load8(row + x);
-                const std::uint64_t flags = (a ^ load8(row + x + 1)) | (a ^ load8(up + x)) << 1 | (a ^ load8(above + x)) << 2;
-                if (flags == 0) continue;
-                for (unsigned b = 0; b < 8; ++b) {
-                    const unsigned f = static_cast<unsigned>(flags >> (8 * b)) & 7u;
-                    for (unsigned axis = 0; axis < 3; ++axis)
-                        if (f >> axis & 1u) out.push_back(base + 3 * (x + b) + axis);
+            for (std::size_t q = 0; q < words; ++q) {
+                const detail::EdgeMasks m = detail::edge_masks(row, up, above, q, words, nx);
+                for (Word any = m.any(); any; any &= any - 1) {
+                    const unsigned r = static_cast<unsigned>(std::countr_zero(any));
+                    const std::uint64_t edge = base + 3 * (64 * q + r);
+                    if (m.x >> r & 1) out.push_back(edge);
+                    if (m.y >> r & 1) out.push_back(edge + 1);
+                    if (m.z >> r & 1) out.push_back(edge + 2);
                 }
-            }
-            for (; x < nx; ++x) {
-                const unsigned f = (x + 1 < nx ? row[x] ^ row[x + 1] : 0u) | (row[x] ^ up[x]) << 1 | (row[x] ^ above[x]) << 2;
-                for (unsigned axis = 0; axis < 3; ++axis)
-                    if (f >> axis & 1u) out.push_back(base + 3 * x + axis);
             }
         }
         std::swap(cur, next);
@@ -96,12 +79,12 @@ std::vector<std::uint64_t> crossed_edges(const VolumeView& volume, double iso, u
         if (const std::size_t z = detail::first_non_finite_plane(volume); z < volume.dims[2]) detail::throw_non_finite(z);
         return {};
     }
-    const std::size_t nz = volume.dims[2], plane = volume.dims[0] * volume.dims[1];
+    const std::size_t nz = volume.dims[2];
     const unsigned slabs = slab_count(threads, nz);
     std::vector<std::vector<std::uint64_t>> found(slabs);
-    std::vector<std::vector<std::uint8_t>> scratch(std::min(slabs, threads));
+    std::vector<std::vector<detail::Word>> scratch(std::min(slabs, threads));
     run_slabs(slabs, threads, [&](unsigned slab, unsigned worker) {
-        if (scratch[worker].empty()) scratch[worker].resize(2 * (plane + 8));
+        if (scratch[worker].empty()) scratch[worker].resize(2 * detail::words_per_row(volume.dims[0]) * volume.dims[1]);
         const detail::Share share = detail::share_of(nz, slab, slabs);
         slab_edges<T>(volume, threshold.value, share.begin, share.end, scratch[worker], found[slab]);
     });
@@ -116,9 +99,9 @@ std::vector<std::uint64_t> crossed_edges(const VolumeView& volume, double iso, u
     return edges;
 }
 
-// Throws Error unless `edge` names an edge of the volume: its lower end a sample, its upper end
-// one step along its axis inside the volume too.
-void check_edge(const std::array<std::size_t, 3>& dims, std::uint64_t edge) {
+// The Error for an edge the volume does not hold: its lower end not a sample, or its upper end
+// past the volume.
+[[noreturn]] void throw_bad_edge(const std::array<std::size_t, 3>& dims, std::uint64_t edge) {
     const std::uint64_t sample = edge / 3;
     const unsigned axis = static_cast<unsigned>(edge % 3);
     const std::uint64_t count = static_cast<std::uint64_t>(dims[0]) * dims[1] * dims[2];
@@ -126,10 +109,30 @@ void check_edge(const std::array<std::size_t, 3>& dims, std::uint64_t edge) {
         throw Error("edge " + std::to_string(edge) + " starts at sample " + std::to_string(sample) +
                     ", past the volume's " + std::to_string(count) + " samples");
     const std::uint64_t at[3] = {sample % dims[0], sample / dims[0] % dims[1], sample / (dims[0] * dims[1])};
-    if (at[axis] + 1 >= dims[axis])
-        throw Error("edge " + std::to_string(edge) + " runs along " + std::string(1, "xyz"[axis]) + " from " +
-                    std::string(1, "xyz"[axis]) + " = " + std::to_string(at[axis]) +
-                    ", the volume's last sample on that axis: no edge leaves it");
+    throw Error("edge " + std::to_string(edge) + " runs along " + std::string(1, "xyz"[axis]) + " from " +
+                std::string(1, "xyz"[axis]) + " = " + std::to_string(at[axis]) +
+                ", the volume's last sample on that axis: no edge leaves it");
+}
+
+// The largest range of the four cells around an edge whose every neighbour is in the volume.
+// `corner` is the sample at -1, -1 across the edge (axes p and q), `along` the edge's stride.
+template <class T>
+float interior_range(const T* corner, std::size_t along, std::size_t sp, std::size_t sq, double offset) {
+    T high[3][3], low[3][3];  // per sample pair along the edge, as in cell_ranges below
+    for (std::size_t i = 0; i < 3; ++i)
+        for (std::size_t j = 0; j < 3; ++j) {
+            const T* s = corner + i * sp + j * sq;
+            high[i][j] = std::max(s[0], s[along]);
+            low[i][j] = std::min(s[0], s[along]);
+        }
+    float best = 0;
+    for (std::size_t i = 0; i < 2; ++i)
+        for (std::size_t j = 0; j < 2; ++j) {
+            const T top = std::max(std::max(high[i][j], high[i + 1][j]), std::max(high[i][j + 1], high[i + 1][j + 1]));
+            const T bottom = std::min(std::min(low[i][j], low[i + 1][j]), std::min(low[i][j + 1], low[i + 1][j + 1]));
+            best = std::max(best, static_cast<float>((static_cast<double>(top) - offset) - (static_cast<double>(bottom) - offset)));
+        }
+    return best;
 }
 
 template <class T>
@@ -139,11 +142,35 @@ void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size
     const std::size_t stride[3] = {1, nx, nx * ny};
     const std::size_t cells[3] = {nx - 1, ny - 1, volume.dims[2] - 1};
     const T* data = static_cast<const T*>(volume.data);
+    // The row of the last edge: edges in canonical order come a few to a row, so most find their
+    // y and z here instead of in three divisions.
+    std::size_t row_start = 0, row_y = 0, row_z = 0;
+    const std::size_t last = nx * ny * volume.dims[2] - 1;
+    constexpr std::size_t kAhead = 32;
     for (std::size_t e = 0; e < count; ++e) {
-        const std::uint64_t sample = edges[e] / 3;
+        // The lines a later edge reads, asked for now: the edges of a surface reach a new
+        // stretch of rows every few edges, and those rows are rarely cached.
+        if (e + kAhead < count) {
+            const std::size_t ahead = static_cast<std::size_t>(edges[e + kAhead] / 3);
+            for (const std::size_t dz : {std::size_t{0}, stride[2], 2 * stride[2]})
+                for (const std::size_t dy : {std::size_t{0}, nx, 2 * nx})
+                    detail::prefetch(data + std::min(last, std::max(ahead + dz + dy, stride[2] + nx) - stride[2] - nx));
+        }
+        if (edges[e] / 3 > last) throw_bad_edge(volume.dims, edges[e]);
+        const std::size_t sample = static_cast<std::size_t>(edges[e] / 3);
         const unsigned axis = static_cast<unsigned>(edges[e] % 3), p = (axis + 1) % 3, q = (axis + 2) % 3;
-        const std::size_t at[3] = {static_cast<std::size_t>(sample % nx), static_cast<std::size_t>(sample / nx % ny),
-                                   static_cast<std::size_t>(sample / (nx * ny))};
+        if (sample - row_start >= nx) {  // unsigned: also when the sample is before the row
+            row_y = sample / nx % ny;
+            row_z = sample / (nx * ny);
+            row_start = nx * (row_y + ny * row_z);
+        }
+        const std::size_t at[3] = {sample - row_start, row_y, row_z};
+        if (at[axis] >= cells[axis]) throw_bad_edge(volume.dims, edges[e]);
+        // Away from the volume's faces and without a mask all four cells count: no tests.
+        if (!cell_mask && at[p] - 1 < cells[p] - 1 && at[q] - 1 < cells[q] - 1) {
+            out[e] = interior_range(data + sample - stride[p] - stride[q], stride[axis], stride[p], stride[q], offset);
+            continue;
+        }
         // The 3 x 3 sample pairs along the edge around it, as max and min of each pair; a cell
         // around the edge is a 2 x 2 block of them (i, j = -1 or 0 its offset across p and q).
         T high[3][3]{}, low[3][3]{};
@@ -152,7 +179,7 @@ void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size
                 const bool held = !((i < 0 && at[p] == 0) || (i > 0 && at[p] + 1 > cells[p]) ||
                                     (j < 0 && at[q] == 0) || (j > 0 && at[q] + 1 > cells[q]));
                 if (!held) continue;
-                const std::size_t s = static_cast<std::size_t>(sample) + i * static_cast<std::ptrdiff_t>(stride[p]) +
+                const std::size_t s = sample + i * static_cast<std::ptrdiff_t>(stride[p]) +
                                       j * static_cast<std::ptrdiff_t>(stride[q]);
                 const T a = data[s], b = data[s + stride[axis]];
                 high[i + 1][j + 1] = std::max(a, b);
@@ -192,28 +219,35 @@ std::vector<std::uint64_t> vertex_edges(const VolumeView& volume, double iso, un
                                           });
 }
 
-std::vector<float> edge_cell_ranges(const VolumeView& volume, std::span<const std::uint64_t> edges, double offset,
-                                    const std::uint8_t* cell_mask, unsigned threads) {
+void edge_cell_ranges_into(const VolumeView& volume, std::span<const std::uint64_t> edges, std::span<float> ranges,
+                           double offset, const std::uint8_t* cell_mask, unsigned threads) {
     detail::validate_volume(volume);
     if (!std::isfinite(offset)) throw Error("edge_cell_ranges: offset must be finite");
-    for (const std::uint64_t edge : edges) check_edge(volume.dims, edge);
+    if (ranges.size() != edges.size())
+        throw Error("edge_cell_ranges: room for " + std::to_string(ranges.size()) + " ranges, for " +
+                    std::to_string(edges.size()) + " edges");
     const unsigned resolved = detail::resolve_threads(threads);
-    return detail::out_of_memory_as_error(
-        [&] { return "out of memory for the ranges of " + std::to_string(edges.size()) + " edges"; }, [&] {
-            std::vector<float> ranges(edges.size());
-            // Pieces of 64 Ki edges: a few per thread on a large mesh, one on a small one.
-            const std::size_t piece = std::size_t{1} << 16;
-            const std::size_t pieces = (edges.size() + piece - 1) / piece;
-            run_slabs(static_cast<unsigned>(std::min<std::size_t>(pieces, std::numeric_limits<unsigned>::max())),
-                      resolved, [&](unsigned w, unsigned) {
-                          const std::size_t begin = w * piece, end = std::min(edges.size(), begin + piece);
-                          detail::dispatch_scalar(volume.type, [&](auto tag) {
-                              cell_ranges<decltype(tag)>(volume, edges.data() + begin, end - begin, offset, cell_mask,
-                                                         ranges.data() + begin);
-                          });
-                      });
-            return ranges;
+    // Pieces of 64 Ki edges: a few per thread on a large mesh, one on a small one. An edge the
+    // volume does not hold throws from its piece; run_slabs passes on the lowest piece's, so the
+    // first such edge is named on any thread count.
+    const std::size_t piece = std::size_t{1} << 16;
+    const std::size_t pieces = (edges.size() + piece - 1) / piece;
+    if (pieces > std::numeric_limits<unsigned>::max()) throw Error("edge_cell_ranges: too many edges");
+    run_slabs(static_cast<unsigned>(pieces), resolved, [&](unsigned w, unsigned) {
+        const std::size_t begin = std::size_t{w} * piece, end = std::min(edges.size(), begin + piece);
+        detail::dispatch_scalar(volume.type, [&](auto tag) {
+            cell_ranges<decltype(tag)>(volume, edges.data() + begin, end - begin, offset, cell_mask, ranges.data() + begin);
         });
+    });
+}
+
+std::vector<float> edge_cell_ranges(const VolumeView& volume, std::span<const std::uint64_t> edges, double offset,
+                                    const std::uint8_t* cell_mask, unsigned threads) {
+    std::vector<float> ranges = detail::out_of_memory_as_error(
+        [&] { return "out of memory for the ranges of " + std::to_string(edges.size()) + " edges"; },
+        [&] { return std::vector<float>(edges.size()); });
+    edge_cell_ranges_into(volume, edges, ranges, offset, cell_mask, threads);
+    return ranges;
 }
 
 }  // namespace voxmesh
