@@ -597,6 +597,26 @@ class VertexEdgesTest(unittest.TestCase):
         every = every[[e % 3 != 2 or (e // 3) // 35 != 5 for e in every.tolist()]]
         np.testing.assert_array_equal(voxmesh.edge_cell_ranges(volume, every), cell_ranges_oracle(volume, every, 0.0, None))
 
+    def test_value_range_is_numpys(self):
+        rng = np.random.default_rng(9)
+        for dtype in (np.uint8, np.int16, np.uint32, np.float32, np.float64):
+            volume = rng.integers(0, 50, size=(6, 7, 5)).astype(dtype)
+            for threads in (1, 2):
+                r = voxmesh.value_range(volume, equal_to=7, threads=threads)
+                self.assertEqual((r.min, r.max), (float(volume.min()), float(volume.max())))
+                self.assertEqual((r.nonfinite, r.first_nonfinite), (0, None))
+                self.assertEqual(r.equal, int(np.count_nonzero(volume == 7)))
+            self.assertEqual(voxmesh.value_range(volume).equal, 0)
+            self.assertEqual(voxmesh.value_range(volume, equal_to=7.5).equal, 0)  # no sample holds it
+        volume = rng.normal(size=(4, 5, 6))
+        volume[1, 2, 3] = np.nan
+        volume[3, 0, 0] = -np.inf
+        r = voxmesh.value_range(volume)
+        finite = volume[np.isfinite(volume)]
+        self.assertEqual((r.min, r.max, r.nonfinite), (finite.min(), finite.max(), 2))
+        self.assertEqual(r.first_nonfinite, (1, 2, 3))  # an index into the [z, y, x] array
+        self.assertTrue(np.isnan(volume[r.first_nonfinite]))
+
     def test_refusals_name_the_problem(self):
         volume = np.zeros((4, 4, 4), dtype=np.float32)
         volume[2, 1, 3] = np.nan

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -148,6 +149,19 @@ Mesh extract(const VolumeView& volume, const Options& options, Stats& stats);
 // std::vector zeroes again (5–12 % of a 512³ sphere or 256³ gyroid extract on the CPU engine
 // here). The previous contents are replaced; on an exception `mesh` is left empty.
 void extract_into(const VolumeView& volume, const Options& options, Mesh& mesh, Stats& stats);
+
+// A volume's samples summed up in one pass on all cores (threads as Options::threads): the
+// smallest and the largest finite sample (both 0 when none is), the NaN and infinite ones (float
+// types) with the first in index order, and, where `equal_to` is given, how many equal it
+// exactly. Samples exactly at iso are inside here and outside for tools that mesh value > iso
+// (scikit-image): they are where the two meshes differ.
+struct ValueRange {
+    double min = 0, max = 0;
+    std::uint64_t nonfinite = 0;
+    std::array<std::size_t, 3> first_nonfinite{0, 0, 0};  // (x, y, z); meaningful when nonfinite > 0
+    std::uint64_t equal = 0;                               // samples == equal_to (0 without one)
+};
+ValueRange value_range(const VolumeView& volume, std::optional<double> equal_to = std::nullopt, unsigned threads = 0);
 
 // The crossed edge under each vertex of extract(volume, options with this iso), for data kept
 // per sample or per cell (labels, a second field) carried onto the mesh without meshing again.

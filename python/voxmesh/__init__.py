@@ -30,7 +30,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["extract", "marching_cubes", "vertex_edges", "edge_cell_ranges", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices",
+__all__ = ["extract", "marching_cubes", "vertex_edges", "edge_cell_ranges", "value_range", "ValueRange", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices",
            "Mesh", "Volume", "Topology", "Sculpt", "Block", "UpdateResult", "VoxmeshError", "VoxmeshMemoryError",
            "version"]
 
@@ -94,6 +94,11 @@ class _DeviceStats(ctypes.Structure):
 class _RawLayout(ctypes.Structure):
     _fields_ = [("dims", ctypes.c_size_t * 3), ("type", ctypes.c_int), ("big_endian", ctypes.c_int),
                 ("offset", ctypes.c_size_t), ("spacing", ctypes.c_double * 3), ("origin", ctypes.c_double * 3)]
+
+
+class _ValueRange(ctypes.Structure):
+    _fields_ = [("min", ctypes.c_double), ("max", ctypes.c_double), ("nonfinite", ctypes.c_uint64),
+                ("first_nonfinite", ctypes.c_size_t * 3), ("equal", ctypes.c_uint64)]
 
 
 class _VolumeInfo(ctypes.Structure):
@@ -209,6 +214,9 @@ def _declare_io(lib, handle):
     lib.voxmesh_write_nrrd.argtypes = [ctypes.c_char_p, ctypes.POINTER(_VolumeView)]
     lib.voxmesh_write_nrrd_to_memory.restype = status
     lib.voxmesh_write_nrrd_to_memory.argtypes = [ctypes.POINTER(_VolumeView), ctypes.c_char_p, ctypes.POINTER(handle)]
+    lib.voxmesh_compute_value_range.restype = status
+    lib.voxmesh_compute_value_range.argtypes = [ctypes.POINTER(_VolumeView), ctypes.POINTER(ctypes.c_double),
+                                                ctypes.c_uint, ctypes.POINTER(_ValueRange)]
     lib.voxmesh_vertex_edges.restype = status
     lib.voxmesh_vertex_edges.argtypes = [ctypes.POINTER(_VolumeView), ctypes.c_double, ctypes.c_uint, ctypes.c_void_p,
                                          size, ctypes.POINTER(size)]
@@ -625,6 +633,27 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     for message in mesh.warnings:
         warnings.warn(message, RuntimeWarning, stacklevel=2)
     return mesh
+
+
+# value_range(): the smallest and largest finite sample, the NaN or infinite ones (count, and the
+# first's array index (z, y, x), None without one), and the samples equal to equal_to.
+ValueRange = collections.namedtuple("ValueRange", "min max nonfinite first_nonfinite equal")
+
+
+def value_range(volume, equal_to=None, threads=0):
+    """A volume's samples summed up in one pass on all cores, as a ValueRange: min and max of the
+    finite samples (0.0 when none is), how many are NaN or infinite and where the first is, and
+    how many equal `equal_to` exactly (0 when it is None). Samples exactly at an iso value are
+    inside for extract and outside for scikit-image: they are where the two meshes differ."""
+    if int(threads) < 0:
+        raise VoxmeshError(f"threads must be 0 (automatic) or more; got {threads}")
+    view, array = _as_view(volume, None, None)  # `array` keeps the samples alive for the call
+    result = _ValueRange()
+    target = None if equal_to is None else ctypes.byref(ctypes.c_double(float(equal_to)))
+    _check(_lib.voxmesh_compute_value_range(ctypes.byref(view), target, int(threads), ctypes.byref(result)))
+    del array
+    first = tuple(result.first_nonfinite)[::-1] if result.nonfinite else None
+    return ValueRange(result.min, result.max, result.nonfinite, first, result.equal)
 
 
 def vertex_edges(volume, iso=0.0, threads=0, count=None):

@@ -4,7 +4,7 @@ arguments and results; the meshing is extract's."""
 
 import numpy as np
 
-from . import VoxmeshError, extract, vertex_edges, edge_cell_ranges, _BACKENDS
+from . import VoxmeshError, extract, vertex_edges, edge_cell_ranges, value_range, _BACKENDS
 
 _METHODS = ("lewiner", "lorensen")
 _NO_SURFACE = "No surface found at the given iso value."  # skimage's RuntimeError, word for word
@@ -69,9 +69,13 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
         volume = volume.view(np.uint8)
     if volume.dtype.type not in _EXACT_IN_FLOAT32 or not volume.dtype.isnative:
         volume = volume.astype(np.float32)  # what skimage meshes: the float32 values
-    low, high = np.float32(volume.min()), np.float32(volume.max())
-    if not (np.isfinite(low) and np.isfinite(high)):
+    given = None if level is None else float(level)
+    # One pass for the range and, when level is known, the samples exactly at it (see below).
+    counted = given is not None and step_size == 1  # else data, the samples meshed, is known only later
+    summary = _value_range(volume, given if counted else None, threads)
+    if summary.nonfinite:
         raise ValueError("volume holds NaN or infinite samples")
+    low, high = np.float32(summary.min), np.float32(summary.max)
     if level is None:
         level = 0.5 * (low + high)
     level = float(level)
@@ -95,7 +99,8 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
     # voxmesh's inside is value >= iso; only a sample exactly at level tells that from
     # skimage's value > level. Nudged one float below level it is outside, and its edges'
     # vertices, a hair off the sample, are put back on it below.
-    at_level = _equal(data, level)
+    at_level_count = summary.equal if counted else _value_range(data, level, threads).equal
+    at_level = _equal(data, level) if at_level_count else None
     meshed = data
     if at_level is not None:
         meshed = data.astype(np.float32)
@@ -142,6 +147,15 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
     if allow_degenerate:
         return verts, faces, normals, values
     return _without_degenerate(verts.astype(np.float32), faces, normals, values)
+
+
+def _value_range(volume, equal_to, threads):
+    try:
+        return value_range(volume, equal_to=equal_to, threads=threads)
+    except VoxmeshError as error:
+        if isinstance(error, MemoryError):
+            raise
+        raise ValueError(str(error)) from error
 
 
 def _greater(data, level):

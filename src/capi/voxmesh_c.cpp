@@ -12,6 +12,7 @@
 #include <iterator>
 #include <memory>
 #include <new>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -415,6 +416,23 @@ voxmesh_status voxmesh_keep_largest_components(const voxmesh_mesh* mesh, size_t 
         require(kept, "voxmesh_keep_largest_components", "the result pointer");
         require(mesh, "voxmesh_keep_largest_components", "the mesh");
         *kept = new voxmesh_mesh{voxmesh::keep_largest_components(mesh->mesh, count)};
+    });
+}
+
+voxmesh_status voxmesh_compute_value_range(const voxmesh_volume_view* volume, const double* equal_to, unsigned threads,
+                                           voxmesh_value_range* range) {
+    if (range) *range = voxmesh_value_range{};
+    return guarded([&] {
+        const char* who = "voxmesh_compute_value_range";
+        require(range, who, "the result pointer");
+        require(volume, who, "the volume");
+        const voxmesh::ValueRange r = voxmesh::value_range(
+            cpp_view(*volume, who), equal_to ? std::optional<double>(*equal_to) : std::nullopt, threads);
+        range->min = r.min;
+        range->max = r.max;
+        range->nonfinite = r.nonfinite;
+        std::copy(r.first_nonfinite.begin(), r.first_nonfinite.end(), range->first_nonfinite);
+        range->equal = r.equal;
     });
 }
 

@@ -30,29 +30,6 @@ ScalarType parse_scalar(const std::string& name) {
     throw BadInput("unknown sample type '" + name + "' (use u8, i8, u16, i16, u32, i32, f32 or f64)");
 }
 
-template <class T>
-ValueRange range_of(const T* s, const std::array<std::size_t, 3>& dims) {
-    ValueRange r;
-    const std::size_t n = dims[0] * dims[1] * dims[2];
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (std::size_t i = 0; i < n; ++i) {
-        const double v = static_cast<double>(s[i]);
-        if constexpr (std::is_floating_point_v<T>) {
-            if (!std::isfinite(v)) {
-                if (r.nonfinite++ == 0) r.first_nonfinite = {i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])};
-                continue;
-            }
-        }
-        lo = std::min(lo, v);
-        hi = std::max(hi, v);
-    }
-    if (lo <= hi) {
-        r.min = lo;
-        r.max = hi;
-    }
-    return r;
-}
-
 }  // namespace
 
 void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& why) {
@@ -211,20 +188,6 @@ Volume load_volume(const std::string& arg, const RawFlags& raw) {
                   << "': the direction matrix is not axis-aligned; its rotation is dropped and the mesh is in the "
                      "volume's index axes (spacing and origin as written)\n";
     return finite_samples(std::move(v), input.display());
-}
-
-ValueRange value_range(const VolumeView& v) {
-    switch (v.type) {
-        case ScalarType::U8: return range_of(static_cast<const std::uint8_t*>(v.data), v.dims);
-        case ScalarType::I8: return range_of(static_cast<const std::int8_t*>(v.data), v.dims);
-        case ScalarType::U16: return range_of(static_cast<const std::uint16_t*>(v.data), v.dims);
-        case ScalarType::I16: return range_of(static_cast<const std::int16_t*>(v.data), v.dims);
-        case ScalarType::U32: return range_of(static_cast<const std::uint32_t*>(v.data), v.dims);
-        case ScalarType::I32: return range_of(static_cast<const std::int32_t*>(v.data), v.dims);
-        case ScalarType::F32: return range_of(static_cast<const float*>(v.data), v.dims);
-        case ScalarType::F64: return range_of(static_cast<const double*>(v.data), v.dims);
-    }
-    throw Error("unknown scalar type");
 }
 
 std::string format_bytes(std::uint64_t bytes) {

@@ -113,12 +113,6 @@ void write_volume_output(const std::string& output, const VolumeView& volume);
 Volume load_volume(const std::string& path, const RawFlags& raw);
 RawLayout raw_layout(const std::string& path, const RawFlags& raw);
 
-struct ValueRange {
-    double min = 0, max = 0;
-    std::size_t nonfinite = 0;  // NaN or infinite samples (float types)
-    std::array<std::size_t, 3> first_nonfinite{0, 0, 0};
-};
-ValueRange value_range(const VolumeView& volume);
 
 std::string format_bytes(std::uint64_t bytes);
 std::string format_double(double v);  // shortest round-trip-ish text

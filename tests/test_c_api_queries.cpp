@@ -1,5 +1,6 @@
-// voxmesh_vertex_edges and voxmesh_edge_cell_ranges against the C++ calls they wrap, and their
-// refusals (the C++ functions themselves: test_core_vertex_edges.cpp).
+// voxmesh_vertex_edges, voxmesh_edge_cell_ranges and voxmesh_compute_value_range against the C++
+// calls they wrap, and their refusals (the C++ functions themselves: test_core_vertex_edges.cpp,
+// test_core_value_range.cpp).
 #ifdef VOXMESH_TEST_C_API
 #include <catch2/catch.hpp>
 #include <voxmesh/voxmesh.h>
@@ -11,6 +12,7 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -41,7 +43,7 @@ Ball ball(std::size_t n) {
 
 }  // namespace
 
-TEST_CASE("C API: vertex edges and cell ranges are the C++ calls'", "[c_api][vertex_edges]") {
+TEST_CASE("C API: vertex edges and cell ranges are the C++ calls'", "[capi][vertex_edges]") {
     const Ball b = ball(21);
     const voxmesh_volume_view view = c_view(b.view);
     const std::vector<std::uint64_t> want = voxmesh::vertex_edges(b.view, 0.0, 2);
@@ -68,7 +70,7 @@ TEST_CASE("C API: vertex edges and cell ranges are the C++ calls'", "[c_api][ver
     REQUIRE(voxmesh_edge_cell_ranges(&view, nullptr, 0, 0.0, nullptr, 0, nullptr) == VOXMESH_OK);  // no edges, no work
 }
 
-TEST_CASE("C API: vertex edges and cell ranges refuse with the problem named", "[c_api][vertex_edges]") {
+TEST_CASE("C API: vertex edges and cell ranges refuse with the problem named", "[capi][vertex_edges]") {
     Ball b = ball(9);
     voxmesh_volume_view view = c_view(b.view);
     size_t count = 99;
@@ -96,5 +98,31 @@ TEST_CASE("C API: vertex edges and cell ranges refuse with the problem named", "
     REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("edges"));
     view.type = 42;
     REQUIRE(voxmesh_vertex_edges(&view, 0.0, 0, nullptr, 0, &count) == VOXMESH_ERROR);
+}
+
+TEST_CASE("C API: the value range is the C++ call's", "[capi][value_range]") {
+    Ball b = ball(13);
+    b.samples[3 + 13 * (4 + 13 * 5)] = std::numeric_limits<float>::infinity();
+    b.samples[100] = 0.0f;
+    const voxmesh_volume_view view = c_view(b.view);
+    for (const double* equal_to : {static_cast<const double*>(nullptr), static_cast<const double*>(&b.view.origin[0])}) {
+        const voxmesh::ValueRange want =
+            voxmesh::value_range(b.view, equal_to ? std::optional<double>(*equal_to) : std::nullopt, 1);
+        voxmesh_value_range got;
+        REQUIRE(voxmesh_compute_value_range(&view, equal_to, 2, &got) == VOXMESH_OK);
+        CHECK(got.min == want.min);
+        CHECK(got.max == want.max);
+        CHECK(got.nonfinite == 1);
+        CHECK(got.first_nonfinite[0] == 3);
+        CHECK(got.first_nonfinite[1] == 4);
+        CHECK(got.first_nonfinite[2] == 5);
+        CHECK(got.equal == want.equal);
+        CHECK(got.equal == (equal_to ? 1u : 0u));  // the origin's 0.0: the one sample set to it
+    }
+    voxmesh_value_range r;
+    REQUIRE(voxmesh_compute_value_range(&view, nullptr, 0, nullptr) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("result pointer"));
+    REQUIRE(voxmesh_compute_value_range(nullptr, nullptr, 0, &r) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("volume"));
 }
 #endif

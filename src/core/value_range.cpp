@@ -1,0 +1,182 @@
+// value_range: min, max, non-finite and equal samples in one pass over z-slabs. Each plane takes
+// a loop without a branch per sample, which the compiler vectorises; a plane holding a NaN or
+// an infinity is then redone sample by sample.
+#include "out_of_memory.hpp"
+#include "parallel.hpp"
+#include "scalar_dispatch.hpp"
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <type_traits>
+#include <vector>
+
+namespace voxmesh {
+
+namespace {
+
+struct Partial {
+    double min = std::numeric_limits<double>::infinity(), max = -std::numeric_limits<double>::infinity();
+    std::uint64_t nonfinite = 0, equal = 0;
+    std::size_t first_nonfinite = 0;  // linear index
+};
+
+// Floats compared as integers: the sign-magnitude bits turned two's complement order the same
+// way the floats do (NaN aside), and integer min, max and the finite test vectorise where a float
+// min/max reduction would not (its NaN and signed-zero rules forbid reordering).
+template <class T>
+struct Keys {  // integer samples are their own keys
+    using Key = T;
+    static Key key(T v) { return v; }
+    static T value(Key k) { return k; }
+    static bool nonfinite(T) { return false; }
+};
+template <class T, class Bits, class Signed>
+struct FloatKeys {
+    using Key = Signed;
+    static constexpr Bits kMagnitude = ~Bits{0} >> 1;
+    static Bits bits(T v) {
+        Bits b;
+        std::memcpy(&b, &v, sizeof b);
+        return b;
+    }
+    static Key key(T v) {
+        const Signed s = static_cast<Signed>(bits(v));
+        return s ^ ((s >> (8 * sizeof(Signed) - 1)) & static_cast<Signed>(kMagnitude));
+    }
+    static T value(Key k) {
+        const Bits b = static_cast<Bits>(k ^ ((k >> (8 * sizeof(Signed) - 1)) & static_cast<Signed>(kMagnitude)));
+        T v;
+        std::memcpy(&v, &b, sizeof v);
+        return v;
+    }
+    static bool nonfinite(T v) {  // all exponent bits set: an infinity or a NaN
+        const Bits exponent = bits(std::numeric_limits<T>::infinity());
+        return (bits(v) & exponent) == exponent;
+    }
+};
+template <>
+struct Keys<float> : FloatKeys<float, std::uint32_t, std::int32_t> {};
+template <>
+struct Keys<double> : FloatKeys<double, std::uint64_t, std::int64_t> {};
+
+// An AVX2 copy beside the baseline one, chosen when the library loads: twice the lanes for the
+// integer min, max and compares (the baseline's SSE2 has no 32-bit integer min or max).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define VOXMESH_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
+#else
+#define VOXMESH_AVX2_CLONE
+#endif
+
+// One plane of `count` samples at `s` (linear index `base`) into `part`.
+template <class T>
+VOXMESH_AVX2_CLONE void plane_range(const T* s, std::size_t count, std::size_t base, bool count_equal, T target, Partial& part) {
+    using K = Keys<T>;
+    using Key = typename K::Key;
+    Key lo = std::numeric_limits<Key>::max(), hi = std::numeric_limits<Key>::lowest();
+    std::uint64_t equal = 0;
+    unsigned bad = 0;
+    // Stretches of at most 2^16 samples, so that the equal count fits lanes of the key's width.
+    using Count = std::conditional_t<sizeof(Key) >= 4, std::make_unsigned_t<Key>, std::uint32_t>;
+    for (std::size_t begin = 0; begin < count; begin += std::size_t{1} << 16) {
+        const std::size_t end = std::min(count, begin + (std::size_t{1} << 16));
+        Count stretch = 0;
+        for (std::size_t i = begin; i < end; ++i) {
+            const Key k = K::key(s[i]);
+            lo = std::min(lo, k);
+            hi = std::max(hi, k);
+            stretch += s[i] == target;
+            bad |= K::nonfinite(s[i]);
+        }
+        equal += stretch;
+    }
+    if (bad) {  // NaN or infinities: sample by sample, leaving them out of min and max
+        for (std::size_t j = 0; j < count; ++j) {
+            const T v = s[j];
+            if (K::nonfinite(v)) {
+                if (part.nonfinite++ == 0) part.first_nonfinite = base + j;
+                continue;
+            }
+            part.min = std::min(part.min, static_cast<double>(v));
+            part.max = std::max(part.max, static_cast<double>(v));
+            if (count_equal) part.equal += v == target;
+        }
+        return;
+    }
+    part.min = std::min(part.min, static_cast<double>(K::value(lo)));
+    part.max = std::max(part.max, static_cast<double>(K::value(hi)));
+    if (count_equal) part.equal += equal;
+}
+
+// Whether a sample of type T can equal `value` exactly, and that sample.
+template <class T>
+bool representable(double value, T& sample) {
+    if (std::isnan(value)) return false;
+    if constexpr (std::is_integral_v<T>) {
+        if (value != std::floor(value) || value < static_cast<double>(std::numeric_limits<T>::lowest()) ||
+            value > static_cast<double>(std::numeric_limits<T>::max()))
+            return false;
+    } else if (!(std::fabs(value) <= static_cast<double>(std::numeric_limits<T>::max())) ||
+               static_cast<double>(static_cast<T>(value)) != value) {
+        return false;  // an infinity, beyond the type's range (checked before converting), or between its values
+    }
+    sample = static_cast<T>(value);
+    return true;
+}
+
+template <class T>
+ValueRange typed_range(const VolumeView& volume, std::optional<double> equal_to, unsigned threads) {
+    const std::size_t plane = volume.dims[0] * volume.dims[1], nz = volume.dims[2];
+    T target{};
+    const bool count_equal = equal_to && representable<T>(*equal_to, target);
+    const unsigned slabs = static_cast<unsigned>(std::min<std::size_t>(nz, std::size_t{4} * threads));
+    std::vector<Partial> parts(slabs);
+    const T* data = static_cast<const T*>(volume.data);
+    detail::run_slabs(slabs, threads, [&](unsigned slab, unsigned) {
+        const detail::Share share = detail::share_of(nz, slab, slabs);
+        for (std::size_t z = share.begin; z < share.end; ++z)
+            plane_range(data + z * plane, plane, z * plane, count_equal, target, parts[slab]);
+    });
+    Partial all;
+    for (const Partial& p : parts) {  // in slab order, so the first non-finite is the volume's first
+        if (p.nonfinite && !all.nonfinite) all.first_nonfinite = p.first_nonfinite;
+        all.nonfinite += p.nonfinite;
+        all.equal += p.equal;
+        all.min = std::min(all.min, p.min);
+        all.max = std::max(all.max, p.max);
+    }
+    ValueRange r;
+    if (all.min <= all.max) {
+        r.min = all.min;
+        r.max = all.max;
+    }
+    r.nonfinite = all.nonfinite;
+    r.equal = all.equal;
+    if (all.nonfinite) {
+        const std::size_t i = all.first_nonfinite;
+        r.first_nonfinite = {i % volume.dims[0], i / volume.dims[0] % volume.dims[1], i / plane};
+    }
+    return r;
+}
+
+}  // namespace
+
+ValueRange value_range(const VolumeView& volume, std::optional<double> equal_to, unsigned threads) {
+    if (!volume.data) throw Error("volume has no data");
+    checked_volume_bytes(volume.dims, volume.type);
+    if (volume.dims[0] * volume.dims[1] * volume.dims[2] == 0) return {};
+    if (const std::size_t size = scalar_size(volume.type); reinterpret_cast<std::uintptr_t>(volume.data) % size != 0)
+        throw Error(std::string("volume data at an address that is not a multiple of ") + std::to_string(size) +
+                    " bytes, the size of a " + scalar_name(volume.type) + " sample");
+    const unsigned resolved = detail::resolve_threads(threads);
+    return detail::out_of_memory_as_error([] { return std::string("out of memory summing up a volume's samples"); }, [&] {
+        return detail::dispatch_scalar(volume.type,
+                                       [&](auto tag) { return typed_range<decltype(tag)>(volume, equal_to, resolved); });
+    });
+}
+
+}  // namespace voxmesh
