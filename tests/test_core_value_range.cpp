@@ -75,7 +75,7 @@ void check_random_volumes(double lowest, double highest) {
 
 }  // namespace
 
-TEST_CASE("value_range gives the oracle's min, max and equal count for every type and thread count", "[value_range]") {
+TEST_CASE("value_range gives the oracle's min, max and equal count for every type and thread count", "[value_range][core]") {
     check_random_volumes<std::uint8_t>(0, 9);
     check_random_volumes<std::int8_t>(-128, 127);
     check_random_volumes<std::uint16_t>(0, 65535);
@@ -86,7 +86,7 @@ TEST_CASE("value_range gives the oracle's min, max and equal count for every typ
     check_random_volumes<double>(-1e-3, 1e-3);
 }
 
-TEST_CASE("value_range orders negative floats and zeros as floats do", "[value_range]") {
+TEST_CASE("value_range orders negative floats and zeros as floats do", "[value_range][core]") {
     // The integer keys of negative floats run backwards from their bits: -2 < -1 < -0.0 == 0 < 1.
     const Dims n{5, 1, 1};
     const std::vector<float> data{-1.0f, -0.0f, -2.0f, 0.0f, 1.0f};
@@ -102,7 +102,7 @@ TEST_CASE("value_range orders negative floats and zeros as floats do", "[value_r
 }
 
 TEST_CASE("value_range counts NaN and infinite samples, names the first, and leaves them out of the range",
-          "[value_range]") {
+          "[value_range][core]") {
     const Dims n{33, 4, 6};
     std::vector<float> data(n[0] * n[1] * n[2]);
     for (std::size_t i = 0; i < data.size(); ++i) data[i] = static_cast<float>(i % 17) - 8.0f;
@@ -126,7 +126,7 @@ TEST_CASE("value_range counts NaN and infinite samples, names the first, and lea
 }
 
 TEST_CASE("value_range refuses a volume without data or misaligned, and sums up an empty one as nothing",
-          "[value_range]") {
+          "[value_range][core]") {
     voxmesh::VolumeView view;
     view.dims = {2, 2, 2};
     REQUIRE_THROWS_WITH(voxmesh::value_range(view), Catch::Contains("no data"));

@@ -242,7 +242,7 @@ const Dims kOddDims[] = {{7, 5, 9}, {17, 3, 11}, {2, 2, 2}, {3, 2, 5}};
 
 // ------------------------------------------------------------------ vertex_edges
 
-TEMPLATE_TEST_CASE("vertex_edges matches a brute-force walk over every edge, on any thread count", "[vertex_edges]",
+TEMPLATE_TEST_CASE("vertex_edges matches a brute-force walk over every edge, on any thread count", "[vertex_edges][core]",
                    std::uint8_t, std::int16_t, std::uint16_t, float, double) {
     std::uint32_t seed = 1234;
     for (const Dims& dims : kOddDims) {
@@ -254,7 +254,7 @@ TEMPLATE_TEST_CASE("vertex_edges matches a brute-force walk over every edge, on 
     for (double iso : {100.0, 100.5, 97.25, 120.0}) check_vertex_edges(ball, cube, iso);
 }
 
-TEST_CASE("vertex_edges on f32: iso not a float decides as the smallest float at or above it", "[vertex_edges]") {
+TEST_CASE("vertex_edges on f32: iso not a float decides as the smallest float at or above it", "[vertex_edges][core]") {
     // 0.1 is not a float: samples of 0.1f (just above 0.1) are inside at iso 0.1.
     const Dims dims{9, 7, 5};
     const std::vector<double> r = vmtest::random_doubles(dims, 77, 0, 2);
@@ -264,7 +264,7 @@ TEST_CASE("vertex_edges on f32: iso not a float decides as the smallest float at
         check_vertex_edges(data, dims, iso);
 }
 
-TEST_CASE("vertex_edges: each vertex of extract lies on its edge with spacing and origin", "[vertex_edges]") {
+TEST_CASE("vertex_edges: each vertex of extract lies on its edge with spacing and origin", "[vertex_edges][core]") {
     const Dims dims{13, 11, 9};
     const std::array<double, 3> spacing{0.7, 1.3, 2.1}, origin{-3.25, 10.5, 0.1};
     const std::vector<float> data = vmtest::sample_field<float>(dims, vmtest::sphere({6.2, 5.1, 4.3}, 3.7));
@@ -291,7 +291,7 @@ TEST_CASE("vertex_edges: each vertex of extract lies on its edge with spacing an
     }
 }
 
-TEST_CASE("vertex_edges: no crossings give empty vectors", "[vertex_edges]") {
+TEST_CASE("vertex_edges: no crossings give empty vectors", "[vertex_edges][core]") {
     const Dims dims{7, 5, 9};
     SECTION("all samples equal") {
         const std::vector<float> flat(dims[0] * dims[1] * dims[2], 3.5f);
@@ -331,7 +331,7 @@ TEST_CASE("vertex_edges: no crossings give empty vectors", "[vertex_edges]") {
     }
 }
 
-TEST_CASE("vertex_edges: NaN or infinite samples and dimensions below 2 are Errors", "[vertex_edges]") {
+TEST_CASE("vertex_edges: NaN or infinite samples and dimensions below 2 are Errors", "[vertex_edges][core]") {
     const Dims dims{6, 5, 7};
     std::vector<float> data = random_volume<float>(dims, 11);
     SECTION("NaN names NaN and the first z-plane holding one") {
@@ -379,7 +379,7 @@ TEST_CASE("vertex_edges: NaN or infinite samples and dimensions below 2 are Erro
     }
 }
 
-TEST_CASE("vertex_edges and edge_cell_ranges on a larger volume: many slabs, several pieces of edges", "[vertex_edges]") {
+TEST_CASE("vertex_edges and edge_cell_ranges on a larger volume: many slabs, several pieces of edges", "[vertex_edges][core]") {
     // 190822 edges (3 per sample, less those leaving the volume): edge_cell_ranges splits them among threads.
     const Dims dims{41, 37, 43};
     const std::vector<float> data = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));
@@ -403,7 +403,7 @@ TEST_CASE("vertex_edges and edge_cell_ranges on a larger volume: many slabs, sev
 
 // ------------------------------------------------------------------ edge_cell_ranges
 
-TEMPLATE_TEST_CASE("edge_cell_ranges matches the cells around each edge, with offsets and masks", "[vertex_edges]",
+TEMPLATE_TEST_CASE("edge_cell_ranges matches the cells around each edge, with offsets and masks", "[vertex_edges][core]",
                    std::uint8_t, std::int16_t, float, double) {
     std::uint32_t seed = 4321;
     for (const Dims& dims : kOddDims) {
@@ -435,7 +435,7 @@ TEMPLATE_TEST_CASE("edge_cell_ranges matches the cells around each edge, with of
     }
 }
 
-TEST_CASE("edge_cell_ranges takes edges in any order, repeated, and none", "[vertex_edges]") {
+TEST_CASE("edge_cell_ranges takes edges in any order, repeated, and none", "[vertex_edges][core]") {
     const Dims dims{7, 5, 9};
     const std::vector<float> data = random_volume<float>(dims, 21);
     const std::vector<std::uint8_t> mask = random_mask(dims, 22);
@@ -449,7 +449,7 @@ TEST_CASE("edge_cell_ranges takes edges in any order, repeated, and none", "[ver
     CHECK(voxmesh::edge_cell_ranges(vmtest::view_of(data, dims), std::span<const std::uint64_t>{}, 0, nullptr, 2).empty());
 }
 
-TEST_CASE("edge_cell_ranges: hand-checked values on a 3x3x2 volume", "[vertex_edges]") {
+TEST_CASE("edge_cell_ranges: hand-checked values on a 3x3x2 volume", "[vertex_edges][core]") {
     // x-edge at (0,1,0): cells (0,0,0) and (0,1,0) along y; z has one cell layer (z - 1 < 0).
     const Dims dims{3, 3, 2};
     std::vector<float> data(18, 0.0f);
@@ -470,7 +470,7 @@ TEST_CASE("edge_cell_ranges: hand-checked values on a 3x3x2 volume", "[vertex_ed
     CHECK(voxmesh::edge_cell_ranges(view, edges, 0, only_b, 2) == std::vector<float>{0.0f, 5.0f, 0.0f});
 }
 
-TEST_CASE("edge_cell_ranges: an edge the volume does not hold is an Error", "[vertex_edges]") {
+TEST_CASE("edge_cell_ranges: an edge the volume does not hold is an Error", "[vertex_edges][core]") {
     const Dims dims{7, 5, 9};
     const std::vector<std::int16_t> data = random_volume<std::int16_t>(dims, 31);
     const voxmesh::VolumeView view = vmtest::view_of(data, dims);
@@ -508,7 +508,7 @@ TEST_CASE("edge_cell_ranges: an edge the volume does not hold is an Error", "[ve
 }
 
 TEST_CASE("edge_cell_ranges_into writes the ranges edge_cell_ranges returns, into memory of the right size",
-          "[vertex_edges]") {
+          "[vertex_edges][core]") {
     const Dims n{9, 8, 7};
     const auto data = vmtest::sample_field<float>(n, vmtest::sphere({4.1, 3.6, 3.2}, 2.7));
     const auto view = vmtest::view_of(data, n);

@@ -176,6 +176,15 @@ RowPacker<T> row_packer() {
     return fast ? fast : &pack_row_portable<T>;
 }
 
+bool use_avx2() {
+#ifdef VOXMESH_X86_DISPATCH
+    static const bool use = !portable_forced() && __builtin_cpu_supports("avx2");
+    return use;
+#else
+    return false;
+#endif
+}
+
 bool cpu_has_popcnt() {
 #ifdef VOXMESH_X86_DISPATCH
     static const bool has = !portable_forced() && __builtin_cpu_supports("popcnt");

@@ -26,6 +26,10 @@ RowPacker<T> avx2_row_packer();
 template <class T>
 RowPacker<T> row_packer();
 
+// True when the processor has AVX2 and VOXMESH_ISA does not say portable: other AVX2 copies
+// (value_range's) follow the packers' choice, so that the portable run tests them too.
+bool use_avx2();
+
 // True when the processor has POPCNT (and the build may use it): see cpu_engine.cpp.
 bool cpu_has_popcnt();
 

@@ -3,9 +3,14 @@
 // an infinity is then redone sample by sample.
 #include "out_of_memory.hpp"
 #include "parallel.hpp"
+#include "row_packer.hpp"  // use_avx2
 #include "scalar_dispatch.hpp"
 
 #include <voxmesh/voxmesh.hpp>
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define VOXMESH_X86_DISPATCH 1
+#endif
 
 #include <algorithm>
 #include <cmath>
@@ -64,17 +69,12 @@ struct Keys<float> : FloatKeys<float, std::uint32_t, std::int32_t> {};
 template <>
 struct Keys<double> : FloatKeys<double, std::uint64_t, std::int64_t> {};
 
-// An AVX2 copy beside the baseline one, chosen when the library loads: twice the lanes for the
-// integer min, max and compares (the baseline's SSE2 has no 32-bit integer min or max).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define VOXMESH_AVX2_CLONE __attribute__((target_clones("avx2", "default")))
-#else
-#define VOXMESH_AVX2_CLONE
-#endif
-
-// One plane of `count` samples at `s` (linear index `base`) into `part`.
+// One plane of `count` samples at `s` (linear index `base`) into `part`. Inlined into a
+// baseline and an AVX2 copy below: AVX2 doubles the lanes of the integer min, max and compares,
+// and SSE2 has no 32-bit integer min or max at all.
 template <class T>
-VOXMESH_AVX2_CLONE void plane_range(const T* s, std::size_t count, std::size_t base, bool count_equal, T target, Partial& part) {
+[[gnu::always_inline]] inline void plane_range(const T* s, std::size_t count, std::size_t base, bool count_equal, T target,
+                                               Partial& part) {
     using K = Keys<T>;
     using Key = typename K::Key;
     Key lo = std::numeric_limits<Key>::max(), hi = std::numeric_limits<Key>::lowest();
@@ -112,6 +112,18 @@ VOXMESH_AVX2_CLONE void plane_range(const T* s, std::size_t count, std::size_t b
     if (count_equal) part.equal += equal;
 }
 
+template <class T>
+void plane_range_baseline(const T* s, std::size_t count, std::size_t base, bool count_equal, T target, Partial& part) {
+    plane_range(s, count, base, count_equal, target, part);
+}
+#ifdef VOXMESH_X86_DISPATCH
+template <class T>
+__attribute__((target("avx2"))) void plane_range_avx2(const T* s, std::size_t count, std::size_t base,
+                                                      bool count_equal, T target, Partial& part) {
+    plane_range(s, count, base, count_equal, target, part);
+}
+#endif
+
 // Whether a sample of type T can equal `value` exactly, and that sample.
 template <class T>
 bool representable(double value, T& sample) {
@@ -136,10 +148,14 @@ ValueRange typed_range(const VolumeView& volume, std::optional<double> equal_to,
     const unsigned slabs = static_cast<unsigned>(std::min<std::size_t>(nz, std::size_t{4} * threads));
     std::vector<Partial> parts(slabs);
     const T* data = static_cast<const T*>(volume.data);
+    auto* scan = &plane_range_baseline<T>;
+#ifdef VOXMESH_X86_DISPATCH
+    if (detail::use_avx2()) scan = &plane_range_avx2<T>;
+#endif
     detail::run_slabs(slabs, threads, [&](unsigned slab, unsigned) {
         const detail::Share share = detail::share_of(nz, slab, slabs);
         for (std::size_t z = share.begin; z < share.end; ++z)
-            plane_range(data + z * plane, plane, z * plane, count_equal, target, parts[slab]);
+            scan(data + z * plane, plane, z * plane, count_equal, target, parts[slab]);
     });
     Partial all;
     for (const Partial& p : parts) {  // in slab order, so the first non-finite is the volume's first
