@@ -140,3 +140,15 @@ TEST_CASE("value_range refuses a volume without data or misaligned, and sums up 
     CHECK(r.max == 0.0);
     CHECK(r.equal == 0);
 }
+
+TEST_CASE("value_range reads a zero extreme as +0.0, with or without a NaN in its plane", "[value_range][core]") {
+    const Dims n{3, 1, 1};
+    const std::vector<float> plain{-0.0f, -1.0f, -0.0f};
+    const std::vector<float> with_nan{-0.0f, std::numeric_limits<float>::quiet_NaN(), -1.0f};
+    for (const auto* data : {&plain, &with_nan}) {
+        const auto r = voxmesh::value_range(vmtest::view_of(*data, n), std::nullopt, 1);
+        CHECK(r.min == -1.0);
+        CHECK(r.max == 0.0);
+        CHECK_FALSE(std::signbit(r.max));
+    }
+}

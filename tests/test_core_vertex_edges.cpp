@@ -522,3 +522,11 @@ TEST_CASE("edge_cell_ranges_into writes the ranges edge_cell_ranges returns, int
     REQUIRE_THROWS_WITH(voxmesh::edge_cell_ranges_into(view, edges, short_by_one),
                         Catch::Contains("room for " + std::to_string(edges.size() - 1) + " ranges"));
 }
+
+TEST_CASE("edge_cell_ranges gives infinity for double ranges beyond float's", "[vertex_edges][core]") {
+    const Dims n{2, 2, 2};
+    std::vector<double> data(8, 1e300);
+    data[0] = -1e300;
+    const std::vector<std::uint64_t> edges{0, 1, 2};
+    for (const float r : voxmesh::edge_cell_ranges(vmtest::view_of(data, n), edges)) CHECK(r == std::numeric_limits<float>::infinity());
+}

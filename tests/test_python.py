@@ -616,6 +616,11 @@ class VertexEdgesTest(unittest.TestCase):
         self.assertEqual((r.min, r.max, r.nonfinite), (finite.min(), finite.max(), 2))
         self.assertEqual(r.first_nonfinite, (1, 2, 3))  # an index into the [z, y, x] array
         self.assertTrue(np.isnan(volume[r.first_nonfinite]))
+        # Samples one byte off their alignment (a buffer's slice) are copied, not refused.
+        raw = np.arange(1, 1 + 4 * 4 * 4 * 4 + 1, dtype=np.uint8).tobytes()
+        shifted = np.frombuffer(raw, dtype=np.float32, count=64, offset=1).reshape(4, 4, 4)
+        r = voxmesh.value_range(shifted)
+        self.assertEqual((r.min, r.max), (float(shifted.min()), float(shifted.max())))
 
     def test_refusals_name_the_problem(self):
         volume = np.zeros((4, 4, 4), dtype=np.float32)
@@ -629,6 +634,12 @@ class VertexEdgesTest(unittest.TestCase):
             voxmesh.edge_cell_ranges(ball, np.array([3 * ball.size], dtype=np.uint64))
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "last sample"):
             voxmesh.edge_cell_ranges(ball, np.array([3 * 11], dtype=np.uint64))  # x-edge from x = nx - 1
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "not be negative"):
+            voxmesh.edge_cell_ranges(ball, [-1])
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "integers"):
+            voxmesh.edge_cell_ranges(ball, np.array([3.9]))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "count"):
+            voxmesh.vertex_edges(ball, 0.0, count=-1)
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "cells' shape"):
             voxmesh.edge_cell_ranges(ball, np.array([0], dtype=np.uint64), cell_mask=np.ones((12, 12, 12), bool))
 

@@ -171,8 +171,8 @@ voxmesh_status voxmesh_read_mesh_from_memory(const void* data, size_t size, cons
 voxmesh_status voxmesh_keep_largest_components(const voxmesh_mesh* mesh, size_t count, voxmesh_mesh** kept);
 
 /* The samples summed up in one pass (voxmesh::value_range): the smallest and largest finite
- * sample (0 when none is), the NaN or infinite ones with the first's (x, y, z), and how many equal
- * *equal_to exactly (equal_to NULL: not counted, 0). */
+ * sample (0 when none is), the NaN or infinite ones with the first's (x, y, z), and how many
+ * finite samples equal *equal_to exactly (equal_to NULL: not counted, 0). */
 typedef struct voxmesh_value_range {
     double min, max;
     uint64_t nonfinite;
@@ -185,8 +185,8 @@ voxmesh_status voxmesh_compute_value_range(const voxmesh_volume_view* volume, co
 /* The crossed edge under each vertex of voxmesh_extract(volume) at `iso` (voxmesh::vertex_edges):
  * vertex i lies on edges[i] = 3 * (x + nx * (y + ny * z)) + axis (0 x, 1 y, 2 z), (x, y, z) the
  * edge's lower end. *count gets how many there are (the mesh's vertex count). edges NULL asks for
- * the count alone; otherwise capacity must be at least the count (an error naming both, nothing
- * written). */
+ * the count alone; otherwise capacity must be at least the count (else an error naming both,
+ * nothing written to edges, *count still set). */
 voxmesh_status voxmesh_vertex_edges(const voxmesh_volume_view* volume, double iso, unsigned threads, uint64_t* edges,
                                     size_t capacity, size_t* count);
 /* For each of `count` edges (that numbering), the largest range, maximum minus minimum sample, of

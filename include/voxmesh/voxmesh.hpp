@@ -152,8 +152,8 @@ void extract_into(const VolumeView& volume, const Options& options, Mesh& mesh, 
 
 // A volume's samples summed up in one pass on all cores (threads as Options::threads): the
 // smallest and the largest finite sample (both 0 when none is), the NaN and infinite ones (float
-// types) with the first in index order, and, where `equal_to` is given, how many equal it
-// exactly. Samples exactly at iso are inside here and outside for tools that mesh value > iso
+// types) with the first in index order, and, where `equal_to` is given, how many finite samples
+// equal it exactly (-0.0 equals 0.0; a min or max of zero reads +0.0). Samples exactly at iso are inside here and outside for tools that mesh value > iso
 // (scikit-image): they are where the two meshes differ.
 struct ValueRange {
     double min = 0, max = 0;
@@ -177,7 +177,9 @@ std::vector<std::uint64_t> vertex_edges(const VolumeView& volume, double iso, un
 // cells the volume holds that share the edge, and of those only the ones `cell_mask` marks
 // nonzero when it is given ((nx-1)(ny-1)(nz-1) bytes, x fastest, a cell by its lowest corner);
 // 0 where no cell counts. Each range is (max - offset) - (min - offset) in double, rounded to
-// float: with offset = the level, scikit-image's `values` from marching_cubes.
+// float (infinity beyond float's range): with offset = the level, scikit-image's `values` from
+// marching_cubes. Samples must be finite (vertex_edges refuses others); ranges over NaN are
+// unspecified.
 std::vector<float> edge_cell_ranges(const VolumeView& volume, std::span<const std::uint64_t> edges,
                                     double offset = 0, const std::uint8_t* cell_mask = nullptr,
                                     unsigned threads = 0);

@@ -539,7 +539,7 @@ def _as_view(volume, spacing, origin):
     if native.type not in _DTYPES:
         raise VoxmeshError(f"unsupported sample type {array.dtype} (uint8, int8, uint16, int16, uint32, "
                            "int32, float32, float64: convert first, e.g. volume.astype(np.float32))")
-    array = np.ascontiguousarray(array, dtype=native)  # a copy only where the layout needs one
+    array = np.require(array, native, ["C", "A"])  # a copy only where layout or alignment needs one
     view = _VolumeView()
     view.data = array.ctypes.data
     view.type = _DTYPES.index(native.type)
@@ -643,7 +643,7 @@ ValueRange = collections.namedtuple("ValueRange", "min max nonfinite first_nonfi
 def value_range(volume, equal_to=None, threads=0):
     """A volume's samples summed up in one pass on all cores, as a ValueRange: min and max of the
     finite samples (0.0 when none is), how many are NaN or infinite and where the first is, and
-    how many equal `equal_to` exactly (0 when it is None). Samples exactly at an iso value are
+    how many finite samples equal `equal_to` exactly (0 when it is None). Samples exactly at an iso value are
     inside for extract and outside for scikit-image: they are where the two meshes differ."""
     if int(threads) < 0:
         raise VoxmeshError(f"threads must be 0 (automatic) or more; got {threads}")
@@ -665,6 +665,8 @@ def vertex_edges(volume, iso=0.0, threads=0, count=None):
     (saves a pass; a wrong one is an error)."""
     if int(threads) < 0:
         raise VoxmeshError(f"threads must be 0 (automatic) or more; got {threads}")
+    if count is not None and int(count) < 0:
+        raise VoxmeshError(f"count must be the mesh's vertex count, not negative; got {count}")
     view, array = _as_view(volume, None, None)  # `array` keeps the samples alive for the call
     found = ctypes.c_size_t()
     if count is None:
@@ -684,13 +686,19 @@ def edge_cell_ranges(volume, edges, offset=0.0, cell_mask=None, threads=0):
     over the cells around it (up to four) that the volume holds and `cell_mask` marks True, as
     float32; 0 where none counts. cell_mask: None or an array of the cells' shape (nz-1, ny-1,
     nx-1), a cell by its lowest corner. Each range is (max - offset) - (min - offset) in double:
-    with offset = the level, scikit-image's `values` from marching_cubes."""
+    with offset = the level, scikit-image's `values` from marching_cubes. Samples must be finite
+    (vertex_edges refuses others); ranges over NaN are unspecified."""
     if int(threads) < 0:
         raise VoxmeshError(f"threads must be 0 (automatic) or more; got {threads}")
     view, array = _as_view(volume, None, None)
-    edges = np.ascontiguousarray(edges, dtype=np.uint64)
+    edges = np.asarray(edges)
     if edges.ndim != 1:
         raise VoxmeshError(f"edges must be a 1-D array; got {edges.ndim} dimension(s)")
+    if len(edges) and edges.dtype.kind not in "iu":
+        raise VoxmeshError(f"edges must be integers (vertex_edges' numbering); got {edges.dtype}")
+    if len(edges) and edges.dtype.kind == "i" and edges.min() < 0:
+        raise VoxmeshError(f"edges must not be negative; got {edges.min()}")
+    edges = np.ascontiguousarray(edges, dtype=np.uint64)
     mask = None
     if cell_mask is not None:
         cells = tuple(n - 1 for n in array.shape)

@@ -72,6 +72,8 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
     given = None if level is None else float(level)
     # One pass for the range and, when level is known, the samples exactly at it (see below).
     counted = given is not None and step_size == 1  # else data, the samples meshed, is known only later
+    if step_size == 1:  # one copy where the layout needs one, shared with `data` below
+        volume = np.require(volume, requirements=["C", "A"])
     summary = _value_range(volume, given if counted else None, threads)
     if summary.nonfinite:
         raise ValueError("volume holds NaN or infinite samples")

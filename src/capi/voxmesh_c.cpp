@@ -444,11 +444,11 @@ voxmesh_status voxmesh_vertex_edges(const voxmesh_volume_view* volume, double is
         require(count, who, "the count pointer");
         require(volume, who, "the volume");
         const std::vector<std::uint64_t> found = voxmesh::vertex_edges(cpp_view(*volume, who), iso, threads);
+        *count = found.size();  // also when the room is too small: the caller learns the size
         if (edges && capacity < found.size())
             throw voxmesh::Error(std::string(who) + ": room for " + std::to_string(capacity) + " edges, but the volume has " +
                                  std::to_string(found.size()) + " crossed edges");
         if (edges) std::copy(found.begin(), found.end(), edges);
-        *count = found.size();
     });
 }
 

@@ -76,12 +76,12 @@ int run_mesh(const MeshArgs& a) {
         throw BadInput("'" + a.input + "': a model, not a volume: voxelize it first (voxmesh voxelize " + a.input +
                        " --resolution N -o model.nrrd), then mesh that; or voxelize and re-mesh it in one step with voxmesh sculpt");
     }
-    const Volume volume = load_volume(a.input, a.raw);
+    const Volume volume = load_volume(a.input, a.raw, a.threads);
 
     double iso = a.iso;
     std::string iso_source = "given";
     if (a.iso_option->count() == 0) {
-        const ValueRange r = value_range(volume.view());
+        const ValueRange r = value_range(volume.view(), std::nullopt, a.threads);
         iso = 0.5 * (r.min + r.max);
         iso_source = "default: midpoint of value range " + format_double(r.min) + ".." + format_double(r.max);
     }

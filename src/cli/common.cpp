@@ -156,9 +156,9 @@ RawLayout raw_layout(const std::string& path, const RawFlags& raw) {
 namespace {
 
 // `v`, or BadInput naming `name` when it holds NaN or infinite samples.
-Volume finite_samples(Volume v, const std::string& name) {
+Volume finite_samples(Volume v, const std::string& name, unsigned threads) {
     if (v.type == ScalarType::F32 || v.type == ScalarType::F64) {
-        const ValueRange r = value_range(v.view());
+        const ValueRange r = value_range(v.view(), std::nullopt, threads);
         if (r.nonfinite)
             throw BadInput("'" + name + "': " + std::to_string(r.nonfinite) + " samples are NaN or infinite (first at " +
                            std::to_string(r.first_nonfinite[0]) + ", " + std::to_string(r.first_nonfinite[1]) + ", " +
@@ -169,10 +169,10 @@ Volume finite_samples(Volume v, const std::string& name) {
 
 }  // namespace
 
-Volume load_volume(const std::string& arg, const RawFlags& raw) {
+Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads) {
     if (arg == "-" && raw.any_given()) {  // raw samples piped in: the flags say what they are
         return finite_samples(about_file(kStdinName, [&] { return read_raw(std::cin, kStdinName, raw_layout(kStdinName, raw)); }),
-                              kStdinName);
+                              kStdinName, threads);
     }
     const InputPath input(arg, InputKind::Volume);  // "-": a file format, told from its content
     const std::string& path = input.path();
@@ -187,7 +187,7 @@ Volume load_volume(const std::string& arg, const RawFlags& raw) {
         std::cerr << "voxmesh: warning: '" << input.display()
                   << "': the direction matrix is not axis-aligned; its rotation is dropped and the mesh is in the "
                      "volume's index axes (spacing and origin as written)\n";
-    return finite_samples(std::move(v), input.display());
+    return finite_samples(std::move(v), input.display(), threads);
 }
 
 std::string format_bytes(std::uint64_t bytes) {

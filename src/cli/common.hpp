@@ -109,8 +109,9 @@ void write_mesh_output(const std::string& output, const std::string& format, con
 // The volume to `output` as NRRD (a file, atomically, or standard output); BadInput naming it.
 void write_volume_output(const std::string& output, const VolumeView& volume);
 
-// Reads a volume file (raw with the flags, else by extension) and rejects NaN/inf samples.
-Volume load_volume(const std::string& path, const RawFlags& raw);
+// Reads a volume file (raw with the flags, else by extension) and rejects NaN/inf samples,
+// scanning for them on `threads` threads (0: every CPU this process may use).
+Volume load_volume(const std::string& path, const RawFlags& raw, unsigned threads = 0);
 RawLayout raw_layout(const std::string& path, const RawFlags& raw);
 
 

@@ -166,9 +166,9 @@ ValueRange typed_range(const VolumeView& volume, std::optional<double> equal_to,
         all.max = std::max(all.max, p.max);
     }
     ValueRange r;
-    if (all.min <= all.max) {
-        r.min = all.min;
-        r.max = all.max;
+    if (all.min <= all.max) {  // + 0.0: a -0.0 extreme reads 0, whichever path found it
+        r.min = all.min + 0.0;
+        r.max = all.max + 0.0;
     }
     r.nonfinite = all.nonfinite;
     r.equal = all.equal;
@@ -182,12 +182,13 @@ ValueRange typed_range(const VolumeView& volume, std::optional<double> equal_to,
 }  // namespace
 
 ValueRange value_range(const VolumeView& volume, std::optional<double> equal_to, unsigned threads) {
-    if (!volume.data) throw Error("volume has no data");
     checked_volume_bytes(volume.dims, volume.type);
     if (volume.dims[0] * volume.dims[1] * volume.dims[2] == 0) return {};
+    if (!volume.data) throw Error("volume has no data");
     if (const std::size_t size = scalar_size(volume.type); reinterpret_cast<std::uintptr_t>(volume.data) % size != 0)
         throw Error(std::string("volume data at an address that is not a multiple of ") + std::to_string(size) +
-                    " bytes, the size of a " + scalar_name(volume.type) + " sample");
+                    " bytes, the size of a " + scalar_name(volume.type) +
+                    " sample; copy the samples to aligned memory (a std::vector of the sample type is)");
     const unsigned resolved = detail::resolve_threads(threads);
     return detail::out_of_memory_as_error([] { return std::string("out of memory summing up a volume's samples"); }, [&] {
         return detail::dispatch_scalar(volume.type,

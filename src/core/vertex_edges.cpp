@@ -99,19 +99,26 @@ std::vector<std::uint64_t> crossed_edges(const VolumeView& volume, double iso, u
     return edges;
 }
 
-// The Error for an edge the volume does not hold: its lower end not a sample, or its upper end
-// past the volume.
-[[noreturn]] void throw_bad_edge(const std::array<std::size_t, 3>& dims, std::uint64_t edge) {
+// The Error for edges[index], an edge the volume does not hold: its lower end not a sample, or
+// its upper end past the volume.
+[[noreturn]] void throw_bad_edge(const std::array<std::size_t, 3>& dims, std::size_t index, std::uint64_t edge) {
     const std::uint64_t sample = edge / 3;
     const unsigned axis = static_cast<unsigned>(edge % 3);
     const std::uint64_t count = static_cast<std::uint64_t>(dims[0]) * dims[1] * dims[2];
+    const std::string which = "edge_cell_ranges: edges[" + std::to_string(index) + "] = " + std::to_string(edge);
     if (sample >= count)
-        throw Error("edge " + std::to_string(edge) + " starts at sample " + std::to_string(sample) +
-                    ", past the volume's " + std::to_string(count) + " samples");
+        throw Error(which + " starts at sample " + std::to_string(sample) + ", past the volume's " +
+                    std::to_string(count) + " samples");
     const std::uint64_t at[3] = {sample % dims[0], sample / dims[0] % dims[1], sample / (dims[0] * dims[1])};
-    throw Error("edge " + std::to_string(edge) + " runs along " + std::string(1, "xyz"[axis]) + " from " +
-                std::string(1, "xyz"[axis]) + " = " + std::to_string(at[axis]) +
-                ", the volume's last sample on that axis: no edge leaves it");
+    throw Error(which + " runs along " + std::string(1, "xyz"[axis]) + " from " + std::string(1, "xyz"[axis]) + " = " +
+                std::to_string(at[axis]) + ", the volume's last sample on that axis: no edge leaves it");
+}
+
+// A range as float: double ranges of f64 samples can lie beyond float's, where converting is
+// undefined; they become infinity, as IEEE rounding would make them.
+float range_as_float(double range) {
+    return range <= static_cast<double>(std::numeric_limits<float>::max()) ? static_cast<float>(range)
+                                                                           : std::numeric_limits<float>::infinity();
 }
 
 // The largest range of the four cells around an edge whose every neighbour is in the volume.
@@ -130,13 +137,13 @@ float interior_range(const T* corner, std::size_t along, std::size_t sp, std::si
         for (std::size_t j = 0; j < 2; ++j) {
             const T top = std::max(std::max(high[i][j], high[i + 1][j]), std::max(high[i][j + 1], high[i + 1][j + 1]));
             const T bottom = std::min(std::min(low[i][j], low[i + 1][j]), std::min(low[i][j + 1], low[i + 1][j + 1]));
-            best = std::max(best, static_cast<float>((static_cast<double>(top) - offset) - (static_cast<double>(bottom) - offset)));
+            best = std::max(best, range_as_float((static_cast<double>(top) - offset) - (static_cast<double>(bottom) - offset)));
         }
     return best;
 }
 
 template <class T>
-void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size_t count, double offset,
+void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size_t first, std::size_t count, double offset,
                  const std::uint8_t* cell_mask, float* out) {
     const std::size_t nx = volume.dims[0], ny = volume.dims[1];
     const std::size_t stride[3] = {1, nx, nx * ny};
@@ -156,7 +163,7 @@ void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size
                 for (const std::size_t dy : {std::size_t{0}, nx, 2 * nx})
                     detail::prefetch(data + std::min(last, std::max(ahead + dz + dy, stride[2] + nx) - stride[2] - nx));
         }
-        if (edges[e] / 3 > last) throw_bad_edge(volume.dims, edges[e]);
+        if (edges[e] / 3 > last) throw_bad_edge(volume.dims, first + e, edges[e]);
         const std::size_t sample = static_cast<std::size_t>(edges[e] / 3);
         const unsigned axis = static_cast<unsigned>(edges[e] % 3), p = (axis + 1) % 3, q = (axis + 2) % 3;
         if (sample - row_start >= nx) {  // unsigned: also when the sample is before the row
@@ -165,7 +172,7 @@ void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size
             row_start = nx * (row_y + ny * row_z);
         }
         const std::size_t at[3] = {sample - row_start, row_y, row_z};
-        if (at[axis] >= cells[axis]) throw_bad_edge(volume.dims, edges[e]);
+        if (at[axis] >= cells[axis]) throw_bad_edge(volume.dims, first + e, edges[e]);
         // Away from the volume's faces and without a mask all four cells count: no tests.
         if (!cell_mask && at[p] - 1 < cells[p] - 1 && at[q] - 1 < cells[q] - 1) {
             out[e] = interior_range(data + sample - stride[p] - stride[q], stride[axis], stride[p], stride[q], offset);
@@ -199,7 +206,7 @@ void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size
                 }
                 const T top = std::max({high[i + 1][j + 1], high[i + 2][j + 1], high[i + 1][j + 2], high[i + 2][j + 2]});
                 const T bottom = std::min({low[i + 1][j + 1], low[i + 2][j + 1], low[i + 1][j + 2], low[i + 2][j + 2]});
-                const float range = static_cast<float>((static_cast<double>(top) - offset) - (static_cast<double>(bottom) - offset));
+                const float range = range_as_float((static_cast<double>(top) - offset) - (static_cast<double>(bottom) - offset));
                 best = std::max(best, range);
             }
         out[e] = best;
@@ -236,7 +243,7 @@ void edge_cell_ranges_into(const VolumeView& volume, std::span<const std::uint64
     run_slabs(static_cast<unsigned>(pieces), resolved, [&](unsigned w, unsigned) {
         const std::size_t begin = std::size_t{w} * piece, end = std::min(edges.size(), begin + piece);
         detail::dispatch_scalar(volume.type, [&](auto tag) {
-            cell_ranges<decltype(tag)>(volume, edges.data() + begin, end - begin, offset, cell_mask, ranges.data() + begin);
+            cell_ranges<decltype(tag)>(volume, edges.data() + begin, begin, end - begin, offset, cell_mask, ranges.data() + begin);
         });
     });
 }
