@@ -27,6 +27,7 @@ using namespace vmbench;
 namespace {
 
 using voxmesh::detail::handle_signal_unless_ignored;
+using voxmesh::detail::kExitSignals;
 using voxmesh::detail::remove_partial_outputs_and_die;
 
 // SIGINT during the runs: the first asks the loops to stop and print what finished; a second
@@ -86,7 +87,7 @@ std::vector<Combo> parse_devices(const std::string& spec) {
 }  // namespace
 
 int main(int argc, char** argv) {
-    for (const int sig : {SIGINT, SIGTERM, SIGHUP}) handle_signal_unless_ignored(sig, remove_partial_outputs_and_die);
+    for (const int sig : kExitSignals) handle_signal_unless_ignored(sig, remove_partial_outputs_and_die);
     CLI::App app{"voxmesh-bench: marching-cubes timings on CPU threads and OpenCL devices"};
     std::vector<std::string> fields, inputs, types{"f32"}, backends{"cpu"};
     std::vector<std::size_t> sizes{64, 128, 256};

@@ -14,7 +14,7 @@ int main(int argc, char** argv) {
     using namespace voxmesh::cli;
     // Interrupted while writing an output: nothing half-written is left behind, nor the copy
     // of standard input (stdin_input.hpp lists it with the outputs' temporaries).
-    for (const int sig : {SIGINT, SIGTERM, SIGHUP})
+    for (const int sig : voxmesh::detail::kExitSignals)
         voxmesh::detail::handle_signal_unless_ignored(sig, voxmesh::detail::remove_partial_outputs_and_die);
     pin_pocl_workers();
     CLI::App app{"voxmesh " VOXMESH_VERSION_STRING

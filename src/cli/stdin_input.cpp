@@ -1,5 +1,7 @@
 #include "stdin_input.hpp"
 
+#include "core/exit_signals.hpp"
+
 #include "io/readers.hpp"
 
 #include <algorithm>
@@ -134,14 +136,18 @@ std::string sniff_format(const std::string& head, std::size_t size, InputKind ki
 
 namespace {
 
-// A new empty file from `pattern` (XXXXXX before `suffix`), its path; BadInput on failure.
-std::string make_temp_file(const std::string& suffix) {
+// A new empty temporary in TMPDIR ending in `suffix`, listed in `listed` for the signal handler
+// before any signal can end the program (none is delivered between creating and listing it);
+// BadInput on failure.
+std::string make_temp_file(const std::string& suffix, voxmesh::detail::ListedTemporary& listed) {
+    const voxmesh::detail::ExitSignalsHeld held;
     std::string pattern = (fs::temp_directory_path() / "voxmesh-stdin-XXXXXX").string() + suffix;
     const int fd = ::mkostemps(pattern.data(), static_cast<int>(suffix.size()), O_CLOEXEC);
     if (fd < 0)
         throw BadInput(std::string("cannot make a temporary file for ") + kStdinName + " in '" +
                        fs::temp_directory_path().string() + "': " + std::strerror(errno));
     ::close(fd);
+    listed.list(pattern);
     return pattern;
 }
 
@@ -156,8 +162,7 @@ InputPath::InputPath(const std::string& arg, InputKind kind) : path_(arg), displ
     if (::isatty(STDIN_FILENO))
         throw BadInput(std::string(kStdinName) + " is a terminal: pipe or redirect " + kind_text(kind) + " into it");
     // Copied first, then named: the format is told from the content.
-    const std::string spooled = make_temp_file("");
-    copy_listed_.list(spooled);
+    const std::string spooled = make_temp_file("", copy_listed_);
     path_ = spooled;
     spooled_ = true;  // from here the destructor's to remove, so the constructor cleans up on throw
     try {
@@ -168,8 +173,7 @@ InputPath::InputPath(const std::string& arg, InputKind kind) : path_(arg), displ
         const std::string ext = sniff_format(read_head(spooled), size, kind);
         if (ext.empty())
             throw BadInput(std::string("'") + kStdinName + "': not " + kind_text(kind) + " by its first bytes");
-        const std::string named = make_temp_file(ext);
-        named_listed_.list(named);
+        const std::string named = make_temp_file(ext, named_listed_);
         if (::rename(spooled.c_str(), named.c_str()) != 0) {
             const int err = errno;
             ::unlink(named.c_str());

@@ -6,7 +6,32 @@
 
 #include <csignal>
 
+#include <pthread.h>
+
 namespace voxmesh::detail {
+
+// The signals the programs clean up after (remove_partial_outputs_and_die).
+inline constexpr int kExitSignals[] = {SIGINT, SIGTERM, SIGHUP};
+
+// Holds kExitSignals back on the calling thread while it lives; one sent meanwhile is delivered
+// when it ends. For making a temporary whose name is known only once it exists (mkstemp) and
+// listing it: a signal in between would leave the file behind. (A signal sent to the process
+// can still go to another thread; the programs read their input before starting any.)
+class ExitSignalsHeld {
+public:
+    ExitSignalsHeld() {
+        sigset_t held;
+        sigemptyset(&held);
+        for (const int sig : kExitSignals) sigaddset(&held, sig);
+        pthread_sigmask(SIG_BLOCK, &held, &previous_);
+    }
+    ~ExitSignalsHeld() { pthread_sigmask(SIG_SETMASK, &previous_, nullptr); }
+    ExitSignalsHeld(const ExitSignalsHeld&) = delete;
+    ExitSignalsHeld& operator=(const ExitSignalsHeld&) = delete;
+
+private:
+    sigset_t previous_;
+};
 
 // A signal handler: removes the temporaries of writes in progress, then dies of `sig` as
 // if unhandled (exit status 128 + sig).
