@@ -553,14 +553,6 @@ private:
 // classify slabs per thread no better than 4.
 constexpr unsigned kClassifySlabsPerThread = 4, kGenerateSlabsPerThread = 4;
 
-// Slabs for `threads` requested threads over `planes` planes: one for a single thread, else
-// `per_thread` for each thread that actually runs (run_slabs caps them at resolve_threads(0)).
-unsigned slab_count(unsigned threads, std::size_t planes, unsigned per_thread) {
-    const unsigned running = std::min(std::max(threads, 1u), resolve_threads(0));
-    const std::size_t slabs = running > 1 ? std::size_t{per_thread} * running : 1;
-    return static_cast<unsigned>(std::max<std::size_t>(1, std::min(slabs, planes)));
-}
-
 }  // namespace
 
 // Spread the three arrays over the workers, largest first, each to the least loaded one.
@@ -619,6 +611,15 @@ void throw_too_many_vertices() {
                 "(mesh a sub-volume or a coarser volume)");
 }
 
+void check_samples_readable(const VolumeView& volume) {
+    if (!volume.data) throw Error("volume has no data");
+    // The engines read samples as their type: a misaligned address is undefined behaviour.
+    if (const std::size_t size = scalar_size(volume.type); reinterpret_cast<std::uintptr_t>(volume.data) % size != 0)
+        throw Error(std::string("volume data at an address that is not a multiple of ") + std::to_string(size) +
+                    " bytes, the size of a " + scalar_name(volume.type) +
+                    " sample; copy the samples to aligned memory (a std::vector of the sample type is)");
+}
+
 void validate_volume(const VolumeView& volume) {
     for (int d = 0; d < 3; ++d)
         if (volume.dims[d] < 2)
@@ -629,12 +630,7 @@ void validate_volume(const VolumeView& volume) {
     if (volume.dims[0] > kMaxRowSamples)
         throw Error("volume rows of " + std::to_string(volume.dims[0]) + " samples are longer than the " +
                     std::to_string(kMaxRowSamples) + " supported (mesh it in parts along x)");
-    if (!volume.data) throw Error("volume has no data");
-    // The engines read samples as their type: a misaligned address is undefined behaviour.
-    if (const std::size_t size = scalar_size(volume.type); reinterpret_cast<std::uintptr_t>(volume.data) % size != 0)
-        throw Error(std::string("volume data at an address that is not a multiple of ") + std::to_string(size) +
-                    " bytes, the size of a " + scalar_name(volume.type) +
-                    " sample; copy the samples to aligned memory (a std::vector of the sample type is)");
+    check_samples_readable(volume);
     for (int d = 0; d < 3; ++d)
         if (!(volume.spacing[d] > 0) || !std::isfinite(volume.spacing[d]) || !std::isfinite(volume.origin[d]))
             throw Error("volume spacing must be positive and finite, origin finite");

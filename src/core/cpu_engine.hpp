@@ -96,6 +96,8 @@ constexpr std::size_t kMaxRowSamples = std::size_t{1} << 29;
 // Throws Error unless every dimension is >= 2, data is set, the size is addressable, rows are
 // at most kMaxRowSamples long and every sample's position fits a float.
 void validate_volume(const VolumeView& volume);
+// Its part that any pass reading the samples needs: data set and aligned to the sample size.
+void check_samples_readable(const VolumeView& volume);
 
 // Throws Error when a mesh of `vertices` vertices cannot be indexed by 32-bit indices. Every
 // engine assembling vertex ids (CPU, OpenCL, sculpting) asks here, so they refuse alike.

@@ -8,8 +8,7 @@
 #include <string_view>
 #include <type_traits>
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define VOXMESH_X86_DISPATCH 1
+#ifdef VOXMESH_X86_DISPATCH
 #include <immintrin.h>
 #endif
 
@@ -171,8 +170,7 @@ RowPacker<T> avx2_row_packer() {
 
 template <class T>
 RowPacker<T> row_packer() {
-    static const bool portable = portable_forced();
-    const RowPacker<T> fast = portable ? nullptr : avx2_row_packer<T>();
+    const RowPacker<T> fast = use_avx2() ? avx2_row_packer<T>() : nullptr;
     return fast ? fast : &pack_row_portable<T>;
 }
 
@@ -196,7 +194,7 @@ bool cpu_has_popcnt() {
 
 bool cpu_has_avx2_bmi2() {
 #ifdef VOXMESH_X86_DISPATCH
-    static const bool has = cpu_has_popcnt() && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("bmi") &&
+    static const bool has = cpu_has_popcnt() && use_avx2() && __builtin_cpu_supports("bmi") &&
                             __builtin_cpu_supports("bmi2");
     return has;
 #else

@@ -6,6 +6,11 @@
 #include <cstddef>
 #include <cstdint>
 
+// Where AVX2 copies of a loop can be compiled beside the baseline and chosen at run time.
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define VOXMESH_X86_DISPATCH 1
+#endif
+
 namespace voxmesh::detail {
 
 using Word = std::uint64_t;

@@ -1,16 +1,13 @@
 // value_range: min, max, non-finite and equal samples in one pass over z-slabs. Each plane takes
 // a loop without a branch per sample, which the compiler vectorises; a plane holding a NaN or
 // an infinity is then redone sample by sample.
+#include "cpu_engine.hpp"  // check_samples_readable
 #include "out_of_memory.hpp"
 #include "parallel.hpp"
-#include "row_packer.hpp"  // use_avx2
+#include "row_packer.hpp"  // use_avx2, VOXMESH_X86_DISPATCH
 #include "scalar_dispatch.hpp"
 
 #include <voxmesh/voxmesh.hpp>
-
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define VOXMESH_X86_DISPATCH 1
-#endif
 
 #include <algorithm>
 #include <cmath>
@@ -145,7 +142,7 @@ ValueRange typed_range(const VolumeView& volume, std::optional<double> equal_to,
     const std::size_t plane = volume.dims[0] * volume.dims[1], nz = volume.dims[2];
     T target{};
     const bool count_equal = equal_to && representable<T>(*equal_to, target);
-    const unsigned slabs = static_cast<unsigned>(std::min<std::size_t>(nz, std::size_t{4} * threads));
+    const unsigned slabs = detail::slab_count(threads, nz, 4);
     std::vector<Partial> parts(slabs);
     const T* data = static_cast<const T*>(volume.data);
     auto* scan = &plane_range_baseline<T>;
@@ -184,11 +181,7 @@ ValueRange typed_range(const VolumeView& volume, std::optional<double> equal_to,
 ValueRange value_range(const VolumeView& volume, std::optional<double> equal_to, unsigned threads) {
     checked_volume_bytes(volume.dims, volume.type);
     if (volume.dims[0] * volume.dims[1] * volume.dims[2] == 0) return {};
-    if (!volume.data) throw Error("volume has no data");
-    if (const std::size_t size = scalar_size(volume.type); reinterpret_cast<std::uintptr_t>(volume.data) % size != 0)
-        throw Error(std::string("volume data at an address that is not a multiple of ") + std::to_string(size) +
-                    " bytes, the size of a " + scalar_name(volume.type) +
-                    " sample; copy the samples to aligned memory (a std::vector of the sample type is)");
+    detail::check_samples_readable(volume);
     const unsigned resolved = detail::resolve_threads(threads);
     return detail::out_of_memory_as_error([] { return std::string("out of memory summing up a volume's samples"); }, [&] {
         return detail::dispatch_scalar(volume.type,

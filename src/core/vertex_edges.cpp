@@ -67,11 +67,6 @@ void slab_edges(const VolumeView& volume, T threshold, std::size_t z0, std::size
     }
 }
 
-// Slabs of z-planes: several per thread, so that a thread done early takes another.
-unsigned slab_count(unsigned threads, std::size_t planes) {
-    return static_cast<unsigned>(std::min<std::size_t>(planes, std::size_t{4} * threads));
-}
-
 template <class T>
 std::vector<std::uint64_t> crossed_edges(const VolumeView& volume, double iso, unsigned threads) {
     const detail::Threshold<T> threshold = detail::make_threshold<T>(iso);
@@ -80,7 +75,8 @@ std::vector<std::uint64_t> crossed_edges(const VolumeView& volume, double iso, u
         return {};
     }
     const std::size_t nz = volume.dims[2];
-    const unsigned slabs = slab_count(threads, nz);
+    // Several slabs per thread, so that a thread done early takes another.
+    const unsigned slabs = detail::slab_count(threads, nz, 4);
     std::vector<std::vector<std::uint64_t>> found(slabs);
     std::vector<std::vector<detail::Word>> scratch(std::min(slabs, threads));
     run_slabs(slabs, threads, [&](unsigned slab, unsigned worker) {
@@ -121,27 +117,6 @@ float range_as_float(double range) {
                                                                            : std::numeric_limits<float>::infinity();
 }
 
-// The largest range of the four cells around an edge whose every neighbour is in the volume.
-// `corner` is the sample at -1, -1 across the edge (axes p and q), `along` the edge's stride.
-template <class T>
-float interior_range(const T* corner, std::size_t along, std::size_t sp, std::size_t sq, double offset) {
-    T high[3][3], low[3][3];  // per sample pair along the edge, as in cell_ranges below
-    for (std::size_t i = 0; i < 3; ++i)
-        for (std::size_t j = 0; j < 3; ++j) {
-            const T* s = corner + i * sp + j * sq;
-            high[i][j] = std::max(s[0], s[along]);
-            low[i][j] = std::min(s[0], s[along]);
-        }
-    float best = 0;
-    for (std::size_t i = 0; i < 2; ++i)
-        for (std::size_t j = 0; j < 2; ++j) {
-            const T top = std::max(std::max(high[i][j], high[i + 1][j]), std::max(high[i][j + 1], high[i + 1][j + 1]));
-            const T bottom = std::min(std::min(low[i][j], low[i + 1][j]), std::min(low[i][j + 1], low[i + 1][j + 1]));
-            best = std::max(best, range_as_float((static_cast<double>(top) - offset) - (static_cast<double>(bottom) - offset)));
-        }
-    return best;
-}
-
 template <class T>
 void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size_t first, std::size_t count, double offset,
                  const std::uint8_t* cell_mask, float* out) {
@@ -173,11 +148,6 @@ void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size
         }
         const std::size_t at[3] = {sample - row_start, row_y, row_z};
         if (at[axis] >= cells[axis]) throw_bad_edge(volume.dims, first + e, edges[e]);
-        // Away from the volume's faces and without a mask all four cells count: no tests.
-        if (!cell_mask && at[p] - 1 < cells[p] - 1 && at[q] - 1 < cells[q] - 1) {
-            out[e] = interior_range(data + sample - stride[p] - stride[q], stride[axis], stride[p], stride[q], offset);
-            continue;
-        }
         // The 3 x 3 sample pairs along the edge around it, as max and min of each pair; a cell
         // around the edge is a 2 x 2 block of them (i, j = -1 or 0 its offset across p and q).
         T high[3][3]{}, low[3][3]{};
