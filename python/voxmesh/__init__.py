@@ -479,6 +479,13 @@ def read_mesh(source, name=None):
     return Mesh(pointer.value)
 
 
+def _check_automatic(**values):
+    """Numbers where 0 means automatic (threads, chunk sizes): refused when negative."""
+    for name, value in values.items():
+        if int(value) < 0:
+            raise VoxmeshError(f"{name} must be 0 (automatic) or more; got {value}")
+
+
 _FIELDS = {"occupancy": 0, "distance": 1}
 
 
@@ -611,9 +618,7 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     if device_type not in _DEVICE_TYPES:
         raise VoxmeshError(f"unknown device type '{device_type}' (any, cpu, gpu, accelerator)")
     chosen = [int(d) for d in (devices or [])]
-    for name, value in (("threads", threads), ("chunk_planes", chunk_planes), ("memory_budget", memory_budget)):
-        if int(value) < 0:
-            raise VoxmeshError(f"{name} must be 0 (automatic) or more; got {value}")
+    _check_automatic(threads=threads, chunk_planes=chunk_planes, memory_budget=memory_budget)
     view, array = _as_view(volume, spacing, origin)  # `array` keeps the samples alive for the call
     options = _lib.voxmesh_default_options()
     options.iso = float(iso)
@@ -645,8 +650,7 @@ def value_range(volume, equal_to=None, threads=0):
     finite samples (0.0 when none is), how many are NaN or infinite and where the first is, and
     how many finite samples equal `equal_to` exactly (0 when it is None). Samples exactly at an iso value are
     inside for extract and outside for scikit-image: they are where the two meshes differ."""
-    if int(threads) < 0:
-        raise VoxmeshError(f"threads must be 0 (automatic) or more; got {threads}")
+    _check_automatic(threads=threads)
     view, array = _as_view(volume, None, None)  # `array` keeps the samples alive for the call
     result = _ValueRange()
     target = None if equal_to is None else ctypes.byref(ctypes.c_double(float(equal_to)))
@@ -663,8 +667,7 @@ def vertex_edges(volume, iso=0.0, threads=0, count=None):
     second field) carried onto the mesh: with `s, axis = np.divmod(edges, 3)`, a vertex's two
     samples are s and s + (1, nx, nx * ny)[axis]. count: the mesh's vertex count when known
     (saves a pass; a wrong one is an error)."""
-    if int(threads) < 0:
-        raise VoxmeshError(f"threads must be 0 (automatic) or more; got {threads}")
+    _check_automatic(threads=threads)
     if count is not None and int(count) < 0:
         raise VoxmeshError(f"count must be the mesh's vertex count, not negative; got {count}")
     view, array = _as_view(volume, None, None)  # `array` keeps the samples alive for the call
@@ -688,8 +691,7 @@ def edge_cell_ranges(volume, edges, offset=0.0, cell_mask=None, threads=0):
     nx-1), a cell by its lowest corner. Each range is (max - offset) - (min - offset) in double:
     with offset = the level, scikit-image's `values` from marching_cubes. Samples must be finite
     (vertex_edges refuses others); ranges over NaN are unspecified."""
-    if int(threads) < 0:
-        raise VoxmeshError(f"threads must be 0 (automatic) or more; got {threads}")
+    _check_automatic(threads=threads)
     view, array = _as_view(volume, None, None)
     edges = np.asarray(edges)
     if edges.ndim != 1:

@@ -107,13 +107,8 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
     if at_level is not None:
         meshed = data.astype(np.float32)
         meshed[at_level] = np.nextafter(np.float32(level), np.float32(-np.inf))
-    try:
-        # spacing = step: positions come out as skimage's, index * step + t * step, rounded once.
-        mesh = extract(meshed, iso=level, spacing=(step, step, step), threads=threads, backend=backend)
-    except VoxmeshError as error:
-        if isinstance(error, MemoryError):
-            raise
-        raise ValueError(str(error)) from error
+    # spacing = step: positions come out as skimage's, index * step + t * step, rounded once.
+    mesh = _as_skimage_errors(extract, meshed, iso=level, spacing=(step, step, step), threads=threads, backend=backend)
     if mesh.triangle_count == 0:
         raise RuntimeError(_NO_SURFACE)
     positions = np.array(mesh.positions[:, ::-1])  # x, y, z -> array axis order
@@ -151,13 +146,19 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
     return _without_degenerate(verts.astype(np.float32), faces, normals, values)
 
 
-def _value_range(volume, equal_to, threads):
+def _as_skimage_errors(call, *args, **kwargs):
+    """call(*args, **kwargs), a VoxmeshError from it raised as skimage's ValueError (running out
+    of memory stays a MemoryError)."""
     try:
-        return value_range(volume, equal_to=equal_to, threads=threads)
+        return call(*args, **kwargs)
     except VoxmeshError as error:
         if isinstance(error, MemoryError):
             raise
         raise ValueError(str(error)) from error
+
+
+def _value_range(volume, equal_to, threads):
+    return _as_skimage_errors(value_range, volume, equal_to=equal_to, threads=threads)
 
 
 def _greater(data, level):
