@@ -101,6 +101,36 @@ TEST_CASE("C API: vertex edges and cell ranges refuse with the problem named", "
     REQUIRE(voxmesh_vertex_edges(&view, 0.0, 0, nullptr, 0, &count) == VOXMESH_ERROR);
 }
 
+TEST_CASE("C API: triangle cells are the C++ call's, and refuse with the problem named", "[capi][triangle_cells]") {
+    Ball b = ball(17);
+    voxmesh_volume_view view = c_view(b.view);
+    const std::vector<std::uint64_t> want = voxmesh::triangle_cells(b.view, 0.0, 2);
+    REQUIRE(!want.empty());
+    size_t count = 0;
+    REQUIRE(voxmesh_triangle_cells(&view, 0.0, 1, nullptr, 0, &count) == VOXMESH_OK);  // the count alone
+    REQUIRE(count == want.size());
+    std::vector<std::uint64_t> got(count + 1, 7);
+    REQUIRE(voxmesh_triangle_cells(&view, 0.0, 2, got.data(), got.size(), &count) == VOXMESH_OK);
+    REQUIRE(count == want.size());
+    REQUIRE(std::equal(want.begin(), want.end(), got.begin()));
+    REQUIRE(got[count] == 7);
+
+    std::vector<std::uint64_t> small(5);
+    count = 0;
+    REQUIRE(voxmesh_triangle_cells(&view, 0.0, 0, small.data(), small.size(), &count) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("voxmesh_triangle_cells: room for 5 cells") &&
+                                           Catch::Contains(std::to_string(want.size()) + " triangles"));
+    REQUIRE(count == want.size());
+    REQUIRE(voxmesh_triangle_cells(&view, 0.0, 0, nullptr, 0, nullptr) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("count pointer"));
+    REQUIRE(voxmesh_triangle_cells(nullptr, 0.0, 0, nullptr, 0, &count) == VOXMESH_ERROR);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("volume"));
+    b.samples[4 + 17 * (2 + 17 * 9)] = std::numeric_limits<float>::quiet_NaN();
+    REQUIRE(voxmesh_triangle_cells(&view, 0.0, 0, nullptr, 0, &count) == VOXMESH_ERROR);
+    REQUIRE(count == 0);
+    REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("NaN") && Catch::Contains("z-plane 9"));
+}
+
 TEST_CASE("C API: the value range is the C++ call's", "[capi][value_range]") {
     Ball b = ball(13);
     b.samples[3 + 13 * (4 + 13 * 5)] = std::numeric_limits<float>::infinity();

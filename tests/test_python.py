@@ -597,6 +597,31 @@ class VertexEdgesTest(unittest.TestCase):
         every = every[[e % 3 != 2 or (e // 3) // 35 != 5 for e in every.tolist()]]
         np.testing.assert_array_equal(voxmesh.edge_cell_ranges(volume, every), cell_ranges_oracle(volume, every, 0.0, None))
 
+    def test_each_triangle_lies_in_its_cell(self):
+        rng = np.random.default_rng(10)
+        for dtype in (np.uint8, np.int16, np.float32, np.float64):
+            volume = rng.integers(0, 6, size=(5, 7, 6)).astype(dtype)
+            cells = voxmesh.triangle_cells(volume, 2.5, threads=2)
+            mesh = voxmesh.extract(volume, 2.5)
+            self.assertEqual(cells.dtype, np.uint64)
+            self.assertEqual(len(cells), mesh.triangle_count)
+            np.testing.assert_array_equal(voxmesh.triangle_cells(volume, 2.5, threads=1, count=len(cells)), cells)
+            # Oracle: each cell meshed alone (its 2 x 2 x 2 samples) has as many triangles as the
+            # cell has entries, and they come in cell order.
+            nz, ny, nx = volume.shape
+            expected = []
+            for c in range((nz - 1) * (ny - 1) * (nx - 1)):
+                z, y, x = np.unravel_index(c, (nz - 1, ny - 1, nx - 1))
+                expected += [c] * voxmesh.extract(volume[z:z + 2, y:y + 2, x:x + 2], 2.5, normals=False).triangle_count
+            np.testing.assert_array_equal(cells, np.array(expected, dtype=np.uint64))
+            # And every vertex of a triangle is on an edge of its cell.
+            s, axis = np.divmod(voxmesh.vertex_edges(volume, 2.5).astype(np.int64)[mesh.indices], 3)
+            low = np.stack(np.unravel_index(s, volume.shape), axis=-1)  # z, y, x of each corner's edge
+            cell = np.stack(np.unravel_index(cells.astype(np.int64), (nz - 1, ny - 1, nx - 1)), axis=-1)[:, None, :]
+            self.assertTrue(np.all((low >= cell) & (low <= cell + 1)))
+            along = np.eye(3, dtype=np.int64)[2 - axis]  # the edge's axis in z, y, x order
+            self.assertTrue(np.all(np.where(along == 1, low == cell, True)))
+
     def test_value_range_is_numpys(self):
         rng = np.random.default_rng(9)
         for dtype in (np.uint8, np.int16, np.uint32, np.float32, np.float64):
@@ -640,6 +665,10 @@ class VertexEdgesTest(unittest.TestCase):
             voxmesh.edge_cell_ranges(ball, np.array([3.9]))
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "count"):
             voxmesh.vertex_edges(ball, 0.0, count=-1)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "triangles"):
+            voxmesh.triangle_cells(ball, 0.0, count=3)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "NaN"):
+            voxmesh.triangle_cells(volume, 0.5)
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "cells' shape"):
             voxmesh.edge_cell_ranges(ball, np.array([0], dtype=np.uint64), cell_mask=np.ones((12, 12, 12), bool))
 

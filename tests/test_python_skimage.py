@@ -184,6 +184,36 @@ class OwnTest(unittest.TestCase):
         with self.assertRaises(RuntimeError):
             voxmesh.marching_cubes(SPHERE, 0.0, mask=np.zeros(SPHERE.shape, dtype=bool))
 
+    def test_a_mask_gives_the_whole_meshs_triangles_of_its_cells(self):
+        # The drop-in meshes only the box of the cells a mask keeps (and a sample around it);
+        # the result must be, bit for bit, the whole volume's mesh cut down to those cells:
+        # extract's triangles of the kept cells (triangle_cells), the vertices they use in
+        # their order, and values over the kept cells alone.
+        rng = np.random.default_rng(3)
+        gyr = gyroid(30, 0.5) + np.float32(0.013)  # no sample exactly at the level
+        for volume in (SPHERE, gyr):
+            shape = volume.shape
+            boxes = [(slice(6, 30), slice(9, 27), slice(4, 20)), (slice(None), slice(None), slice(0, 22)),
+                     (slice(1, 3), slice(2, shape[1]), slice(shape[2] - 5, shape[2]))]
+            for box in boxes:
+                mask = np.zeros(shape, dtype=bool)
+                mask[box] = rng.random(mask[box].shape) < 0.8
+                cells = mask[1:, 1:, 1:]  # a cell is kept by its far corner
+                mesh = voxmesh.extract(volume, 0.0, threads=1)
+                kept = cells.ravel()[voxmesh.triangle_cells(volume, 0.0)]
+                if not kept.any():
+                    continue
+                faces = mesh.indices[kept]
+                used = np.zeros(mesh.vertex_count, dtype=bool)
+                used[faces.ravel()] = True
+                edges = voxmesh.vertex_edges(volume, 0.0)
+                want = (mesh.positions[used][:, ::-1], (np.cumsum(used) - 1)[faces], mesh.normals[used][:, ::-1],
+                        voxmesh.edge_cell_ranges(volume, edges, 0.0, cells)[used])
+                got = voxmesh.marching_cubes(volume, 0.0, mask=mask, threads=2)
+                for name, g, w in zip(("verts", "faces", "normals", "values"), got, want):
+                    with self.subTest(box=box, result=name):
+                        np.testing.assert_array_equal(g, w)
+
     def test_sample_types_give_the_float32_mesh(self):
         volume = np.clip(SPHERE * 20 + 128, 0, 255).astype(np.uint8)
         for level in (127.5, 128):

@@ -189,6 +189,11 @@ voxmesh_status voxmesh_compute_value_range(const voxmesh_volume_view* volume, co
  * nothing written to edges, *count still set). */
 voxmesh_status voxmesh_vertex_edges(const voxmesh_volume_view* volume, double iso, unsigned threads, uint64_t* edges,
                                     size_t capacity, size_t* count);
+/* The cell each triangle of voxmesh_extract(volume) at `iso` lies in (voxmesh::triangle_cells):
+ * triangle i lies in cells[i] = x + (nx - 1) * (y + (ny - 1) * z), (x, y, z) the cell's lowest
+ * corner. *count gets the mesh's triangle count; cells NULL, capacity and errors as above. */
+voxmesh_status voxmesh_triangle_cells(const voxmesh_volume_view* volume, double iso, unsigned threads, uint64_t* cells,
+                                      size_t capacity, size_t* count);
 /* For each of `count` edges (that numbering), the largest range, maximum minus minimum sample, of
  * the cells around it that the volume holds and cell_mask marks nonzero (NULL: every cell;
  * otherwise (nx-1)(ny-1)(nz-1) bytes, x fastest, a cell by its lowest corner), into ranges[0 ..

@@ -171,6 +171,22 @@ ValueRange value_range(const VolumeView& volume, std::optional<double> equal_to 
 // inside_below and the backend do not change it. Errors as extract's: dims below 2, NaN or
 // infinite samples (naming the first z-plane holding one); threads as Options::threads.
 std::vector<std::uint64_t> vertex_edges(const VolumeView& volume, double iso, unsigned threads = 0);
+// As vertex_edges, into memory the caller has (a binding's array): returns how many crossed
+// edges there are, and writes them when `edges` has room for them all, else writes nothing
+// (an empty span asks for the count alone).
+std::size_t vertex_edges_into(const VolumeView& volume, double iso, std::span<std::uint64_t> edges, unsigned threads = 0);
+
+// The cell each triangle of extract(volume, options with this iso) lies in, for data kept per
+// cell (a mask, a material, a region) carried onto the triangles, or triangles picked by cell
+// without meshing again. The canonical mesh writes each cell's triangles together, cells in
+// index order, so triangle i lies in the cell
+//   cells[i] = x + (nx - 1) * (y + (ny - 1) * z)   ((x, y, z) its lowest corner),
+// one entry per triangle (a cell with two triangles appears twice, in a row). inside_below and
+// the backend do not change it. Errors as vertex_edges'.
+std::vector<std::uint64_t> triangle_cells(const VolumeView& volume, double iso, unsigned threads = 0);
+// As triangle_cells, into memory the caller has; returns the triangle count, writing as
+// vertex_edges_into does.
+std::size_t triangle_cells_into(const VolumeView& volume, double iso, std::span<std::uint64_t> cells, unsigned threads = 0);
 
 // For each of `edges` (vertex_edges' numbering; an edge the volume does not hold is an Error),
 // the largest range, maximum sample minus minimum, over the cells around it: the up to four

@@ -30,7 +30,7 @@ import warnings
 
 import numpy as np
 
-__all__ = ["extract", "marching_cubes", "vertex_edges", "edge_cell_ranges", "value_range", "ValueRange", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices",
+__all__ = ["extract", "marching_cubes", "vertex_edges", "triangle_cells", "edge_cell_ranges", "value_range", "ValueRange", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices",
            "Mesh", "Volume", "Topology", "Sculpt", "Block", "UpdateResult", "VoxmeshError", "VoxmeshMemoryError",
            "version"]
 
@@ -220,6 +220,8 @@ def _declare_io(lib, handle):
     lib.voxmesh_vertex_edges.restype = status
     lib.voxmesh_vertex_edges.argtypes = [ctypes.POINTER(_VolumeView), ctypes.c_double, ctypes.c_uint, ctypes.c_void_p,
                                          size, ctypes.POINTER(size)]
+    lib.voxmesh_triangle_cells.restype = status
+    lib.voxmesh_triangle_cells.argtypes = lib.voxmesh_vertex_edges.argtypes
     lib.voxmesh_edge_cell_ranges.restype = status
     lib.voxmesh_edge_cell_ranges.argtypes = [ctypes.POINTER(_VolumeView), ctypes.c_void_p, size, ctypes.c_double,
                                              ctypes.c_void_p, ctypes.c_uint, ctypes.c_void_p]
@@ -667,21 +669,36 @@ def vertex_edges(volume, iso=0.0, threads=0, count=None):
     second field) carried onto the mesh: with `s, axis = np.divmod(edges, 3)`, a vertex's two
     samples are s and s + (1, nx, nx * ny)[axis]. count: the mesh's vertex count when known
     (saves a pass; a wrong one is an error)."""
+    return _list_query(_lib.voxmesh_vertex_edges, volume, iso, threads, count, "vertex", "crossed edges")
+
+
+def triangle_cells(volume, iso=0.0, threads=0, count=None):
+    """The cell each triangle of extract(volume, iso) lies in, as a uint64 array: triangle i lies
+    in the cell whose lowest corner is sample [z, y, x] with cells[i] = x + (nx-1) * (y + (ny-1)
+    * z), the flat index into an array of the cells' shape (nz-1, ny-1, nx-1). For data kept per
+    cell (a mask, a material) carried onto the triangles: `mesh.indices[cell_mask.ravel()[cells]]`
+    are the triangles of the cells a mask keeps. count: the mesh's triangle count when known
+    (saves a pass; a wrong one is an error)."""
+    return _list_query(_lib.voxmesh_triangle_cells, volume, iso, threads, count, "triangle", "triangles")
+
+
+def _list_query(call, volume, iso, threads, count, per, found_what):
+    """A uint64 array from one of the C calls that list one entry per vertex or triangle
+    (voxmesh_vertex_edges, voxmesh_triangle_cells): asked for the count first unless given."""
     _check_automatic(threads=threads)
     if count is not None and int(count) < 0:
-        raise VoxmeshError(f"count must be the mesh's vertex count, not negative; got {count}")
+        raise VoxmeshError(f"count must be the mesh's {per} count, not negative; got {count}")
     view, array = _as_view(volume, None, None)  # `array` keeps the samples alive for the call
     found = ctypes.c_size_t()
     if count is None:
-        _check(_lib.voxmesh_vertex_edges(ctypes.byref(view), float(iso), int(threads), None, 0, ctypes.byref(found)))
+        _check(call(ctypes.byref(view), float(iso), int(threads), None, 0, ctypes.byref(found)))
         count = found.value
-    edges = np.empty(int(count), dtype=np.uint64)
-    _check(_lib.voxmesh_vertex_edges(ctypes.byref(view), float(iso), int(threads), edges.ctypes.data, len(edges),
-                                     ctypes.byref(found)))
-    if found.value != len(edges):
-        raise VoxmeshError(f"count {len(edges)} given, but the volume has {found.value} crossed edges")
+    out = np.empty(int(count), dtype=np.uint64)
+    _check(call(ctypes.byref(view), float(iso), int(threads), out.ctypes.data, len(out), ctypes.byref(found)))
+    if found.value != len(out):
+        raise VoxmeshError(f"count {len(out)} given, but the volume has {found.value} {found_what}")
     del array
-    return edges
+    return out
 
 
 def edge_cell_ranges(volume, edges, offset=0.0, cell_mask=None, threads=0):

@@ -4,14 +4,13 @@ arguments and results; the meshing is extract's."""
 
 import numpy as np
 
-from . import VoxmeshError, extract, vertex_edges, edge_cell_ranges, value_range, _BACKENDS
+from . import VoxmeshError, extract, vertex_edges, triangle_cells, edge_cell_ranges, value_range, _BACKENDS
 
 _METHODS = ("lewiner", "lorensen")
 _NO_SURFACE = "No surface found at the given iso value."  # skimage's RuntimeError, word for word
 # Types whose every value float32 holds: skimage converts to float32 first, and meshing these
 # as they are gives the same crossings and the same t without the copy.
 _EXACT_IN_FLOAT32 = (np.uint8, np.int8, np.uint16, np.int16, np.float32)
-_case_triangles = None  # triangles per cell case, for `mask`; filled on first use
 
 
 def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_direction="descent", step_size=1,
@@ -93,11 +92,15 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
         if mask.shape != volume.shape:
             raise ValueError(f"mask must have the volume's shape {volume.shape}; got {mask.shape}")
         # skimage tests the mask at each cell's far corner (see the docstring).
-        mask = mask[step::step, step::step, step::step].astype(bool)
+        mask = np.asarray(mask[step::step, step::step, step::step], dtype=bool)  # no copy of a bool mask
 
-    data = np.ascontiguousarray(volume[::step, ::step, ::step])
+    data = volume[::step, ::step, ::step]
     if min(data.shape) < 2:
         raise RuntimeError(_NO_SURFACE)  # a step past the volume leaves no cell, as in skimage
+    corner = np.zeros(3, dtype=np.int64)  # data's first sample in the stepped volume, (x, y, z)
+    if mask is not None:
+        data, mask, corner = _crop_to_mask(data, mask)
+    data = np.ascontiguousarray(data)
     # voxmesh's inside is value >= iso; only a sample exactly at level tells that from
     # skimage's value > level. Nudged one float below level it is outside, and its edges'
     # vertices, a hair off the sample, are put back on it below.
@@ -108,7 +111,8 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
         meshed = data.astype(np.float32)
         meshed[at_level] = np.nextafter(np.float32(level), np.float32(-np.inf))
     # spacing = step: positions come out as skimage's, index * step + t * step, rounded once.
-    mesh = _as_skimage_errors(extract, meshed, iso=level, spacing=(step, step, step), threads=threads, backend=backend)
+    mesh = _as_skimage_errors(extract, meshed, iso=level, spacing=(step, step, step), origin=tuple(corner * step),
+                              threads=threads, backend=backend)
     if mesh.triangle_count == 0:
         raise RuntimeError(_NO_SURFACE)
     positions = np.array(mesh.positions[:, ::-1])  # x, y, z -> array axis order
@@ -120,20 +124,23 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
     edges = vertex_edges(meshed, level, threads=threads, count=len(positions))
     if at_level is not None:
         owner, axis = np.divmod(edges.astype(np.int64), 3)
-        _snap_to_samples(positions, data, level, owner, axis, step)
-    if mask is not None:
-        faces = faces[mask.ravel()[_triangle_cells(_greater(data, level), len(faces))]]
+        _snap_to_samples(positions, data, level, owner, axis, step, corner)
+    if mask is not None:  # the triangles of the kept cells (np.compress: a boolean index is slower)
+        kept = mask.ravel()[triangle_cells(meshed, level, threads=threads, count=len(faces))]
+        faces = np.compress(kept, faces, axis=0)
     if len(faces) == 0:
         raise RuntimeError(_NO_SURFACE)
     # skimage's values: per vertex, the largest (max - level) - (min - level) over the
     # (masked-in) cells around its edge, every one of which uses the vertex.
     values = edge_cell_ranges(data, edges, offset=level, cell_mask=mask, threads=threads)
-    if mask is not None:  # vertices of the dropped cells only go, keeping the others' order
-        used = np.zeros(len(positions), dtype=bool)
-        used[faces.ravel()] = True
-        renumber = np.cumsum(used) - 1
+    if mask is not None:
+        # Vertices of the dropped cells only go, keeping the others' order. A vertex is used
+        # when a kept cell is around its edge (a cell's triangles use every crossed edge it
+        # has), which is where its value is not 0: the range of a cell an edge crosses is not.
+        used = values > 0
+        renumber = np.cumsum(used, dtype=np.int32) - 1  # int32: skimage's type for faces
         faces = renumber[faces]
-        positions, normals, values = positions[used], normals[used], values[used]
+        positions, normals, values = (np.compress(used, a, axis=0) for a in (positions, normals, values))
 
     if gradient_direction == "ascent":
         faces = faces[:, ::-1]
@@ -161,17 +168,6 @@ def _value_range(volume, equal_to, threads):
     return _as_skimage_errors(value_range, volume, equal_to=equal_to, threads=threads)
 
 
-def _greater(data, level):
-    """data > level, exactly: numpy compares float32 data with a float level in float32,
-    where level rounded up would make a sample equal to it outside."""
-    if data.dtype.kind in "iu":
-        return data > int(np.floor(level))
-    below = np.float32(level)
-    if below > level:
-        below = np.nextafter(below, np.float32(-np.inf))
-    return data > below  # for float32 v: v > level exactly when v > the float at or below it
-
-
 def _equal(data, level):
     """Where data == level exactly, or None where no sample is (the usual case)."""
     if data.dtype.kind in "iu":
@@ -190,7 +186,25 @@ def _coordinates(owner, shape):
     return np.stack([owner % nx, owner // nx % ny, owner // (nx * ny)])  # x, y, z
 
 
-def _snap_to_samples(positions, data, level, owner, axis, step):
+def _crop_to_mask(data, mask):
+    """data cut to the box of the cells mask keeps, with one sample more on each side where
+    data has one, so that the gradients at those cells' corners are the uncut volume's; the
+    mask cut to match, and the cut's first sample as (x, y, z). Meshing the cut gives the
+    same kept triangles and vertices in the same order (the canonical order is by position)
+    without meshing what the mask drops. Nothing kept raises skimage's RuntimeError."""
+    spans = []
+    for axis in range(3):
+        kept = np.flatnonzero(mask.any(axis=tuple(a for a in range(3) if a != axis)))
+        if len(kept) == 0:
+            raise RuntimeError(_NO_SURFACE)
+        spans.append((max(int(kept[0]) - 1, 0), min(int(kept[-1]) + 3, data.shape[axis])))
+    samples = tuple(slice(begin, end) for begin, end in spans)
+    cells = tuple(slice(begin, end - 1) for begin, end in spans)
+    corner = np.array([begin for begin, _ in spans[::-1]], dtype=np.int64)
+    return data[samples], np.ascontiguousarray(mask[cells]), corner  # the mask once, for both its uses
+
+
+def _snap_to_samples(positions, data, level, owner, axis, step, corner):
     """Vertices of edges with an end exactly at level go onto that sample, where skimage puts
     them (so that allow_degenerate=False finds them coincident). Except from an array's first
     plane: skimage's weights (1 / (2.2e-16 + |v - level|) at each end) leave such a vertex
@@ -202,7 +216,7 @@ def _snap_to_samples(positions, data, level, owner, axis, step):
         far = flat[owner + strides[axis]].astype(np.float64)
         hit = np.flatnonzero((far if end else flat[owner].astype(np.float64)) == level)
         if len(hit):
-            xyz = _coordinates(owner[hit], data.shape)
+            xyz = _coordinates(owner[hit], data.shape) + corner[:, None]  # in the stepped volume
             column = 2 - axis[hit]  # the edge's axis among positions' z, y, x
             rows = np.arange(len(hit))
             first = (xyz[axis[hit], rows] == 0) if end == 0 else np.zeros(len(hit), dtype=bool)
@@ -212,30 +226,6 @@ def _snap_to_samples(positions, data, level, owner, axis, step):
                 epsilon = np.finfo(np.float64).eps
                 weight = 1.0 / (epsilon + np.abs(far[hit[first]] - level))
                 positions[hit[first], column[first]] = (step * (weight / (1.0 / epsilon + weight))).astype(np.float32)
-
-
-def _triangle_cells(inside, count):
-    """The cell (linear index in the cell grid) of each triangle: voxmesh writes them by cell,
-    so each cell's run is as long as its case's triangle count."""
-    global _case_triangles
-    if _case_triangles is None:
-        cube, counts = np.empty((2, 2, 2), dtype=np.float32), []
-        for case in range(256):
-            for corner in range(8):
-                cube[corner >> 2, corner >> 1 & 1, corner & 1] = 1.0 if case >> corner & 1 else -1.0
-            counts.append(extract(cube, 0.0, threads=1, normals=False).triangle_count)
-        _case_triangles = np.array(counts, dtype=np.int64)
-    nz, ny, nx = inside.shape
-    case = np.zeros((nz - 1, ny - 1, nx - 1), dtype=np.uint8)
-    for corner in range(8):
-        dz, dy, dx = corner >> 2, corner >> 1 & 1, corner & 1
-        case |= inside[dz:dz + nz - 1, dy:dy + ny - 1, dx:dx + nx - 1].astype(np.uint8) << corner
-    per_cell = _case_triangles[case.ravel()]
-    cells = np.flatnonzero(per_cell)
-    cell_of = np.repeat(cells, per_cell[cells])
-    if len(cell_of) != count:
-        raise RuntimeError(f"voxmesh gave {count} triangles where its cases make {len(cell_of)}")
-    return cell_of
 
 
 def _without_degenerate(verts, faces, normals, values):

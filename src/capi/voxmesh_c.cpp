@@ -259,6 +259,17 @@ voxmesh::VoxelizeOptions voxelize_options(const voxmesh_voxelize_options& given,
     return cpp;
 }
 
+// A list query (voxmesh::vertex_edges_into, triangle_cells_into) as the C calls promise: *count
+// always, the entries only where `capacity` holds them all, else an error naming both.
+template <class Query>
+void list_out(const Query& query, const char* who, const char* what, const char* of_what, uint64_t* out,
+              size_t capacity, size_t* count) {
+    *count = query(std::span<std::uint64_t>(out, out ? capacity : 0));
+    if (out && capacity < *count)
+        throw voxmesh::Error(std::string(who) + ": room for " + std::to_string(capacity) + " " + what + ", but the volume has " +
+                             std::to_string(*count) + " " + of_what);
+}
+
 }  // namespace
 
 extern "C" {
@@ -443,12 +454,22 @@ voxmesh_status voxmesh_vertex_edges(const voxmesh_volume_view* volume, double is
         const char* who = "voxmesh_vertex_edges";
         require(count, who, "the count pointer");
         require(volume, who, "the volume");
-        const std::vector<std::uint64_t> found = voxmesh::vertex_edges(cpp_view(*volume, who), iso, threads);
-        *count = found.size();  // also when the room is too small: the caller learns the size
-        if (edges && capacity < found.size())
-            throw voxmesh::Error(std::string(who) + ": room for " + std::to_string(capacity) + " edges, but the volume has " +
-                                 std::to_string(found.size()) + " crossed edges");
-        if (edges) std::copy(found.begin(), found.end(), edges);
+        const voxmesh::VolumeView view = cpp_view(*volume, who);
+        list_out([&](std::span<std::uint64_t> room) { return voxmesh::vertex_edges_into(view, iso, room, threads); }, who,
+                 "edges", "crossed edges", edges, capacity, count);
+    });
+}
+
+voxmesh_status voxmesh_triangle_cells(const voxmesh_volume_view* volume, double iso, unsigned threads, uint64_t* cells,
+                                      size_t capacity, size_t* count) {
+    if (count) *count = 0;
+    return guarded([&] {
+        const char* who = "voxmesh_triangle_cells";
+        require(count, who, "the count pointer");
+        require(volume, who, "the volume");
+        const voxmesh::VolumeView view = cpp_view(*volume, who);
+        list_out([&](std::span<std::uint64_t> room) { return voxmesh::triangle_cells_into(view, iso, room, threads); }, who,
+                 "cells", "triangles", cells, capacity, count);
     });
 }
 

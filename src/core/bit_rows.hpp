@@ -111,6 +111,20 @@ struct CellWord {
         return static_cast<unsigned>(v - 2 * f - 4 * std::popcount(rings & cells));
     }
 
+    // A word with more than this many non-uniform cells has its triangles counted in one go
+    // (triangle_sum, about 100 instructions), fewer cell by cell. In-process A/B, 2 threads:
+    // classify -3 to -11 % on gyroid u8 256³, u8 512³ and f32 512³, sphere ±0; summing every
+    // word cost sphere u8 512³ +7 to +10 % classify (its words hold one to four such cells).
+    static constexpr unsigned kCellsToSum = 4;
+
+    // The triangles of the cells set in `cells` (non-uniform ones), whichever way is cheaper.
+    VOXMESH_HOT_INLINE unsigned triangle_count(Word cells) const {
+        if (std::popcount(cells) > static_cast<int>(kCellsToSum)) return triangle_sum(cells);
+        unsigned count = 0;
+        for (Word rest = cells; rest; rest &= rest - 1) count += triangles(static_cast<unsigned>(std::countr_zero(rest)));
+        return count;
+    }
+
 private:
     // Rows a, b, c, d's bits r and r + 1 (r < 63), two bits each.
     VOXMESH_HOT_INLINE unsigned row_pairs(unsigned r) const {

@@ -177,12 +177,6 @@ inline WordSpan cell_row_words(const RowInfo& a, const RowInfo& b) {
     return {(first > 0 ? first - 1 : 0) / 64, last / 64 + 1};
 }
 
-// A word with more than this many non-uniform cells has its triangles counted in one go
-// (CellWord::triangle_sum, about 100 instructions), fewer cell by cell. In-process A/B, 2
-// threads: classify -3 to -11 % on gyroid u8 256³, u8 512³ and f32 512³, sphere ±0; summing
-// every word cost sphere u8 512³ +7 to +10 % classify (its words hold one to four such cells).
-constexpr unsigned kCellsToSum = 4;
-
 // Counts the triangles of cell row j (rows j and j + 1 of planes `here` and `up`) into
 // info[j].triangles.
 [[gnu::always_inline]] inline void count_cell_row_body(const BitPlane& here, const BitPlane& up, RowInfo* info,
@@ -197,13 +191,7 @@ constexpr unsigned kCellsToSum = 4;
     for (std::size_t q = span.begin; q < span.end; ++q) {
         if (!(nonuniform_words & word_bit(q))) continue;
         const CellWord cell(ra, rb, rc, rd, q, words);
-        const Word cells = cell.nonuniform(q, nx);
-        if (popcount(cells) > kCellsToSum) {
-            count += cell.triangle_sum(cells);
-        } else {
-            for (Word rest = cells; rest; rest &= rest - 1)
-                count += cell.triangles(static_cast<unsigned>(std::countr_zero(rest)));
-        }
+        count += cell.triangle_count(cell.nonuniform(q, nx));
     }
     info[j].triangles = count;
 }

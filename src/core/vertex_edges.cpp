@@ -6,6 +6,7 @@
 #include "edge_vertex.hpp"  // prefetch
 #include "out_of_memory.hpp"
 #include "parallel.hpp"
+#include "plane_lists.hpp"
 #include "scalar_dispatch.hpp"
 #include "threshold.hpp"
 
@@ -24,28 +25,23 @@ namespace {
 
 using detail::run_slabs;
 
-// The crossed edges owned by samples of planes [z0, z1), in canonical order, appended to `out`.
-// Rows are packed to inside bits 64 samples a word (the engine's packer and edge masks), so a
-// word without crossings costs a few operations. `planes` holds room for two planes of rows.
+// The crossed edges owned by samples of planes [z0, z1), in canonical order, appended to
+// `list`. Rows are packed to inside bits 64 samples a word (the engine's packer and edge
+// masks), so a word without crossings costs a few operations. `planes` holds room for two
+// planes of rows.
 template <class T>
-void slab_edges(const VolumeView& volume, T threshold, std::size_t z0, std::size_t z1, std::vector<detail::Word>& planes,
-                std::vector<std::uint64_t>& out) {
+void slab_edges(const VolumeView& volume, T threshold, std::size_t z0, std::size_t z1, detail::Word* planes,
+                detail::ChunkedList& list) {
     using detail::Word;
     const std::size_t nx = volume.dims[0], ny = volume.dims[1], nz = volume.dims[2];
     const std::size_t words = detail::words_per_row(nx), plane_words = words * ny;
-    const T* data = static_cast<const T*>(volume.data);
     const detail::RowPacker<T> pack = detail::row_packer<T>();
-    const auto pack_plane = [&](std::size_t z, Word* bits) {
-        bool bad = false;
-        for (std::size_t y = 0; y < ny; ++y) bad |= pack(data + nx * (y + ny * z), nx, threshold, bits + y * words);
-        if (bad) detail::throw_non_finite(z);
-    };
-    Word* cur = planes.data();
-    Word* next = planes.data() + plane_words;
-    pack_plane(z0, cur);
+    Word* cur = planes;
+    Word* next = planes + plane_words;
+    detail::pack_plane(volume, pack, threshold, z0, cur);
     for (std::size_t z = z0; z < z1; ++z) {
         const bool has_next = z + 1 < nz;
-        if (has_next) pack_plane(z + 1, next);
+        if (has_next) detail::pack_plane(volume, pack, threshold, z + 1, next);
         for (std::size_t y = 0; y < ny; ++y) {
             const Word* row = cur + y * words;
             // A missing neighbour row is the row itself: nothing crosses toward it.
@@ -57,9 +53,9 @@ void slab_edges(const VolumeView& volume, T threshold, std::size_t z0, std::size
                 for (Word any = m.any(); any; any &= any - 1) {
                     const unsigned r = static_cast<unsigned>(std::countr_zero(any));
                     const std::uint64_t edge = base + 3 * (64 * q + r);
-                    if (m.x >> r & 1) out.push_back(edge);
-                    if (m.y >> r & 1) out.push_back(edge + 1);
-                    if (m.z >> r & 1) out.push_back(edge + 2);
+                    if (m.x >> r & 1) list.push(edge);
+                    if (m.y >> r & 1) list.push(edge + 1);
+                    if (m.z >> r & 1) list.push(edge + 2);
                 }
             }
         }
@@ -67,32 +63,13 @@ void slab_edges(const VolumeView& volume, T threshold, std::size_t z0, std::size
     }
 }
 
-template <class T>
-std::vector<std::uint64_t> crossed_edges(const VolumeView& volume, double iso, unsigned threads) {
-    const detail::Threshold<T> threshold = detail::make_threshold<T>(iso);
-    if (threshold.uniform != detail::Uniform::Mixed) {
-        if (const std::size_t z = detail::first_non_finite_plane(volume); z < volume.dims[2]) detail::throw_non_finite(z);
-        return {};
-    }
-    const std::size_t nz = volume.dims[2];
-    // Several slabs per thread, so that a thread done early takes another.
-    const unsigned slabs = detail::slab_count(threads, nz, 4);
-    std::vector<std::vector<std::uint64_t>> found(slabs);
-    std::vector<std::vector<detail::Word>> scratch(std::min(slabs, threads));
-    run_slabs(slabs, threads, [&](unsigned slab, unsigned worker) {
-        if (scratch[worker].empty()) scratch[worker].resize(2 * detail::words_per_row(volume.dims[0]) * volume.dims[1]);
-        const detail::Share share = detail::share_of(nz, slab, slabs);
-        slab_edges<T>(volume, threshold.value, share.begin, share.end, scratch[worker], found[slab]);
-    });
-    std::size_t total = 0;
-    for (const auto& f : found) total += f.size();
-    std::vector<std::uint64_t> edges;
-    edges.reserve(total);
-    for (auto& f : found) {
-        edges.insert(edges.end(), f.begin(), f.end());
-        std::vector<std::uint64_t>().swap(f);
-    }
-    return edges;
+// The crossed edges' count; they are written where room(count) says (list_by_slabs).
+template <class Room>
+std::size_t crossed_edges(const VolumeView& volume, double iso, unsigned threads, const Room& room) {
+    const auto fill = [&](auto threshold, std::size_t z0, std::size_t z1, detail::Word* planes, detail::ChunkedList& list) {
+        slab_edges(volume, threshold, z0, z1, planes, list);
+    };
+    return detail::list_query(volume, iso, 0, threads, "the volume's crossed edges", fill, room);
 }
 
 // The Error for edges[index], an edge the volume does not hold: its lower end not a sample, or
@@ -186,14 +163,13 @@ void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size
 }  // namespace
 
 std::vector<std::uint64_t> vertex_edges(const VolumeView& volume, double iso, unsigned threads) {
-    detail::validate_volume(volume);
-    const unsigned resolved = detail::resolve_threads(threads);
-    return detail::out_of_memory_as_error([] { return std::string("out of memory listing the volume's crossed edges"); },
-                                          [&] {
-                                              return detail::dispatch_scalar(volume.type, [&](auto tag) {
-                                                  return crossed_edges<decltype(tag)>(volume, iso, resolved);
-                                              });
-                                          });
+    std::vector<std::uint64_t> edges;
+    crossed_edges(volume, iso, threads, detail::room_in(edges));
+    return edges;
+}
+
+std::size_t vertex_edges_into(const VolumeView& volume, double iso, std::span<std::uint64_t> edges, unsigned threads) {
+    return crossed_edges(volume, iso, threads, [&](std::size_t) { return edges; });
 }
 
 void edge_cell_ranges_into(const VolumeView& volume, std::span<const std::uint64_t> edges, std::span<float> ranges,

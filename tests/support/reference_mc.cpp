@@ -81,6 +81,7 @@ RefMesh reference_mc(const std::vector<double>& values, const Dims& dims, const 
                     for (int k = 0; k < 3; ++k) tri[k] = edge_id(g, x, y, z, entry.edges[3 * t + k]);
                     if (options.inside_below) std::swap(tri[1], tri[2]);
                     mesh.soup.push_back(tri);
+                    mesh.cells.push_back(x + (dims[0] - 1) * (y + (dims[1] - 1) * z));
                 }
             }
 

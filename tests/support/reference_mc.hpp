@@ -36,6 +36,7 @@ struct RefMesh {
     std::vector<double> normals;          // xyz per vertex; (0,0,0) where the gradient vanishes
     std::vector<std::uint32_t> indices;   // canonical triangle order
     std::vector<std::array<std::uint64_t, 3>> soup;  // the same triangles as edge-id triples
+    std::vector<std::uint64_t> cells;                 // per triangle, its cell: x + (nx-1) * (y + (ny-1) * z)
 
     std::size_t vertex_count() const { return edge_ids.size(); }
     std::size_t triangle_count() const { return soup.size(); }
