@@ -1,6 +1,6 @@
-// What vertex_edges and triangle_cells share: a volume's z-planes packed to inside bits one
-// after another, and lists gathered slab by slab on worker threads and joined in slab order,
-// which keeps them in the canonical mesh's order.
+// What vertex_edges and triangle_cells share: a volume's z-planes packed to inside bits two at
+// a time, and lists gathered plane by plane on worker threads and joined in slab order, which
+// keeps them in the canonical mesh's order.
 #pragma once
 
 #include "bit_rows.hpp"
@@ -64,30 +64,41 @@ private:
     std::size_t used_ = kChunk;  // the first push makes a chunk
 };
 
-// The list that fill(threshold, begin, end, two_planes, list) pushes for the slabs of `planes`
-// planes, slab by slab on worker threads; then room(total) says where it goes (a span of at
+// The list that visit(z, here, above, list) pushes for planes z of [0, planes), in plane order:
+// `here` is plane z packed to inside bits (ny rows of words_per_row(nx) words), `above` plane
+// z + 1, or null past the volume's last plane. Slab by slab on worker threads, each packing its
+// planes once into two planes' room; then room(total) says where the list goes (a span of at
 // least `total`, else it is not written), and each slab's part is copied to its place on a
 // worker thread (the caller's memory is often fresh pages, which then fault in on every core).
-// `two_planes` is a worker's room for two planes of packed rows. Returns the list's size; where
-// no sample can cross iso it is empty (after the NaN check the packing does not make then).
-template <class T, class Fill, class Room>
-std::size_t list_by_slabs(const VolumeView& volume, double iso, std::size_t planes, unsigned threads, const Fill& fill,
-                          const Room& room) {
+// Returns the list's size; where no sample can cross iso it is empty (after the NaN check the
+// packing does not make then).
+template <class T, class Visit, class Room>
+std::size_t list_by_slabs(const VolumeView& volume, double iso, std::size_t planes, unsigned threads,
+                          const Visit& visit, const Room& room) {
     const Threshold<T> threshold = make_threshold<T>(iso);
     if (threshold.uniform != Uniform::Mixed) {
         if (const std::size_t z = first_non_finite_plane(volume); z < volume.dims[2]) throw_non_finite(z);
-        room(0);
         return 0;
     }
+    const RowPacker<T> pack = row_packer<T>();
+    const std::size_t plane_words = words_per_row(volume.dims[0]) * volume.dims[1];
     // Several slabs per thread, so that a thread done early takes another.
     const unsigned slabs = slab_count(threads, planes, 4);
     std::vector<ChunkedList> found(slabs);
     {
         std::vector<std::vector<Word>> scratch(std::min(slabs, threads));
         run_slabs(slabs, threads, [&](unsigned slab, unsigned worker) {
-            if (scratch[worker].empty()) scratch[worker].resize(2 * words_per_row(volume.dims[0]) * volume.dims[1]);
+            if (scratch[worker].empty()) scratch[worker].resize(2 * plane_words);
+            Word* here = scratch[worker].data();
+            Word* above = here + plane_words;
             const Share share = share_of(planes, slab, slabs);
-            fill(threshold.value, share.begin, share.end, scratch[worker].data(), found[slab]);
+            pack_plane(volume, pack, threshold.value, share.begin, here);
+            for (std::size_t z = share.begin; z < share.end; ++z) {
+                const bool has_above = z + 1 < volume.dims[2];
+                if (has_above) pack_plane(volume, pack, threshold.value, z + 1, above);
+                visit(z, here, has_above ? above : nullptr, found[slab]);
+                std::swap(here, above);
+            }
         });
     }
     std::vector<std::size_t> start(slabs + 1, 0);
@@ -100,17 +111,16 @@ std::size_t list_by_slabs(const VolumeView& volume, double iso, std::size_t plan
 }
 
 // A list query from the top: the volume checked, its sample type chosen, list_by_slabs over
-// its z-planes less `fewer_planes` (1 for cell planes) with fill(threshold, ...) as a generic
-// lambda, and running out of memory an Error saying it was `listing`.
-template <class Fill, class Room>
+// its z-planes less `fewer_planes` (1 for cell planes), and running out of memory an Error
+// saying it was `listing`.
+template <class Visit, class Room>
 std::size_t list_query(const VolumeView& volume, double iso, std::size_t fewer_planes, unsigned threads,
-                       const char* listing, const Fill& fill, const Room& room) {
+                       const char* listing, const Visit& visit, const Room& room) {
     validate_volume(volume);
     const unsigned resolved = resolve_threads(threads);
     return out_of_memory_as_error([&] { return std::string("out of memory listing ") + listing; }, [&] {
         return dispatch_scalar(volume.type, [&](auto tag) {
-            using T = decltype(tag);
-            return list_by_slabs<T>(volume, iso, volume.dims[2] - fewer_planes, resolved, fill, room);
+            return list_by_slabs<decltype(tag)>(volume, iso, volume.dims[2] - fewer_planes, resolved, visit, room);
         });
     });
 }

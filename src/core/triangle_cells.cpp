@@ -16,43 +16,34 @@ namespace {
 
 using detail::Word;
 
-// The cells of cell planes [z0, z1), one entry per triangle, appended to `list`.
-// Planes z and z + 1 are packed to inside bits 64 samples a word, so a word of 64 cells none of
-// which the surface crosses costs a few operations (CellWord: the engine's own corner masks).
-template <class T>
-void slab_cells(const VolumeView& volume, T threshold, std::size_t z0, std::size_t z1, Word* planes,
-                detail::ChunkedList& list) {
+// The cells of cell plane z, one entry per triangle, appended to `list`, from the inside bits
+// of planes z and z + 1: the engine's corner masks (CellWord), 64 cells a word, so a word of
+// cells none of which the surface crosses costs a few operations.
+void plane_cells(const VolumeView& volume, std::size_t z, const Word* here, const Word* above,
+                 detail::ChunkedList& list) {
     const std::size_t nx = volume.dims[0], ny = volume.dims[1];
-    const std::size_t words = detail::words_per_row(nx), plane_words = words * ny;
-    const detail::RowPacker<T> pack = detail::row_packer<T>();
-    Word* cur = planes;
-    Word* next = planes + plane_words;
-    detail::pack_plane(volume, pack, threshold, z0, cur);
-    for (std::size_t z = z0; z < z1; ++z) {
-        detail::pack_plane(volume, pack, threshold, z + 1, next);  // z + 1 < nz: z is a cell plane
-        for (std::size_t y = 0; y + 1 < ny; ++y) {
-            const Word *a = cur + y * words, *b = a + words, *c = next + y * words, *d = c + words;
-            const std::uint64_t base = (nx - 1) * (y + (ny - 1) * z);
-            for (std::size_t q = 0; q < words; ++q) {
-                const detail::CellWord cell(a, b, c, d, q, words);
-                const Word cells = cell.nonuniform(q, nx);
-                for (Word rest = cells; rest; rest &= rest - 1) {
-                    const unsigned r = static_cast<unsigned>(std::countr_zero(rest));
-                    for (unsigned t = cell.triangles(r); t > 0; --t) list.push(base + 64 * q + r);
-                }
+    const std::size_t words = detail::words_per_row(nx);
+    for (std::size_t y = 0; y + 1 < ny; ++y) {
+        const Word *a = here + y * words, *b = a + words, *c = above + y * words, *d = c + words;
+        const std::uint64_t base = (nx - 1) * (y + (ny - 1) * z);
+        for (std::size_t q = 0; q < words; ++q) {
+            const detail::CellWord cell(a, b, c, d, q, words);
+            for (Word cells = cell.nonuniform(q, nx); cells; cells &= cells - 1) {
+                const unsigned r = static_cast<unsigned>(std::countr_zero(cells));
+                for (unsigned t = cell.triangles(r); t > 0; --t) list.push(base + 64 * q + r);
             }
         }
-        std::swap(cur, next);
     }
 }
 
-// The triangles' count; their cells are written where room(count) says (list_by_slabs).
+// The triangles' count; their cells are written where room(count) says (list_by_slabs). Cell
+// planes are z = 0 .. nz - 2, so plane z + 1 is always there.
 template <class Room>
 std::size_t cells_of_triangles(const VolumeView& volume, double iso, unsigned threads, const Room& room) {
-    const auto fill = [&](auto threshold, std::size_t z0, std::size_t z1, Word* planes, detail::ChunkedList& list) {
-        slab_cells(volume, threshold, z0, z1, planes, list);
+    const auto visit = [&](std::size_t z, const Word* here, const Word* above, detail::ChunkedList& list) {
+        plane_cells(volume, z, here, above, list);
     };
-    return detail::list_query(volume, iso, 1, threads, "the cells of the volume's triangles", fill, room);
+    return detail::list_query(volume, iso, 1, threads, "the cells of the volume's triangles", visit, room);
 }
 
 }  // namespace

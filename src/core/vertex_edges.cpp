@@ -8,7 +8,6 @@
 #include "parallel.hpp"
 #include "plane_lists.hpp"
 #include "scalar_dispatch.hpp"
-#include "threshold.hpp"
 
 #include <voxmesh/voxmesh.hpp>
 
@@ -25,51 +24,40 @@ namespace {
 
 using detail::run_slabs;
 
-// The crossed edges owned by samples of planes [z0, z1), in canonical order, appended to
-// `list`. Rows are packed to inside bits 64 samples a word (the engine's packer and edge
-// masks), so a word without crossings costs a few operations. `planes` holds room for two
-// planes of rows.
-template <class T>
-void slab_edges(const VolumeView& volume, T threshold, std::size_t z0, std::size_t z1, detail::Word* planes,
-                detail::ChunkedList& list) {
+// The crossed edges owned by samples of plane z, in canonical order, appended to `list`, from
+// the plane's inside bits and those of plane z + 1 (null past the last plane): the engine's edge
+// masks, 64 samples a word, so a word without crossings costs a few operations.
+void plane_edges(const VolumeView& volume, std::size_t z, const detail::Word* here, const detail::Word* above,
+                 detail::ChunkedList& list) {
     using detail::Word;
-    const std::size_t nx = volume.dims[0], ny = volume.dims[1], nz = volume.dims[2];
-    const std::size_t words = detail::words_per_row(nx), plane_words = words * ny;
-    const detail::RowPacker<T> pack = detail::row_packer<T>();
-    Word* cur = planes;
-    Word* next = planes + plane_words;
-    detail::pack_plane(volume, pack, threshold, z0, cur);
-    for (std::size_t z = z0; z < z1; ++z) {
-        const bool has_next = z + 1 < nz;
-        if (has_next) detail::pack_plane(volume, pack, threshold, z + 1, next);
-        for (std::size_t y = 0; y < ny; ++y) {
-            const Word* row = cur + y * words;
-            // A missing neighbour row is the row itself: nothing crosses toward it.
-            const Word* up = y + 1 < ny ? row + words : row;
-            const Word* above = has_next ? next + y * words : row;
-            const std::uint64_t base = 3 * (nx * (y + ny * z));
-            for (std::size_t q = 0; q < words; ++q) {
-                const detail::EdgeMasks m = detail::edge_masks(row, up, above, q, words, nx);
-                for (Word any = m.any(); any; any &= any - 1) {
-                    const unsigned r = static_cast<unsigned>(std::countr_zero(any));
-                    const std::uint64_t edge = base + 3 * (64 * q + r);
-                    if (m.x >> r & 1) list.push(edge);
-                    if (m.y >> r & 1) list.push(edge + 1);
-                    if (m.z >> r & 1) list.push(edge + 2);
-                }
+    const std::size_t nx = volume.dims[0], ny = volume.dims[1];
+    const std::size_t words = detail::words_per_row(nx);
+    for (std::size_t y = 0; y < ny; ++y) {
+        const Word* row = here + y * words;
+        // A missing neighbour row is the row itself: nothing crosses toward it.
+        const Word* up = y + 1 < ny ? row + words : row;
+        const Word* next_z = above ? above + y * words : row;
+        const std::uint64_t base = 3 * (nx * (y + ny * z));
+        for (std::size_t q = 0; q < words; ++q) {
+            const detail::EdgeMasks m = detail::edge_masks(row, up, next_z, q, words, nx);
+            for (Word any = m.any(); any; any &= any - 1) {
+                const unsigned r = static_cast<unsigned>(std::countr_zero(any));
+                const std::uint64_t edge = base + 3 * (64 * q + r);
+                if (m.x >> r & 1) list.push(edge);
+                if (m.y >> r & 1) list.push(edge + 1);
+                if (m.z >> r & 1) list.push(edge + 2);
             }
         }
-        std::swap(cur, next);
     }
 }
 
 // The crossed edges' count; they are written where room(count) says (list_by_slabs).
 template <class Room>
 std::size_t crossed_edges(const VolumeView& volume, double iso, unsigned threads, const Room& room) {
-    const auto fill = [&](auto threshold, std::size_t z0, std::size_t z1, detail::Word* planes, detail::ChunkedList& list) {
-        slab_edges(volume, threshold, z0, z1, planes, list);
+    const auto visit = [&](std::size_t z, const detail::Word* here, const detail::Word* above, detail::ChunkedList& list) {
+        plane_edges(volume, z, here, above, list);
     };
-    return detail::list_query(volume, iso, 0, threads, "the volume's crossed edges", fill, room);
+    return detail::list_query(volume, iso, 0, threads, "the volume's crossed edges", visit, room);
 }
 
 // The Error for edges[index], an edge the volume does not hold: its lower end not a sample, or
