@@ -5,7 +5,7 @@ packages=(
   build-essential cmake pkg-config
   ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   catch2 libcli11-dev zlib1g-dev
-  python3 python3-numpy python3-venv python3-pip python3-setuptools python3-wheel
+  python3 python3-numpy python3-venv python3-pip python3-setuptools python3-wheel python3-build
   clang libclang-rt-14-dev
   locales
 )
