@@ -2,8 +2,8 @@
  * threads must give identical buffers and a closed surface (every edge in two triangles,
  * Euler characteristic 2), bad arguments must fail with a status and a message naming the
  * problem, a mesh must write to a file, and a cube made from arrays must voxelize and mesh back
- * closed, and a sculpt's edit must re-mesh only some blocks and weld to extract's mesh. Exits 0
- * only when every check passes.
+ * closed, a sculpt's edit must re-mesh only some blocks and weld to extract's mesh, and a
+ * sculpt from a C function must take a stroke script. Exits 0 only when every check passes.
  *
  *   c_api_program <scratch-dir> <volume-file>   (a NRRD it must read; headsq.nrrd) */
 #include <voxmesh/voxmesh.h>
@@ -24,6 +24,17 @@ static int failures = 0;
     } while (0)
 
 static int contains(const char* text, const char* part) { return strstr(text, part) != NULL; }
+
+/* A ball of radius *user around the centre of a 33^3 volume, positive inside. */
+static double ball_field(double x, double y, double z, void* user) {
+    return *(const double*)user - sqrt((x - 16.2) * (x - 16.2) + (y - 15.9) * (y - 15.9) + (z - 16.1) * (z - 16.1));
+}
+
+static int count_frame(const voxmesh_stroke_frame* frame, void* user) {
+    size_t* frames = (size_t*)user;
+    if (frame->frame == *frames) ++*frames; /* frames come in order */
+    return 0;
+}
 
 static int compare_keys(const void* a, const void* b) {
     const unsigned long long x = *(const unsigned long long*)a, y = *(const unsigned long long*)b;
@@ -215,6 +226,26 @@ int main(int argc, char** argv) {
         CHECK(voxmesh_sculpt_apply(sculpt, 99, center, 4.0, 3.0, VOXMESH_UNITS_SAMPLES) == VOXMESH_ERROR);
         CHECK(contains(voxmesh_last_error(), "unknown brush 99"));
         voxmesh_mesh_free(fresh);
+        voxmesh_mesh_free(sculpted);
+        voxmesh_sculpt_free(sculpt);
+    }
+
+    /* A sculpt made from a C function, then a stroke script in memory: each frame is told to
+     * the callback, and the surface stays closed. */
+    {
+        voxmesh_sculpt* sculpt = NULL;
+        voxmesh_mesh* sculpted = NULL;
+        const size_t dims[3] = {33, 33, 33};
+        double radius = 11.0;
+        size_t frames = 0;
+        const char* script = "add 16 16 27 4 2\nsubtract 16 5 16 3 1.5\n";
+        CHECK(voxmesh_sculpt_from_function(dims, VOXMESH_F32, ball_field, &radius, NULL, &sculpt) == VOXMESH_OK);
+        CHECK(voxmesh_sculpt_run_strokes(sculpt, script, strlen(script), "s.txt", count_frame, &frames) == VOXMESH_OK);
+        CHECK(frames == 2);
+        CHECK(voxmesh_sculpt_mesh(sculpt, &sculpted) == VOXMESH_OK);
+        CHECK(sculpted && closed_with_euler(sculpted, &euler) && euler == 2);
+        CHECK(voxmesh_sculpt_run_strokes(sculpt, "add 1 2\n", 8, "s.txt", NULL, NULL) == VOXMESH_ERROR);
+        CHECK(contains(voxmesh_last_error(), "s.txt:1:"));
         voxmesh_mesh_free(sculpted);
         voxmesh_sculpt_free(sculpt);
     }

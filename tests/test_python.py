@@ -375,6 +375,64 @@ class SculptTest(unittest.TestCase):
             s.add((2.0, 2.0, 4.0), 1.5, strength=5, units="world")
             self.assertEqual(s.mesh().topology().closed, closed)
 
+    def test_stroke_scripts_are_the_same_dabs_applied_by_hand(self):
+        script = ("# a bump, a dent, then world units\n"
+                  "add 19.5 19.5 33 4 3\n"
+                  "subtract 6 19.5 19.5 3 1\n"
+                  "units world\n"
+                  "smooth 10.75 4 42 5 0.8\n")
+        by_hand = self.make()
+        by_hand.add((19.5, 19.5, 33.0), 4, strength=3)
+        by_hand.subtract((6.0, 19.5, 19.5), 3, strength=1)
+        by_hand.smooth((10.75, 4.0, 42.0), 5, strength=0.8, units="world")
+        frames = []
+        scripted = self.make()
+        scripted.run_strokes(script, name="s.txt", on_frame=frames.append)
+        self.assertFalse(scripted.dirty)
+        self.assertTrue(np.array_equal(scripted.array, by_hand.array))
+        self.assert_same_mesh(scripted.mesh(), by_hand.mesh())
+        self.assertEqual([f.frame for f in frames], [0, 1, 2])
+        self.assertEqual([f.line for f in frames], [2, 3, 5])
+        self.assertEqual([f.brush for f in frames], ["add", "subtract", "smooth"])
+        self.assertEqual([f.units for f in frames], ["samples", "samples", "world"])
+        self.assertEqual(frames[2].center, (10.75, 4.0, 42.0))
+        self.assertEqual((frames[0].radius, frames[0].strength), (4.0, 3.0))
+        self.assertTrue(all(f.blocks_remeshed >= f.blocks_changed > 0 for f in frames))
+
+        # From a file, as bytes, with no callback: the same samples.
+        scratch = tempfile.mkdtemp(dir=os.environ.get("VOXMESH_TEST_SCRATCH"))
+        path = os.path.join(scratch, "strokes.txt")
+        with open(path, "w") as f:
+            f.write(script)
+        from_file = self.make()
+        from_file.run_stroke_script(path)
+        self.assertTrue(np.array_equal(from_file.array, by_hand.array))
+        from_bytes = self.make()
+        from_bytes.run_strokes(script.encode())
+        self.assertTrue(np.array_equal(from_bytes.array, by_hand.array))
+        os.remove(path)
+        os.rmdir(scratch)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "strokes.txt"):
+            from_file.run_stroke_script(path)
+
+        # A malformed line: nothing applied. An exception from on_frame stops the strokes there.
+        untouched = self.make()
+        before = untouched.array.copy()
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "^s.txt:6:"):
+            untouched.run_strokes(script + "add 1 2 3\n", name="s.txt")
+        self.assertTrue(np.array_equal(untouched.array, before))
+
+        def stop_after_first(frame):
+            if frame.frame == 0:
+                raise KeyError("enough")
+
+        stopped = self.make()
+        with self.assertRaisesRegex(KeyError, "enough"):
+            stopped.run_strokes(script, on_frame=stop_after_first)
+        first = self.make()
+        first.add((19.5, 19.5, 33.0), 4, strength=3)
+        self.assertTrue(np.array_equal(stopped.array, first.array))
+
     def test_refusals_name_the_problem(self):
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "3-D"):
             voxmesh.Sculpt(np.zeros((8, 8)))

@@ -296,6 +296,12 @@ voxmesh_status voxmesh_sculpt_new(const voxmesh_volume_view* volume, const voxme
  * volume's border cuts it open. */
 voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, const voxmesh_voxelize_options* voxelize,
                                         const voxmesh_sculpt_options* options, voxmesh_sculpt** sculpt);
+/* A dims[0] x dims[1] x dims[2] volume of `type` (VOXMESH_U8, _U16 or _F32) filled with
+ * f(x, y, z, user) at each sample's index coordinates, rounded and clamped for integer types.
+ * f is called from several threads at once: it must be thread-safe. */
+typedef double (*voxmesh_sample_function)(double x, double y, double z, void* user);
+voxmesh_status voxmesh_sculpt_from_function(const size_t dims[3], int type, voxmesh_sample_function f, void* user,
+                                            const voxmesh_sculpt_options* options, voxmesh_sculpt** sculpt);
 void voxmesh_sculpt_free(voxmesh_sculpt* sculpt);
 
 typedef enum voxmesh_brush {
@@ -345,6 +351,29 @@ typedef struct voxmesh_block {
     size_t vertex_count, triangle_count;
 } voxmesh_block;
 voxmesh_status voxmesh_sculpt_get_block(const voxmesh_sculpt* sculpt, size_t index, voxmesh_block* block);
+/* Stroke scripts (see voxmesh/sculpt.hpp): one dab a line, "op x y z radius strength" with op
+ * add | subtract | smooth | set; '#' starts a comment; a line "units world" or "units samples"
+ * switches how later dabs are read. The whole script is read first, so a malformed line is
+ * VOXMESH_ERROR "NAME:LINE: problem" with nothing applied. Then each dab is applied, the sculpt
+ * updated, and on_frame (may be NULL) told, on the calling thread. */
+typedef struct voxmesh_stroke_frame {
+    size_t frame;          /* 0-based dab number */
+    size_t line;           /* 1-based line of the script */
+    int brush;             /* a voxmesh_brush */
+    int units;             /* a voxmesh_units */
+    double center[3], radius, strength;
+    double edit_seconds, update_seconds; /* the dab's apply and update */
+    size_t blocks_changed, blocks_remeshed;
+} voxmesh_stroke_frame;
+/* Returns 0 to go on; anything else stops the script after this frame, and the run returns
+ * VOXMESH_ERROR naming the frame (the dabs so far stay applied and meshed). */
+typedef int (*voxmesh_stroke_callback)(const voxmesh_stroke_frame* frame, void* user);
+voxmesh_status voxmesh_sculpt_run_stroke_script(voxmesh_sculpt* sculpt, const char* path,
+                                                voxmesh_stroke_callback on_frame, void* user);
+/* The same with the script's `size` bytes in memory; `name` stands for the file in messages
+ * (NULL: "strokes"). */
+voxmesh_status voxmesh_sculpt_run_strokes(voxmesh_sculpt* sculpt, const char* text, size_t size, const char* name,
+                                          voxmesh_stroke_callback on_frame, void* user);
 /* The whole welded mesh, identical to voxmesh_extract of the samples (updates first). */
 voxmesh_status voxmesh_sculpt_mesh(voxmesh_sculpt* sculpt, voxmesh_mesh** mesh);
 /* Where update re-meshes: VOXMESH_BACKEND_CPU or _OPENCL, and "cpu" or the device's name. */

@@ -31,7 +31,7 @@ import warnings
 import numpy as np
 
 __all__ = ["extract", "marching_cubes", "vertex_edges", "triangle_cells", "edge_cell_ranges", "value_range", "ValueRange", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices",
-           "Mesh", "Volume", "Topology", "Sculpt", "Block", "UpdateResult", "VoxmeshError", "VoxmeshMemoryError",
+           "Mesh", "Volume", "Topology", "Sculpt", "Block", "UpdateResult", "StrokeFrame", "VoxmeshError", "VoxmeshMemoryError",
            "version"]
 
 _DTYPES = [np.uint8, np.int8, np.uint16, np.int16, np.uint32, np.int32, np.float32, np.float64]
@@ -122,6 +122,16 @@ class _Block(ctypes.Structure):
     _fields_ = [("index", ctypes.c_size_t), ("coord", ctypes.c_size_t * 3), ("cell_begin", ctypes.c_size_t * 3),
                 ("cell_end", ctypes.c_size_t * 3), ("positions", ctypes.c_void_p), ("normals", ctypes.c_void_p),
                 ("indices", ctypes.c_void_p), ("vertex_count", ctypes.c_size_t), ("triangle_count", ctypes.c_size_t)]
+
+
+class _StrokeFrame(ctypes.Structure):
+    _fields_ = [("frame", ctypes.c_size_t), ("line", ctypes.c_size_t), ("brush", ctypes.c_int), ("units", ctypes.c_int),
+                ("center", ctypes.c_double * 3), ("radius", ctypes.c_double), ("strength", ctypes.c_double),
+                ("edit_seconds", ctypes.c_double), ("update_seconds", ctypes.c_double),
+                ("blocks_changed", ctypes.c_size_t), ("blocks_remeshed", ctypes.c_size_t)]
+
+
+_STROKE_CALLBACK = ctypes.CFUNCTYPE(ctypes.c_int, ctypes.POINTER(_StrokeFrame), ctypes.c_void_p)
 
 
 def _library_path():
@@ -261,6 +271,11 @@ def _declare_sculpt(lib, handle):
     lib.voxmesh_sculpt_mesh.argtypes = [handle, ctypes.POINTER(handle)]
     lib.voxmesh_sculpt_backend.restype = ctypes.c_int
     lib.voxmesh_sculpt_backend.argtypes = [handle]
+    lib.voxmesh_sculpt_run_stroke_script.restype = ctypes.c_int
+    lib.voxmesh_sculpt_run_stroke_script.argtypes = [handle, ctypes.c_char_p, _STROKE_CALLBACK, ctypes.c_void_p]
+    lib.voxmesh_sculpt_run_strokes.restype = ctypes.c_int
+    lib.voxmesh_sculpt_run_strokes.argtypes = [handle, ctypes.c_char_p, ctypes.c_size_t, ctypes.c_char_p,
+                                               _STROKE_CALLBACK, ctypes.c_void_p]
     for name in ("voxmesh_sculpt_device_name", "voxmesh_sculpt_warnings"):
         getattr(lib, name).restype = ctypes.c_char_p
         getattr(lib, name).argtypes = [handle]
@@ -733,6 +748,8 @@ def edge_cell_ranges(volume, edges, offset=0.0, cell_mask=None, threads=0):
 
 _BRUSHES = {"add": 0, "subtract": 1, "smooth": 2, "set": 3}
 _UNITS = {"samples": 0, "world": 1}
+_BRUSH_NAMES = {code: name for name, code in _BRUSHES.items()}
+_UNIT_NAMES = {code: name for name, code in _UNITS.items()}
 
 # update(): the blocks re-meshed that are or were non-empty (ascending), how many dirty blocks
 # were re-meshed (empty ones included), and the seconds it took.
@@ -741,6 +758,34 @@ UpdateResult = collections.namedtuple("UpdateResult", "changed remeshed seconds"
 # bx + nbx * (by + nby * bz); coord, cell_begin and cell_end are (x, y, z); positions (V, 3)
 # float32, normals (V, 3) float32 or None, indices (T, 3) uint32 into this block's vertices.
 Block = collections.namedtuple("Block", "index coord cell_begin cell_end positions normals indices")
+# One dab of a stroke script, after it was applied and meshed: frame (0-based), line (1-based),
+# brush ("add", ...), units ("samples" or "world"), center (x, y, z), radius, strength, the
+# seconds of its edit and of its update, and the blocks that update changed and re-meshed.
+StrokeFrame = collections.namedtuple("StrokeFrame", "frame line brush units center radius strength edit_seconds "
+                                                    "update_seconds blocks_changed blocks_remeshed")
+
+
+def _run_strokes(call, on_frame):
+    """call(callback) with on_frame told each frame as a StrokeFrame; an exception from on_frame
+    stops the strokes and is raised here (the C library cannot carry it)."""
+    raised = []
+
+    def tell(frame, _user):
+        f = frame.contents
+        try:
+            on_frame(StrokeFrame(f.frame, f.line, _BRUSH_NAMES[f.brush], _UNIT_NAMES[f.units], tuple(f.center),
+                                 f.radius, f.strength, f.edit_seconds, f.update_seconds, f.blocks_changed,
+                                 f.blocks_remeshed))
+        except BaseException as error:  # noqa: B902 - KeyboardInterrupt stops the strokes too
+            raised.append(error)
+            return 1
+        return 0
+
+    callback = _STROKE_CALLBACK(tell) if on_frame is not None else _STROKE_CALLBACK()
+    status = call(callback)
+    if raised:
+        raise raised[0]
+    _check(status)
 
 
 def _sculpt_options(iso, threads, block_size, normals, inside_below, strength_scale, backend, device):
@@ -853,6 +898,21 @@ class Sculpt:
             raise VoxmeshError(f"unknown units '{units}' (samples, world)")
         _check(_lib.voxmesh_sculpt_set_region(self._handle.pointer, _point("lo", lo), _point("hi", hi),
                                               float(value), _UNITS[units]))
+
+    def run_strokes(self, script, name="strokes", on_frame=None):
+        """A stroke script's text (str or bytes): one dab a line, "op x y z radius strength" with
+        op add | subtract | smooth | set, '#' comments, and "units world" / "units samples" lines.
+        The whole script is read first: a malformed line raises VoxmeshError "NAME:LINE: problem"
+        with nothing applied. Then each dab is applied and meshed, and on_frame(StrokeFrame)
+        called; an exception from on_frame stops the strokes there and is raised."""
+        text = script.encode() if isinstance(script, str) else bytes(script)
+        _run_strokes(lambda callback: _lib.voxmesh_sculpt_run_strokes(self._handle.pointer, text, len(text),
+                                                                      str(name).encode(), callback, None), on_frame)
+
+    def run_stroke_script(self, path, on_frame=None):
+        """run_strokes with the script read from the file at `path` (errors name the file)."""
+        _run_strokes(lambda callback: _lib.voxmesh_sculpt_run_stroke_script(self._handle.pointer, os.fsencode(path),
+                                                                            callback, None), on_frame)
 
     def invalidate_all(self):
         """Marks every block dirty after writes to `array`; refuses NaN or infinite samples."""

@@ -9,10 +9,12 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <functional>
 #include <iterator>
 #include <memory>
 #include <new>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -244,6 +246,41 @@ voxmesh::Units units(int code, const char* who) {
 }
 
 std::array<double, 3> point(const double* xyz) { return {xyz[0], xyz[1], xyz[2]}; }
+
+int brush_code(voxmesh::BrushOp op) {
+    switch (op) {
+        case voxmesh::BrushOp::Add: return VOXMESH_BRUSH_ADD;
+        case voxmesh::BrushOp::Subtract: return VOXMESH_BRUSH_SUBTRACT;
+        case voxmesh::BrushOp::Smooth: return VOXMESH_BRUSH_SMOOTH;
+        case voxmesh::BrushOp::Set: return VOXMESH_BRUSH_SET;
+    }
+    return -1;
+}
+
+// run_strokes with each frame told to the C callback; a nonzero answer stops the run as an Error.
+void run_script(voxmesh_sculpt& sculpt, const std::vector<voxmesh::ScriptDab>& dabs, voxmesh_stroke_callback on_frame,
+                void* user, const char* who) {
+    std::function<void(const voxmesh::StrokeFrame&)> tell;
+    if (on_frame)
+        tell = [&](const voxmesh::StrokeFrame& f) {
+            voxmesh_stroke_frame c{};
+            c.frame = f.frame;
+            c.line = f.dab.line;
+            c.brush = brush_code(f.dab.dab.op);
+            c.units = f.dab.units == voxmesh::Units::World ? VOXMESH_UNITS_WORLD : VOXMESH_UNITS_SAMPLES;
+            for (int a = 0; a < 3; ++a) c.center[a] = f.dab.dab.center[a];
+            c.radius = f.dab.dab.radius;
+            c.strength = f.dab.dab.strength;
+            c.edit_seconds = f.edit_seconds;
+            c.update_seconds = f.update_seconds;
+            c.blocks_changed = f.blocks_changed;
+            c.blocks_remeshed = f.blocks_remeshed;
+            if (on_frame(&c, user) != 0)
+                throw voxmesh::Error(std::string(who) + ": on_frame stopped the strokes after frame " +
+                                     std::to_string(f.frame) + " (line " + std::to_string(f.dab.line) + ")");
+        };
+    voxmesh::run_strokes(sculpt.sculpt, dabs, tell);
+}
 
 voxmesh::VoxelizeOptions voxelize_options(const voxmesh_voxelize_options& given, const char* who) {
     voxmesh::VoxelizeOptions cpp;
@@ -690,6 +727,23 @@ voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, const voxmesh
     });
 }
 
+voxmesh_status voxmesh_sculpt_from_function(const size_t dims[3], int type, voxmesh_sample_function f, void* user,
+                                            const voxmesh_sculpt_options* options, voxmesh_sculpt** sculpt) {
+    if (sculpt) *sculpt = nullptr;
+    return guarded([&] {
+        const char* who = "voxmesh_sculpt_from_function";
+        require(sculpt, who, "the sculpt pointer");
+        require(dims, who, "dims");
+        require(reinterpret_cast<const void*>(f), who, "the function");
+        auto warnings = std::make_shared<std::string>();
+        const voxmesh_sculpt_options given = options ? *options : voxmesh_default_sculpt_options();
+        voxmesh::Sculpt made = voxmesh::Sculpt::from_function(
+            {dims[0], dims[1], dims[2]}, scalar_type(type, who),
+            [f, user](double x, double y, double z) { return f(x, y, z, user); }, sculpt_options(given, warnings, who));
+        *sculpt = new voxmesh_sculpt{std::move(made), std::move(warnings)};
+    });
+}
+
 void voxmesh_sculpt_free(voxmesh_sculpt* sculpt) { delete sculpt; }
 
 voxmesh_status voxmesh_sculpt_apply(voxmesh_sculpt* sculpt, int brush, const double center[3], double radius,
@@ -776,6 +830,27 @@ voxmesh_status voxmesh_sculpt_get_block(const voxmesh_sculpt* sculpt, size_t ind
         block->indices = data_or_null(b.indices);
         block->vertex_count = b.vertex_count();
         block->triangle_count = b.triangle_count();
+    });
+}
+
+voxmesh_status voxmesh_sculpt_run_stroke_script(voxmesh_sculpt* sculpt, const char* path,
+                                                voxmesh_stroke_callback on_frame, void* user) {
+    return guarded([&] {
+        const char* who = "voxmesh_sculpt_run_stroke_script";
+        require(sculpt, who, "the sculpt");
+        require(path, who, "the path");
+        run_script(*sculpt, voxmesh::read_stroke_script(path), on_frame, user, who);
+    });
+}
+
+voxmesh_status voxmesh_sculpt_run_strokes(voxmesh_sculpt* sculpt, const char* text, size_t size, const char* name,
+                                          voxmesh_stroke_callback on_frame, void* user) {
+    return guarded([&] {
+        const char* who = "voxmesh_sculpt_run_strokes";
+        require(sculpt, who, "the sculpt");
+        if (size > 0) require(text, who, "the text");
+        std::istringstream in(size > 0 ? std::string(text, size) : std::string());
+        run_script(*sculpt, voxmesh::parse_stroke_script(in, name ? name : "strokes"), on_frame, user, who);
     });
 }
 
