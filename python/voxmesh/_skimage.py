@@ -192,9 +192,12 @@ def _crop_to_mask(data, mask):
     mask cut to match, and the cut's first sample as (x, y, z). Meshing the cut gives the
     same kept triangles and vertices in the same order (the canonical order is by position)
     without meshing what the mask drops. Nothing kept raises skimage's RuntimeError."""
+    # Two passes over the mask, not one per axis: the rows that keep a cell give the first two
+    # axes' spans, and the last axis' comes from a reduction numpy runs fast on a strided mask.
+    rows = mask.any(axis=2)
     spans = []
-    for axis in range(3):
-        kept = np.flatnonzero(mask.any(axis=tuple(a for a in range(3) if a != axis)))
+    for axis, kept in enumerate((rows.any(axis=1), rows.any(axis=0), mask.any(axis=(0, 1)))):
+        kept = np.flatnonzero(kept)
         if len(kept) == 0:
             raise RuntimeError(_NO_SURFACE)
         spans.append((max(int(kept[0]) - 1, 0), min(int(kept[-1]) + 3, data.shape[axis])))
