@@ -14,7 +14,8 @@
 #include <memory>
 #include <new>
 #include <optional>
-#include <sstream>
+#include <istream>
+#include <streambuf>
 #include <string>
 #include <utility>
 #include <vector>
@@ -246,6 +247,14 @@ voxmesh::Units units(int code, const char* who) {
 }
 
 std::array<double, 3> point(const double* xyz) { return {xyz[0], xyz[1], xyz[2]}; }
+
+// The caller's bytes as a stream's buffer, read in place (no copy of a long script).
+struct MemoryBuffer : std::streambuf {
+    MemoryBuffer(const char* data, std::size_t size) {
+        char* begin = const_cast<char*>(data);  // only read: a get area is char*
+        setg(begin, begin, begin + (data ? size : 0));
+    }
+};
 
 int brush_code(voxmesh::BrushOp op) {
     switch (op) {
@@ -849,7 +858,8 @@ voxmesh_status voxmesh_sculpt_run_strokes(voxmesh_sculpt* sculpt, const char* te
         const char* who = "voxmesh_sculpt_run_strokes";
         require(sculpt, who, "the sculpt");
         if (size > 0) require(text, who, "the text");
-        std::istringstream in(size > 0 ? std::string(text, size) : std::string());
+        MemoryBuffer buffer(text, size);
+        std::istream in(&buffer);
         run_script(*sculpt, voxmesh::parse_stroke_script(in, name ? name : "strokes"), on_frame, user, who);
     });
 }
