@@ -256,14 +256,20 @@ struct MemoryBuffer : std::streambuf {
     }
 };
 
-int brush_code(voxmesh::BrushOp op) {
-    switch (op) {
-        case voxmesh::BrushOp::Add: return VOXMESH_BRUSH_ADD;
-        case voxmesh::BrushOp::Subtract: return VOXMESH_BRUSH_SUBTRACT;
-        case voxmesh::BrushOp::Smooth: return VOXMESH_BRUSH_SMOOTH;
-        case voxmesh::BrushOp::Set: return VOXMESH_BRUSH_SET;
-    }
-    return -1;
+// The brushes in voxmesh_brush's order: a code is an index.
+constexpr voxmesh::BrushOp kBrushes[] = {voxmesh::BrushOp::Add, voxmesh::BrushOp::Subtract, voxmesh::BrushOp::Smooth,
+                                         voxmesh::BrushOp::Set};
+static_assert(VOXMESH_BRUSH_ADD == 0 && VOXMESH_BRUSH_SUBTRACT == 1 && VOXMESH_BRUSH_SMOOTH == 2 && VOXMESH_BRUSH_SET == 3);
+
+voxmesh::BrushOp brush(int code, const char* who) {
+    if (code < 0 || code >= static_cast<int>(std::size(kBrushes)))
+        throw voxmesh::Error(std::string(who) + ": unknown brush " + std::to_string(code) +
+                             " (VOXMESH_BRUSH_ADD, _SUBTRACT, _SMOOTH or _SET)");
+    return kBrushes[code];
+}
+
+int code_of(voxmesh::BrushOp op) {
+    return static_cast<int>(std::find(std::begin(kBrushes), std::end(kBrushes), op) - std::begin(kBrushes));
 }
 
 // run_strokes with each frame told to the C callback; a nonzero answer stops the run as an Error.
@@ -275,7 +281,7 @@ void run_script(voxmesh_sculpt& sculpt, const std::vector<voxmesh::ScriptDab>& d
             voxmesh_stroke_frame c{};
             c.frame = f.frame;
             c.line = f.dab.line;
-            c.brush = brush_code(f.dab.dab.op);
+            c.brush = code_of(f.dab.dab.op);
             c.units = f.dab.units == voxmesh::Units::World ? VOXMESH_UNITS_WORLD : VOXMESH_UNITS_SAMPLES;
             for (int a = 0; a < 3; ++a) c.center[a] = f.dab.dab.center[a];
             c.radius = f.dab.dab.radius;
@@ -755,18 +761,13 @@ voxmesh_status voxmesh_sculpt_from_function(const size_t dims[3], int type, voxm
 
 void voxmesh_sculpt_free(voxmesh_sculpt* sculpt) { delete sculpt; }
 
-voxmesh_status voxmesh_sculpt_apply(voxmesh_sculpt* sculpt, int brush, const double center[3], double radius,
+voxmesh_status voxmesh_sculpt_apply(voxmesh_sculpt* sculpt, int brush_code, const double center[3], double radius,
                                     double strength, int units_code) {
     return guarded([&] {
         require(sculpt, "voxmesh_sculpt_apply", "the sculpt");
         require(center, "voxmesh_sculpt_apply", "the center");
-        using voxmesh::BrushOp;
-        static constexpr BrushOp kOps[] = {BrushOp::Add, BrushOp::Subtract, BrushOp::Smooth, BrushOp::Set};
-        if (brush < 0 || brush >= static_cast<int>(std::size(kOps)))
-            throw voxmesh::Error("voxmesh_sculpt_apply: unknown brush " + std::to_string(brush) +
-                                 " (VOXMESH_BRUSH_ADD, _SUBTRACT, _SMOOTH or _SET)");
         voxmesh::Dab dab;
-        dab.op = kOps[brush];
+        dab.op = brush(brush_code, "voxmesh_sculpt_apply");
         dab.center = point(center);
         dab.radius = radius;
         dab.strength = strength;
