@@ -132,6 +132,12 @@ TEST_CASE("C API sculpt_from_function: the C++ from_function's samples, on every
     CHECK(std::string(voxmesh_last_error()) == "voxmesh_sculpt_from_function: the function is NULL");
     CHECK(voxmesh_sculpt_from_function(nullptr, VOXMESH_F32, c_ball, &calls, nullptr, &made) == VOXMESH_ERROR);
     CHECK(std::string(voxmesh_last_error()) == "voxmesh_sculpt_from_function: dims is NULL");
+    const voxmesh_sample_function nan_at_one = [](double x, double y, double z, void*) {
+        return x == 3 && y == 4 && z == 5 ? NAN : 1.0;
+    };
+    CHECK(voxmesh_sculpt_from_function(kDims, VOXMESH_F32, nan_at_one, nullptr, nullptr, &made) == VOXMESH_ERROR);
+    CHECK(made == nullptr);
+    CHECK_THAT(std::string(voxmesh_last_error()), Catch::Contains("returned NaN"));
     CHECK(voxmesh_sculpt_from_function(kDims, VOXMESH_F32, c_ball, &calls, nullptr, nullptr) == VOXMESH_ERROR);
     CHECK(std::string(voxmesh_last_error()) == "voxmesh_sculpt_from_function: the sculpt pointer is NULL");
 }
