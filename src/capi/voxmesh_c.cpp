@@ -10,11 +10,11 @@
 #include <array>
 #include <cstring>
 #include <functional>
+#include <istream>
 #include <iterator>
 #include <memory>
 #include <new>
 #include <optional>
-#include <istream>
 #include <streambuf>
 #include <string>
 #include <utility>
@@ -239,6 +239,16 @@ voxmesh::SculptOptions sculpt_options(const voxmesh_sculpt_options& given, const
     return cpp;
 }
 
+// *sculpt := the sculpt make(C++ options) builds from the C options (NULL: the defaults), with a
+// log that keeps its warnings for the C caller.
+template <class Make>
+void new_sculpt(voxmesh_sculpt** sculpt, const voxmesh_sculpt_options* options, const char* who, const Make& make) {
+    auto warnings = std::make_shared<std::string>();
+    const voxmesh_sculpt_options given = options ? *options : voxmesh_default_sculpt_options();
+    voxmesh::Sculpt made = make(sculpt_options(given, warnings, who));
+    *sculpt = new voxmesh_sculpt{std::move(made), std::move(warnings)};
+}
+
 voxmesh::Units units(int code, const char* who) {
     if (code == VOXMESH_UNITS_SAMPLES) return voxmesh::Units::Samples;
     if (code == VOXMESH_UNITS_WORLD) return voxmesh::Units::World;
@@ -311,12 +321,15 @@ voxmesh::VoxelizeOptions voxelize_options(const voxmesh_voxelize_options& given,
     return cpp;
 }
 
-// A list query (voxmesh::vertex_edges_into, triangle_cells_into) as the C calls promise: *count
-// always, the entries only where `capacity` holds them all, else an error naming both.
+// A list query of a volume (query(view, room): voxmesh::vertex_edges_into, triangle_cells_into)
+// as the C calls promise: *count always, the entries only where `capacity` holds them all, else
+// an error naming both.
 template <class Query>
-void list_out(const Query& query, const char* who, const char* what, const char* of_what, uint64_t* out,
-              size_t capacity, size_t* count) {
-    *count = query(std::span<std::uint64_t>(out, out ? capacity : 0));
+void list_out(const voxmesh_volume_view* volume, const char* who, const char* what, const char* of_what, uint64_t* out,
+              size_t capacity, size_t* count, const Query& query) {
+    require(count, who, "the count pointer");
+    require(volume, who, "the volume");
+    *count = query(cpp_view(*volume, who), std::span<std::uint64_t>(out, out ? capacity : 0));
     if (out && capacity < *count)
         throw voxmesh::Error(std::string(who) + ": room for " + std::to_string(capacity) + " " + what + ", but the volume has " +
                              std::to_string(*count) + " " + of_what);
@@ -503,12 +516,10 @@ voxmesh_status voxmesh_vertex_edges(const voxmesh_volume_view* volume, double is
                                     size_t capacity, size_t* count) {
     if (count) *count = 0;
     return guarded([&] {
-        const char* who = "voxmesh_vertex_edges";
-        require(count, who, "the count pointer");
-        require(volume, who, "the volume");
-        const voxmesh::VolumeView view = cpp_view(*volume, who);
-        list_out([&](std::span<std::uint64_t> room) { return voxmesh::vertex_edges_into(view, iso, room, threads); }, who,
-                 "edges", "crossed edges", edges, capacity, count);
+        list_out(volume, "voxmesh_vertex_edges", "edges", "crossed edges", edges, capacity, count,
+                 [&](const voxmesh::VolumeView& view, std::span<std::uint64_t> room) {
+                     return voxmesh::vertex_edges_into(view, iso, room, threads);
+                 });
     });
 }
 
@@ -516,12 +527,10 @@ voxmesh_status voxmesh_triangle_cells(const voxmesh_volume_view* volume, double 
                                       size_t capacity, size_t* count) {
     if (count) *count = 0;
     return guarded([&] {
-        const char* who = "voxmesh_triangle_cells";
-        require(count, who, "the count pointer");
-        require(volume, who, "the volume");
-        const voxmesh::VolumeView view = cpp_view(*volume, who);
-        list_out([&](std::span<std::uint64_t> room) { return voxmesh::triangle_cells_into(view, iso, room, threads); }, who,
-                 "cells", "triangles", cells, capacity, count);
+        list_out(volume, "voxmesh_triangle_cells", "cells", "triangles", cells, capacity, count,
+                 [&](const voxmesh::VolumeView& view, std::span<std::uint64_t> room) {
+                     return voxmesh::triangle_cells_into(view, iso, room, threads);
+                 });
     });
 }
 
@@ -718,10 +727,8 @@ voxmesh_status voxmesh_sculpt_new(const voxmesh_volume_view* volume, const voxme
         require(sculpt, "voxmesh_sculpt_new", "the sculpt pointer");
         require(volume, "voxmesh_sculpt_new", "the volume");
         const voxmesh::VolumeView view = cpp_view(*volume, "voxmesh_sculpt_new");
-        auto warnings = std::make_shared<std::string>();
-        const voxmesh_sculpt_options given = options ? *options : voxmesh_default_sculpt_options();
-        voxmesh::Sculpt made(view, sculpt_options(given, warnings, "voxmesh_sculpt_new"));
-        *sculpt = new voxmesh_sculpt{std::move(made), std::move(warnings)};
+        new_sculpt(sculpt, options, "voxmesh_sculpt_new",
+                   [&](const voxmesh::SculptOptions& cpp) { return voxmesh::Sculpt(view, cpp); });
     });
 }
 
@@ -731,14 +738,12 @@ voxmesh_status voxmesh_sculpt_from_mesh(const voxmesh_mesh* model, const voxmesh
     return guarded([&] {
         require(sculpt, "voxmesh_sculpt_from_mesh", "the sculpt pointer");
         require(model, "voxmesh_sculpt_from_mesh", "the model");
-        auto warnings = std::make_shared<std::string>();
-        const voxmesh_sculpt_options given = options ? *options : voxmesh_default_sculpt_options();
-        const voxmesh::SculptOptions cpp = sculpt_options(given, warnings, "voxmesh_sculpt_from_mesh");
-        const voxmesh::VoxelizeOptions grid =
-            voxelize ? voxelize_options(*voxelize, "voxmesh_sculpt_from_mesh")
-                     : voxmesh::Sculpt::model_voxelization(voxmesh::VoxelizeOptions{}.resolution, cpp);
-        voxmesh::Sculpt made = voxmesh::Sculpt::from_mesh(model->mesh, grid, cpp);
-        *sculpt = new voxmesh_sculpt{std::move(made), std::move(warnings)};
+        new_sculpt(sculpt, options, "voxmesh_sculpt_from_mesh", [&](const voxmesh::SculptOptions& cpp) {
+            const voxmesh::VoxelizeOptions grid =
+                voxelize ? voxelize_options(*voxelize, "voxmesh_sculpt_from_mesh")
+                         : voxmesh::Sculpt::model_voxelization(voxmesh::VoxelizeOptions{}.resolution, cpp);
+            return voxmesh::Sculpt::from_mesh(model->mesh, grid, cpp);
+        });
     });
 }
 
@@ -750,12 +755,12 @@ voxmesh_status voxmesh_sculpt_from_function(const size_t dims[3], int type, voxm
         require(sculpt, who, "the sculpt pointer");
         require(dims, who, "dims");
         require(reinterpret_cast<const void*>(f), who, "the function");
-        auto warnings = std::make_shared<std::string>();
-        const voxmesh_sculpt_options given = options ? *options : voxmesh_default_sculpt_options();
-        voxmesh::Sculpt made = voxmesh::Sculpt::from_function(
-            {dims[0], dims[1], dims[2]}, scalar_type(type, who),
-            [f, user](double x, double y, double z) { return f(x, y, z, user); }, sculpt_options(given, warnings, who));
-        *sculpt = new voxmesh_sculpt{std::move(made), std::move(warnings)};
+        const voxmesh::ScalarType scalar = scalar_type(type, who);
+        new_sculpt(sculpt, options, who, [&](const voxmesh::SculptOptions& cpp) {
+            return voxmesh::Sculpt::from_function(
+                {dims[0], dims[1], dims[2]}, scalar, [f, user](double x, double y, double z) { return f(x, y, z, user); },
+                cpp);
+        });
     });
 }
 
