@@ -1,6 +1,8 @@
 // Hybrid's sharing rules (src/cl/hybrid_schedule.hpp), on made-up rates.
 #include <catch2/catch.hpp>
 
+#include <vector>
+
 #include "cl/hybrid_schedule.hpp"
 
 using namespace voxmesh::detail;
@@ -80,4 +82,42 @@ TEST_CASE("Hybrid: a side planned out grows more hopeful until it is given a chu
     hybrid_hope_for_idle(d, true, true);
     CHECK(d.device_count == before.device_count);
     CHECK(d.cpu_generate == before.cpu_generate);
+}
+
+TEST_CASE("Hybrid: a call picks the quickest of the split, the CPU alone and the device alone", "[hybrid]") {
+    HybridModeTimes t;
+    // The first split builds and measures; it is not timed. Then each mode once, in order.
+    CHECK(hybrid_choose_mode(t) == HybridMode::Split);
+    hybrid_record_mode(t, HybridMode::Split, 100);
+    CHECK(t.seconds[0] == 0);
+    CHECK(hybrid_choose_mode(t) == HybridMode::Split);
+    hybrid_record_mode(t, HybridMode::Split, 10);
+    CHECK(hybrid_choose_mode(t) == HybridMode::CpuAlone);
+    hybrid_record_mode(t, HybridMode::CpuAlone, 8);
+    CHECK(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 12);
+    // The quickest from then on, but for one call in kHybridRecheckCalls, which measures the
+    // other mode measured longest ago (the split here, then the device, in turn).
+    std::vector<HybridMode> ran;
+    for (std::uint64_t call = t.calls; call < 2 * kHybridRecheckCalls; ++call) {
+        const HybridMode m = hybrid_choose_mode(t);
+        ran.push_back(m);
+        hybrid_record_mode(t, m, m == HybridMode::CpuAlone ? 8 : m == HybridMode::Split ? 10 : 12);
+    }
+    std::vector<HybridMode> rechecks;
+    for (std::size_t i = 0; i < ran.size(); ++i)
+        if (ran[i] != HybridMode::CpuAlone) rechecks.push_back(ran[i]);
+    REQUIRE(rechecks.size() == 2);
+    CHECK(rechecks[0] == HybridMode::Split);
+    CHECK(rechecks[1] == HybridMode::DeviceAlone);
+    CHECK(ran[kHybridRecheckCalls - 1 - 3] == HybridMode::Split);  // the 16th measured call
+    // A mode that turns slow loses its place: one slow call moves its time halfway.
+    hybrid_record_mode(t, HybridMode::CpuAlone, 20);
+    CHECK(t.seconds[1] == Approx(14));
+    CHECK(hybrid_choose_mode(t) == HybridMode::Split);
+    // A mode measured as taking no time at all still counts as measured.
+    HybridModeTimes z;
+    hybrid_record_mode(z, HybridMode::Split, 0);
+    hybrid_record_mode(z, HybridMode::Split, 0);
+    CHECK(hybrid_choose_mode(z) == HybridMode::CpuAlone);
 }

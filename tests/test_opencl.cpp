@@ -491,7 +491,9 @@ TEST_CASE("Hybrid meshes small volumes whole, whoever takes the last plane", "[o
         INFO("dims " << dims[0] << "x" << dims[1] << "x" << dims[2]);
         const Mesh cpu = run(v, o, Backend::Cpu);
         REQUIRE(cpu.vertex_count() > 0);
-        for (int round = 0; round < 3; ++round) require_same(cpu, run(v, o, Backend::Hybrid), v);
+        // Five calls: the split twice, then the CPU engine alone and the device alone (each
+        // measured once before Hybrid picks the quickest), all with the CPU engine's mesh.
+        for (int round = 0; round < 5; ++round) require_same(cpu, run(v, o, Backend::Hybrid), v);
     }
 }
 
@@ -578,6 +580,7 @@ TEST_CASE("Hybrid's planned split from earlier calls gives the same mesh", "[ope
     };
     Options o;
     o.devices = {0};
+    const Pretend split_only(detail::opencl_hybrid_split_only);  // the plan is what is tested
     const auto hybrid = [&](const Volume& vol, double device_count_s, double device_generate_s, double cpu_count_s) {
         detail::opencl_pretend_slow(device_count_s, device_generate_s, cpu_count_s);
         Stats stats;
@@ -625,6 +628,43 @@ TEST_CASE("Hybrid's planned split from earlier calls gives the same mesh", "[ope
         const Stats mended = hybrid(vol, 0.05, 0, 0);
         CHECK(mended.devices[1].chunks >= 1);
         CHECK(mended.devices[0].chunks < 8);
+    }
+}
+
+// With one device and automatic chunks, Hybrid times the split, the CPU engine alone and the
+// device alone in its first calls on a volume shape, then runs the quickest (and now and then
+// another again). A device made far slower than the CPU must not be run alone once measured.
+TEST_CASE("Hybrid runs the quickest of the split, the CPU engine alone and the device alone", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{44, 40, 104}};  // a shape no other test meshes: the choice is per shape
+    const auto f = gyroid(g);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, Options{}, Backend::Cpu);
+    Options o;
+    o.devices = {0};
+    detail::opencl_pretend_slow(0.03, 0, 0);  // 30 ms for each chunk the device counts
+    struct Restore {
+        ~Restore() { detail::opencl_pretend_slow(0, 0, 0); }
+    } restore;
+    enum Ran { SplitOrCpu, CpuAlone, DeviceAlone };
+    const auto hybrid = [&] {
+        Stats stats;
+        require_same(cpu, run(v, o, Backend::Hybrid, &stats), v);
+        CHECK(stats.backend == Backend::Hybrid);
+        REQUIRE(stats.devices.size() == 2);  // the device, then the CPU, whatever ran
+        CHECK(stats.devices[1].name == "cpu");
+        CHECK(stats.devices[0].voxels + stats.devices[1].voxels == g.size());
+        if (stats.devices[1].chunks == 0) return DeviceAlone;
+        if (stats.devices[0].chunks == 0 && stats.devices[1].chunks == 1) return CpuAlone;
+        return SplitOrCpu;
+    };
+    hybrid();  // the split, untimed
+    hybrid();  // the split, timed
+    CHECK(hybrid() == CpuAlone);
+    CHECK(hybrid() == DeviceAlone);
+    for (int call = 0; call < 6; ++call) {
+        INFO("call " << call << " after each mode was measured");
+        CHECK(hybrid() != DeviceAlone);
     }
 }
 

@@ -1,7 +1,7 @@
 #!/bin/bash
 # Runs on a lent GPU machine (see prepare.sh), from the repository root: finds the NVIDIA
 # OpenCL driver, runs the whole test suite on it, then the comparisons the next GPU session
-# needs, each engine at the SAME thread counts (the twelfth session divided Hybrid on 2
+# needs (each under a timeout; SIGINT makes voxmesh-bench print what it finished), each engine at the SAME thread counts (the twelfth session divided Hybrid on 2
 # threads by OpenCL alone on 16: Options::threads also sets how many host threads fill and
 # empty the pinned copy blocks). Outputs go to $OUT (or bench/gpu/out).
 set -uo pipefail
@@ -13,19 +13,20 @@ if [ -n "$driver" ]; then
   mkdir -p /tmp/vendors && echo "$driver" > /tmp/vendors/nvidia.icd
   export OCL_ICD_VENDORS=/tmp/vendors
 fi
-# The tests find their data under /work/main and the CLI under build/src/cli.
+# The tests find their data under /work/main, the CLI under build/src/cli and the benchmark under build/bench.
 mkdir -p /work && [ -e /work/main ] || ln -s "$PWD" /work/main
-mkdir -p build/src/cli && cp .gpu/voxmesh build/src/cli/
+mkdir -p build/src/cli build/bench && cp .gpu/voxmesh build/src/cli/ && cp .gpu/voxmesh-bench build/bench/
 bench=.gpu/voxmesh-bench
 {
   cat .gpu/commit.txt; nproc; grep -m1 'model name' /proc/cpuinfo; nvidia-smi -L 2>&1 | head -3
   $bench --list-devices
 } > "$out/machine.txt" 2>&1
-.gpu/voxmesh_tests > "$out/tests.txt" 2>&1; echo "voxmesh_tests exit $?" >> "$out/tests.txt"
-.gpu/voxmesh-cl-bandwidth > "$out/cl_bandwidth.txt" 2>&1
+timeout 60 .gpu/voxmesh-cl-bandwidth > "$out/cl_bandwidth.txt" 2>&1
 threads=$(nproc)
-$bench --field sphere,gyroid,ct --type f32,u8 --sizes 256,512 --threads 2,"$threads" --backends cpu,opencl,hybrid \
+timeout -s INT -k 20 240 $bench --field sphere,gyroid,ct --type f32,u8 --sizes 256,512 --threads 2,"$threads" --backends cpu,opencl,hybrid \
   --interleave --repeat 7 --warmup 1 --setup-first --save "$out/backends.jsonl" > "$out/backends.txt" 2>&1
-$bench --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 1,2,"$threads" --interleave --repeat 7 \
+timeout -s INT -k 20 90 $bench --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 1,2,"$threads" --interleave --repeat 7 \
   --no-floor --reuse-mesh > "$out/scaling_into.txt" 2>&1
+# The whole suite last: the comparisons matter most when device time runs short.
+timeout 150 .gpu/voxmesh_tests > "$out/tests.txt" 2>&1; echo "voxmesh_tests exit $?" >> "$out/tests.txt"
 tail -2 "$out/tests.txt"

@@ -70,6 +70,10 @@ std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{
 // many depends on timing).
 std::atomic<bool> g_deal_first_chunks{false};
 
+// Test hook: Hybrid always splits (no choice of the CPU engine or the device alone), for tests
+// of the split's schedule.
+std::atomic<bool> g_hybrid_split_only{false};
+
 // Sleeps `times` × the hook's seconds (a chunk count for per-chunk hooks); nothing when unset.
 void pretend_slow(const std::atomic<double>& seconds, std::size_t times = 1) {
     if (const double s = seconds; s > 0)
@@ -90,6 +94,7 @@ struct RatesKey {
 };
 std::mutex g_rates_mutex;
 std::map<RatesKey, HybridRates> g_rates;
+std::map<RatesKey, HybridModeTimes> g_modes;  // under g_rates_mutex too
 constexpr std::size_t kMaxRates = 64;  // shapes remembered; the map starts over beyond that
 
 // Seconds and samples of one side's pass in this call.
@@ -275,14 +280,17 @@ private:
     void warn(const std::string& message);
     // Host threads copying to and from a discrete device: the call's; in Hybrid, where those
     // run the CPU worker, the cores it leaves (at least two).
+    // Hybrid with the device alone: all the cores, as the split would use.
     unsigned copy_threads() const {
         const unsigned cores = resolve_threads(0);
+        if (device_alone_) return std::max(threads_, cores);
         return hybrid_ ? std::max(2u, cores > threads_ ? cores - threads_ : 0u) : threads_;
     }
 
     const VolumeView& volume_;
     const Options& options_;
     bool hybrid_;
+    bool device_alone_ = false;  // Hybrid chose the device alone: from then on the OpenCL engine's paths
     Mesh storage_;  // the caller's arrays for the mesh to reuse
     std::size_t nx_, ny_, nz_, plane_;
     unsigned threads_;
@@ -315,9 +323,16 @@ private:
     Measured cpu_taken_over_;  // the CPU worker's pieces taken over from devices: counted again and generated
     void plan_hybrid(const std::vector<DeviceJob>& jobs);
     void remember_rates(const std::vector<DeviceJob>& jobs);
-    RatesKey rates_key(const DeviceJob& job) const {
-        return RatesKey{job.device.get(), volume_.type, options_.normals, threads_, nx_, ny_, nz_};
+    RatesKey rates_key(const Device* device) const {
+        return RatesKey{device, volume_.type, options_.normals, threads_, nx_, ny_, nz_};
     }
+    RatesKey rates_key(const DeviceJob& job) const { return rates_key(job.device.get()); }
+    // Hybrid with one device and automatic chunks: which mode this call runs, and what it took.
+    bool chooses_mode(const std::vector<std::shared_ptr<Device>>& chosen) const {
+        return hybrid_ && chosen.size() == 1 && options_.chunk_planes == 0 && !g_hybrid_split_only;
+    }
+    HybridMode choose_mode(const Device* device) const;
+    void record_mode(const Device* device, HybridMode mode, double seconds) const;
     std::mutex mutex_;  // warnings_, fallback_ stats
     std::vector<std::string> warnings_;
     DeviceStats cpu_stats_, fallback_stats_;
@@ -579,6 +594,18 @@ void Engine::plan_hybrid(const std::vector<DeviceJob>& jobs) {
         rates_ = it->second;
     }
     planned_device_chunks_ = hybrid_device_chunks(chunks_.size(), chunk_samples(), rates_);
+}
+
+HybridMode Engine::choose_mode(const Device* device) const {
+    std::lock_guard<std::mutex> lock(g_rates_mutex);
+    const auto it = g_modes.find(rates_key(device));
+    return it == g_modes.end() ? HybridMode::Split : hybrid_choose_mode(it->second);
+}
+
+void Engine::record_mode(const Device* device, HybridMode mode, double seconds) const {
+    std::lock_guard<std::mutex> lock(g_rates_mutex);
+    if (g_modes.size() >= kMaxRates && !g_modes.count(rates_key(device))) g_modes.clear();
+    hybrid_record_mode(g_modes[rates_key(device)], mode, seconds);
 }
 
 // This call's rates, for the next call's plan; a side that did no work in a pass keeps the
@@ -1103,6 +1130,22 @@ Mesh Engine::run(Stats& stats) {
     });
     if (uniform) return cpu_extract(volume_, options_, stats, std::move(storage_));
 
+    const HybridMode mode = chooses_mode(chosen) ? choose_mode(chosen.front().get()) : HybridMode::Split;
+    if (mode == HybridMode::CpuAlone) {
+        Mesh mesh = cpu_extract(volume_, options_, stats, std::move(storage_));
+        record_mode(chosen.front().get(), mode, seconds_since(t0));
+        stats.backend = Backend::Hybrid;
+        DeviceStats idle;
+        idle.name = chosen.front()->info.name;
+        stats.devices.insert(stats.devices.begin(), idle);  // as the split lists them: devices, then the CPU
+        report();
+        return mesh;
+    }
+    if (mode == HybridMode::DeviceAlone) {
+        hybrid_ = false;  // the OpenCL engine on this device, copying on all the cores
+        device_alone_ = true;
+    }
+
     // The devices are this call's from counting to generating (a piece's counts and bits stay
     // on its device between the phases); taken in one global order, so calls never deadlock.
     std::vector<std::shared_ptr<Device>> by_address = chosen;
@@ -1170,12 +1213,13 @@ Mesh Engine::run(Stats& stats) {
         stats.devices.push_back(job.stats);
         for (int p = 0; p < 3; ++p) cpu_pass_seconds_[p] += job.pass_seconds[p];
     }
-    if (hybrid_) stats.devices.push_back(cpu_stats_);
+    if (hybrid_ || device_alone_) stats.devices.push_back(cpu_stats_);
     if (fallback_stats_.chunks > 0) stats.devices.push_back(fallback_stats_);
     stats.times.classify = cpu_pass_seconds_[0];
     stats.times.scan = cpu_pass_seconds_[1];
     stats.times.generate = cpu_pass_seconds_[2];
     stats.times.total = seconds_since(t0);
+    if (mode != HybridMode::Split || chooses_mode(chosen)) record_mode(chosen.front().get(), mode, stats.times.total);
     report();
     return mesh;
 }
@@ -1237,6 +1281,8 @@ void opencl_pretend_discrete(bool pretend) { g_pretend_discrete = pretend; }
 void opencl_staging_block_bytes(std::size_t bytes) { cl_engine::set_staging_block_bytes(bytes); }
 
 void opencl_deal_first_chunks(bool deal) { g_deal_first_chunks = deal; }
+
+void opencl_hybrid_split_only(bool split_only) { g_hybrid_split_only = split_only; }
 
 void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s, double cpu_start_s) {
     g_slow_count_s = count_s;

@@ -10,11 +10,18 @@
 // Times are seconds per chunk measured in this call; 0 means not measured yet. Where an
 // earlier call on the same device and volume shape measured both sides, the split is planned
 // from those rates instead (hybrid_device_chunks) and the rules above only mend it.
+//
+// Sharing is not always quicker: the host threads that feed a GPU are the CPU engine's too, and
+// where host memory bandwidth bounds both, splitting a volume costs more than it gains. So a
+// call with one device picks, from what earlier calls with the same device, shape and settings
+// took end to end, the quickest of the split, the CPU engine alone and the device alone
+// (hybrid_choose_mode).
 #pragma once
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 
 namespace voxmesh::detail {
 
@@ -96,6 +103,50 @@ inline std::size_t hybrid_device_chunks(std::size_t chunks, double samples, cons
     const double rest_on_cpu = static_cast<double>(chunks - 1) * samples * (r.cpu_count + r.cpu_generate);
     if (best == 0 && chunks > 1 && one_on_device <= rest_on_cpu) best = 1;
     return best;
+}
+
+// What Hybrid runs in one call with one device.
+enum class HybridMode : unsigned { Split = 0, CpuAlone = 1, DeviceAlone = 2 };
+constexpr unsigned kHybridModes = 3;
+// One call in this many measures again the mode measured longest ago (not the quickest), so
+// that a change of load, or of the data in a volume of the same shape, is noticed.
+constexpr std::uint64_t kHybridRecheckCalls = 16;
+
+// End-to-end seconds of earlier calls per mode, with one device, volume shape and settings.
+struct HybridModeTimes {
+    double seconds[kHybridModes] = {0, 0, 0};             // smoothed; 0: not measured yet
+    std::uint64_t measured_at[kHybridModes] = {0, 0, 0};  // `calls` when last measured
+    std::uint64_t calls = 0;                              // calls measured
+    std::uint64_t split_calls = 0;                        // split calls, the first included
+};
+
+// The mode for the next call: the split first (its first call builds the device's programs and
+// measures the rates later splits are planned by, so its time is not counted), then each mode
+// not measured yet, then the quickest, except every kHybridRecheckCalls-th call, which measures
+// the other mode measured longest ago.
+inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
+    if (t.split_calls == 0) return HybridMode::Split;
+    for (unsigned m = 0; m < kHybridModes; ++m)
+        if (t.seconds[m] <= 0) return static_cast<HybridMode>(m);
+    unsigned best = 0;
+    for (unsigned m = 1; m < kHybridModes; ++m)
+        if (t.seconds[m] < t.seconds[best]) best = m;
+    if (t.calls % kHybridRecheckCalls == kHybridRecheckCalls - 1) {
+        unsigned oldest = best == 0 ? 1 : 0;
+        for (unsigned m = 0; m < kHybridModes; ++m)
+            if (m != best && t.measured_at[m] < t.measured_at[oldest]) oldest = m;
+        return static_cast<HybridMode>(oldest);
+    }
+    return static_cast<HybridMode>(best);
+}
+
+// A call in `mode` took `seconds` end to end. A mode's time is the mean of its latest and its
+// earlier time, so that one slow call (a busy machine) moves it only halfway.
+inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double seconds) {
+    if (mode == HybridMode::Split && t.split_calls++ == 0) return;
+    const auto m = static_cast<unsigned>(mode);
+    t.seconds[m] = t.seconds[m] > 0 ? 0.5 * (t.seconds[m] + seconds) : std::max(seconds, 1e-9);
+    t.measured_at[m] = t.calls++;
 }
 
 }  // namespace voxmesh::detail

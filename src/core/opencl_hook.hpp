@@ -51,6 +51,9 @@ void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s =
 // test can count on each worker meshing something; chunks are otherwise pulled by
 // whichever worker is free.
 void opencl_deal_first_chunks(bool deal);
+// Hybrid always splits the volume between the CPU worker and the devices, instead of choosing
+// the CPU engine or a device alone where earlier calls found that quicker (for tests of the split).
+void opencl_hybrid_split_only(bool split_only);
 // Runs f holding the device registry's lock, as a thread inside devices() would; with
 // `as_discovery`, as one caught discovering (the device list half built).
 void opencl_with_registry_locked(bool as_discovery, const std::function<void()>& f);
