@@ -141,12 +141,22 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
 }
 
 // A call in `mode` took `seconds` end to end. A mode's time is the mean of its latest and its
-// earlier time, so that one slow call (a busy machine) moves it only halfway.
+// earlier time, so that one slow call (a busy machine) moves it only halfway. Where the mode
+// was the quickest, the others' times follow its change: the same shape can hold a sparser or
+// a denser surface than the calls they were timed on, and only a call in another mode (a
+// recheck) can say that the order has changed.
 inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double seconds) {
     if (mode == HybridMode::Split && t.split_calls++ == 0) return;
     const auto m = static_cast<unsigned>(mode);
-    t.seconds[m] = t.seconds[m] > 0 ? 0.5 * (t.seconds[m] + seconds) : std::max(seconds, 1e-9);
+    const double before = t.seconds[m];
+    bool quickest = before > 0;
+    for (unsigned o = 0; o < kHybridModes; ++o)
+        if (o != m && (t.seconds[o] <= 0 || t.seconds[o] < before)) quickest = false;
+    t.seconds[m] = before > 0 ? 0.5 * (before + seconds) : std::max(seconds, 1e-9);
     t.measured_at[m] = t.calls++;
+    if (quickest)
+        for (unsigned o = 0; o < kHybridModes; ++o)
+            if (o != m) t.seconds[o] *= t.seconds[m] / before;
 }
 
 }  // namespace voxmesh::detail
