@@ -111,12 +111,13 @@ TEST_CASE("Hybrid: a call picks the quickest of the split, the CPU alone and the
     CHECK(rechecks[0] == HybridMode::Split);
     CHECK(rechecks[1] == HybridMode::DeviceAlone);
     CHECK(ran[kHybridRecheckCalls - 1 - 3] == HybridMode::Split);  // the 16th measured call
-    // The quickest mode run on a denser surface of the same shape: its time moves halfway, and
-    // the others' along with it, so that it stays the quickest until a recheck says otherwise.
+    // The quickest mode run on a denser surface of the same shape: that is its time now, and
+    // the others' follow by the same factor, so that it stays the quickest until a recheck says
+    // otherwise.
     hybrid_record_mode(t, HybridMode::CpuAlone, 24);
-    CHECK(t.seconds[1] == Approx(16));
-    CHECK(t.seconds[0] == Approx(20));
-    CHECK(t.seconds[2] == Approx(24));
+    CHECK(t.seconds[1] == Approx(24));
+    CHECK(t.seconds[0] == Approx(30));
+    CHECK(t.seconds[2] == Approx(36));
     CHECK(hybrid_choose_mode(t) == HybridMode::CpuAlone);
     // A recheck that finds another mode quicker than its scaled time moves it first.
     HybridModeTimes r;
@@ -124,7 +125,7 @@ TEST_CASE("Hybrid: a call picks the quickest of the split, the CPU alone and the
     hybrid_record_mode(r, HybridMode::Split, 10);
     hybrid_record_mode(r, HybridMode::CpuAlone, 8);
     hybrid_record_mode(r, HybridMode::DeviceAlone, 12);
-    hybrid_record_mode(r, HybridMode::DeviceAlone, 2);  // 7: now the quickest; the others stay
+    hybrid_record_mode(r, HybridMode::DeviceAlone, 2);  // halfway: 7, now the quickest; the others stay
     CHECK(r.seconds[0] == Approx(10));
     CHECK(r.seconds[1] == Approx(8));
     CHECK(hybrid_choose_mode(r) == HybridMode::DeviceAlone);

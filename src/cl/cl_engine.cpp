@@ -280,17 +280,15 @@ private:
     void warn(const std::string& message);
     // Host threads copying to and from a discrete device: the call's; in Hybrid, where those
     // run the CPU worker, the cores it leaves (at least two).
-    // Hybrid with the device alone: all the cores, as the split would use.
     unsigned copy_threads() const {
         const unsigned cores = resolve_threads(0);
-        if (device_alone_) return std::max(threads_, cores);
         return hybrid_ ? std::max(2u, cores > threads_ ? cores - threads_ : 0u) : threads_;
     }
 
     const VolumeView& volume_;
     const Options& options_;
     bool hybrid_;
-    bool device_alone_ = false;  // Hybrid chose the device alone: from then on the OpenCL engine's paths
+    bool device_alone_ = false;  // Hybrid chose the device alone: from then on the OpenCL engine's
     Mesh storage_;  // the caller's arrays for the mesh to reuse
     std::size_t nx_, ny_, nz_, plane_;
     unsigned threads_;
@@ -331,8 +329,8 @@ private:
     bool chooses_mode(const std::vector<std::shared_ptr<Device>>& chosen) const {
         return hybrid_ && chosen.size() == 1 && options_.chunk_planes == 0 && !g_hybrid_split_only;
     }
-    HybridMode choose_mode(const Device* device) const;
-    void record_mode(const Device* device, HybridMode mode, double seconds) const;
+    static HybridMode choose_mode(const RatesKey& key);
+    static void record_mode(const RatesKey& key, HybridMode mode, double seconds);
     std::mutex mutex_;  // warnings_, fallback_ stats
     std::vector<std::string> warnings_;
     DeviceStats cpu_stats_, fallback_stats_;
@@ -596,16 +594,16 @@ void Engine::plan_hybrid(const std::vector<DeviceJob>& jobs) {
     planned_device_chunks_ = hybrid_device_chunks(chunks_.size(), chunk_samples(), rates_);
 }
 
-HybridMode Engine::choose_mode(const Device* device) const {
+HybridMode Engine::choose_mode(const RatesKey& key) {
     std::lock_guard<std::mutex> lock(g_rates_mutex);
-    const auto it = g_modes.find(rates_key(device));
+    const auto it = g_modes.find(key);
     return it == g_modes.end() ? HybridMode::Split : hybrid_choose_mode(it->second);
 }
 
-void Engine::record_mode(const Device* device, HybridMode mode, double seconds) const {
+void Engine::record_mode(const RatesKey& key, HybridMode mode, double seconds) {
     std::lock_guard<std::mutex> lock(g_rates_mutex);
-    if (g_modes.size() >= kMaxRates && !g_modes.count(rates_key(device))) g_modes.clear();
-    hybrid_record_mode(g_modes[rates_key(device)], mode, seconds);
+    if (g_modes.size() >= kMaxRates && !g_modes.count(key)) g_modes.clear();
+    hybrid_record_mode(g_modes[key], mode, seconds);
 }
 
 // This call's rates, for the next call's plan; a side that did no work in a pass keeps the
@@ -1130,10 +1128,12 @@ Mesh Engine::run(Stats& stats) {
     });
     if (uniform) return cpu_extract(volume_, options_, stats, std::move(storage_));
 
-    const HybridMode mode = chooses_mode(chosen) ? choose_mode(chosen.front().get()) : HybridMode::Split;
+    const bool choosing = chooses_mode(chosen);
+    const RatesKey mode_key = rates_key(chosen.front().get());
+    const HybridMode mode = choosing ? choose_mode(mode_key) : HybridMode::Split;
     if (mode == HybridMode::CpuAlone) {
         Mesh mesh = cpu_extract(volume_, options_, stats, std::move(storage_));
-        record_mode(chosen.front().get(), mode, seconds_since(t0));
+        record_mode(mode_key, mode, seconds_since(t0));
         stats.backend = Backend::Hybrid;
         DeviceStats idle;
         idle.name = chosen.front()->info.name;
@@ -1142,8 +1142,12 @@ Mesh Engine::run(Stats& stats) {
         return mesh;
     }
     if (mode == HybridMode::DeviceAlone) {
-        hybrid_ = false;  // the OpenCL engine on this device, copying on all the cores
+        // The OpenCL engine on this device, its host work (copies, the mesh's first touch) on
+        // all the cores, as the split would use them.
+        hybrid_ = false;
         device_alone_ = true;
+        threads_ = std::max(threads_, resolve_threads(0));
+        stats.workers = 0;
     }
 
     // The devices are this call's from counting to generating (a piece's counts and bits stay
@@ -1219,7 +1223,7 @@ Mesh Engine::run(Stats& stats) {
     stats.times.scan = cpu_pass_seconds_[1];
     stats.times.generate = cpu_pass_seconds_[2];
     stats.times.total = seconds_since(t0);
-    if (mode != HybridMode::Split || chooses_mode(chosen)) record_mode(chosen.front().get(), mode, stats.times.total);
+    if (choosing) record_mode(mode_key, mode, stats.times.total);
     report();
     return mesh;
 }

@@ -140,23 +140,26 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
     return static_cast<HybridMode>(best);
 }
 
-// A call in `mode` took `seconds` end to end. A mode's time is the mean of its latest and its
-// earlier time, so that one slow call (a busy machine) moves it only halfway. Where the mode
-// was the quickest, the others' times follow its change: the same shape can hold a sparser or
-// a denser surface than the calls they were timed on, and only a call in another mode (a
-// recheck) can say that the order has changed.
+// A call in `mode` took `seconds` end to end. Where the mode was the quickest, that is its time
+// now, and the others' times follow its change by the same factor: the same shape can hold a
+// sparser or a denser surface than the calls they were timed on (or the machine can be busier),
+// and only a call in another mode can say that their order has changed. Such a call (a recheck)
+// moves that mode's time halfway, so that one call slowed by chance does not reorder the modes.
 inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double seconds) {
     if (mode == HybridMode::Split && t.split_calls++ == 0) return;
     const auto m = static_cast<unsigned>(mode);
-    const double before = t.seconds[m];
+    const double before = t.seconds[m], now = std::max(seconds, 1e-9);
     bool quickest = before > 0;
     for (unsigned o = 0; o < kHybridModes; ++o)
         if (o != m && (t.seconds[o] <= 0 || t.seconds[o] < before)) quickest = false;
-    t.seconds[m] = before > 0 ? 0.5 * (before + seconds) : std::max(seconds, 1e-9);
     t.measured_at[m] = t.calls++;
-    if (quickest)
-        for (unsigned o = 0; o < kHybridModes; ++o)
-            if (o != m) t.seconds[o] *= t.seconds[m] / before;
+    if (!quickest) {
+        t.seconds[m] = before > 0 ? 0.5 * (before + now) : now;
+        return;
+    }
+    t.seconds[m] = now;
+    for (unsigned o = 0; o < kHybridModes; ++o)
+        if (o != m) t.seconds[o] *= now / before;
 }
 
 }  // namespace voxmesh::detail
