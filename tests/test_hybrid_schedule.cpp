@@ -1,6 +1,7 @@
 // Hybrid's sharing rules (src/cl/hybrid_schedule.hpp), on made-up rates.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <vector>
 
 #include "cl/hybrid_schedule.hpp"
@@ -96,42 +97,61 @@ TEST_CASE("Hybrid: a call picks the quickest of the split, the CPU alone and the
     hybrid_record_mode(t, HybridMode::CpuAlone, 8);
     CHECK(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
     hybrid_record_mode(t, HybridMode::DeviceAlone, 12);
-    // The quickest from then on, but for one call in kHybridRecheckCalls, which measures the
-    // other mode measured longest ago (the split here, then the device, in turn).
+    // The quickest from then on, but for rechecks of the others: the split (25 % slower) every
+    // 25 calls, the device alone (50 % slower) every 50; together about 2 % of the time.
     std::vector<HybridMode> ran;
-    for (std::uint64_t call = t.calls; call < 2 * kHybridRecheckCalls; ++call) {
+    double spent = 0;
+    for (int call = 0; call < 200; ++call) {
         const HybridMode m = hybrid_choose_mode(t);
         ran.push_back(m);
-        hybrid_record_mode(t, m, m == HybridMode::CpuAlone ? 8 : m == HybridMode::Split ? 10 : 12);
+        const double s = m == HybridMode::CpuAlone ? 8 : m == HybridMode::Split ? 10 : 12;
+        spent += s;
+        hybrid_record_mode(t, m, s);
     }
-    std::vector<HybridMode> rechecks;
-    for (std::size_t i = 0; i < ran.size(); ++i)
-        if (ran[i] != HybridMode::CpuAlone) rechecks.push_back(ran[i]);
-    REQUIRE(rechecks.size() == 2);
-    CHECK(rechecks[0] == HybridMode::Split);
-    CHECK(rechecks[1] == HybridMode::DeviceAlone);
-    CHECK(ran[kHybridRecheckCalls - 1 - 3] == HybridMode::Split);  // the 16th measured call
+    CHECK(std::count(ran.begin(), ran.end(), HybridMode::Split) == 8);
+    CHECK(std::count(ran.begin(), ran.end(), HybridMode::DeviceAlone) == 4);
+    CHECK(spent / (200 * 8) - 1 == Approx(0.02).margin(0.002));
+    CHECK(ran[22] == HybridMode::Split);  // 25 calls after it was measured
     // The quickest mode run on a denser surface of the same shape: that is its time now, and
-    // the others' follow by the same factor, so that it stays the quickest until a recheck says
-    // otherwise.
+    // the others' follow by the same factor, so that it stays the quickest until a recheck
+    // says otherwise.
     hybrid_record_mode(t, HybridMode::CpuAlone, 24);
     CHECK(t.seconds[1] == Approx(24));
     CHECK(t.seconds[0] == Approx(30));
     CHECK(t.seconds[2] == Approx(36));
     CHECK(hybrid_choose_mode(t) == HybridMode::CpuAlone);
-    // A recheck that finds another mode quicker than its scaled time moves it first.
-    HybridModeTimes r;
-    hybrid_record_mode(r, HybridMode::Split, 1);
-    hybrid_record_mode(r, HybridMode::Split, 10);
-    hybrid_record_mode(r, HybridMode::CpuAlone, 8);
-    hybrid_record_mode(r, HybridMode::DeviceAlone, 12);
-    hybrid_record_mode(r, HybridMode::DeviceAlone, 2);  // halfway: 7, now the quickest; the others stay
-    CHECK(r.seconds[0] == Approx(10));
-    CHECK(r.seconds[1] == Approx(8));
-    CHECK(hybrid_choose_mode(r) == HybridMode::DeviceAlone);
+    // A recheck that finds another mode quicker makes it the quickest.
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 20);
+    CHECK(t.seconds[1] == Approx(24));
+    CHECK(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
     // A mode measured as taking no time at all still counts as measured.
     HybridModeTimes z;
     hybrid_record_mode(z, HybridMode::Split, 0);
     hybrid_record_mode(z, HybridMode::Split, 0);
     CHECK(hybrid_choose_mode(z) == HybridMode::CpuAlone);
+}
+
+TEST_CASE("Hybrid: modes as quick as the best are rechecked often, slow ones seldom", "[hybrid]") {
+    CHECK(hybrid_recheck_calls(0) == kHybridMinRecheckCalls);
+    CHECK(hybrid_recheck_calls(0.02) == kHybridMinRecheckCalls);
+    CHECK(hybrid_recheck_calls(0.1) == 10);
+    CHECK(hybrid_recheck_calls(0.5) == 50);
+    CHECK(hybrid_recheck_calls(4) == kHybridMaxRecheckCalls);  // 5x slower: a recheck costs 4 calls
+    CHECK(hybrid_recheck_calls(1e300) == kHybridMaxRecheckCalls);
+    // The split and the device alone nearly tied, the CPU alone far slower: of the rechecks due,
+    // the mode closest to the quickest is measured; the near-tie swaps places as calls come in.
+    HybridModeTimes t;
+    hybrid_record_mode(t, HybridMode::Split, 1);
+    hybrid_record_mode(t, HybridMode::Split, 10.2);
+    hybrid_record_mode(t, HybridMode::CpuAlone, 50);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 10);
+    int split = 0, cpu = 0;
+    for (int call = 0; call < 40; ++call) {
+        const HybridMode m = hybrid_choose_mode(t);
+        split += m == HybridMode::Split;
+        cpu += m == HybridMode::CpuAlone;
+        hybrid_record_mode(t, m, m == HybridMode::Split ? 10.2 : m == HybridMode::CpuAlone ? 50 : 10);
+    }
+    CHECK(split == 10);  // every fourth call
+    CHECK(cpu == 0);
 }

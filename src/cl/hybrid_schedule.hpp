@@ -108,22 +108,31 @@ inline std::size_t hybrid_device_chunks(std::size_t chunks, double samples, cons
 // What Hybrid runs in one call with one device.
 enum class HybridMode : unsigned { Split = 0, CpuAlone = 1, DeviceAlone = 2 };
 constexpr unsigned kHybridModes = 3;
-// One call in this many measures again the mode measured longest ago (not the quickest), so
-// that a change of load, or of the data in a volume of the same shape, is noticed.
-constexpr std::uint64_t kHybridRecheckCalls = 16;
 
 // End-to-end seconds of earlier calls per mode, with one device, volume shape and settings.
 struct HybridModeTimes {
-    double seconds[kHybridModes] = {0, 0, 0};             // smoothed; 0: not measured yet
+    double seconds[kHybridModes] = {0, 0, 0};             // 0: not measured yet
     std::uint64_t measured_at[kHybridModes] = {0, 0, 0};  // `calls` when last measured
     std::uint64_t calls = 0;                              // calls measured
     std::uint64_t split_calls = 0;                        // split calls, the first included
 };
 
+// How often a mode other than the quickest is measured again (a recheck), so that a change of
+// load or of the data in a volume of the same shape is noticed: a mode `gap` slower than the
+// quickest (0.1: 10 % slower) once every gap / kHybridRecheckCost calls, so that its rechecks
+// cost about that share of the time on average. Modes as quick as the best one, which the
+// noise of a single call can reorder, are measured every few calls; those far slower seldom.
+constexpr double kHybridRecheckCost = 0.01;
+constexpr std::uint64_t kHybridMinRecheckCalls = 4, kHybridMaxRecheckCalls = 256;
+inline std::uint64_t hybrid_recheck_calls(double gap) {
+    const double calls = std::ceil(std::max(0.0, gap) / kHybridRecheckCost);
+    if (!(calls < static_cast<double>(kHybridMaxRecheckCalls))) return kHybridMaxRecheckCalls;
+    return std::max(kHybridMinRecheckCalls, static_cast<std::uint64_t>(calls));
+}
+
 // The mode for the next call: the split first (its first call builds the device's programs and
 // measures the rates later splits are planned by, so its time is not counted), then each mode
-// not measured yet, then the quickest, except every kHybridRecheckCalls-th call, which measures
-// the other mode measured longest ago.
+// not measured yet, then the quickest, or a recheck that is due (the one closest to the quickest).
 inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
     if (t.split_calls == 0) return HybridMode::Split;
     for (unsigned m = 0; m < kHybridModes; ++m)
@@ -131,20 +140,18 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
     unsigned best = 0;
     for (unsigned m = 1; m < kHybridModes; ++m)
         if (t.seconds[m] < t.seconds[best]) best = m;
-    if (t.calls % kHybridRecheckCalls == kHybridRecheckCalls - 1) {
-        unsigned oldest = best == 0 ? 1 : 0;
-        for (unsigned m = 0; m < kHybridModes; ++m)
-            if (m != best && t.measured_at[m] < t.measured_at[oldest]) oldest = m;
-        return static_cast<HybridMode>(oldest);
+    unsigned pick = best;
+    for (unsigned m = 0; m < kHybridModes; ++m) {
+        if (m == best || t.calls - t.measured_at[m] < hybrid_recheck_calls(t.seconds[m] / t.seconds[best] - 1)) continue;
+        if (pick == best || t.seconds[m] < t.seconds[pick]) pick = m;
     }
-    return static_cast<HybridMode>(best);
+    return static_cast<HybridMode>(pick);
 }
 
-// A call in `mode` took `seconds` end to end. Where the mode was the quickest, that is its time
-// now, and the others' times follow its change by the same factor: the same shape can hold a
-// sparser or a denser surface than the calls they were timed on (or the machine can be busier),
-// and only a call in another mode can say that their order has changed. Such a call (a recheck)
-// moves that mode's time halfway, so that one call slowed by chance does not reorder the modes.
+// A call in `mode` took `seconds` end to end: that is the mode's time now. Where the mode was
+// the quickest, the others' times follow its change by the same factor: the same shape can hold
+// a sparser or a denser surface than the calls they were timed on (or the machine can be
+// busier), and only a call in another mode can say that their order has changed.
 inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double seconds) {
     if (mode == HybridMode::Split && t.split_calls++ == 0) return;
     const auto m = static_cast<unsigned>(mode);
@@ -152,14 +159,11 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
     bool quickest = before > 0;
     for (unsigned o = 0; o < kHybridModes; ++o)
         if (o != m && (t.seconds[o] <= 0 || t.seconds[o] < before)) quickest = false;
-    t.measured_at[m] = t.calls++;
-    if (!quickest) {
-        t.seconds[m] = before > 0 ? 0.5 * (before + now) : now;
-        return;
-    }
     t.seconds[m] = now;
-    for (unsigned o = 0; o < kHybridModes; ++o)
-        if (o != m) t.seconds[o] *= now / before;
+    t.measured_at[m] = t.calls++;
+    if (quickest)
+        for (unsigned o = 0; o < kHybridModes; ++o)
+            if (o != m) t.seconds[o] *= now / before;
 }
 
 }  // namespace voxmesh::detail
