@@ -76,7 +76,8 @@ struct Options {
     Backend backend = Backend::Auto;
     // CPU worker threads; 0 = all cores this process may use (its affinity mask, capped by a
     // cgroup CPU quota), counted when the library is loaded. Copies to a discrete GPU run on as
-    // many; Hybrid's on the cores its CPU worker leaves (at least 2).
+    // many; Hybrid's on the cores its CPU worker leaves (at least 2), or on all cores in a call
+    // where Hybrid runs the device alone (it found that quicker than sharing: see README).
     unsigned threads = 0;
     bool normals = true;
     bool inside_below = false;  // flip: inside where value < iso (SDFs); winding and normals only
