@@ -642,7 +642,7 @@ TEST_CASE("Hybrid runs the quickest of the split, the CPU engine alone and the d
     const Mesh cpu = run(v, Options{}, Backend::Cpu);
     Options o;
     o.devices = {0};
-    detail::opencl_pretend_slow(0.03, 0, 0);  // 30 ms for each chunk the device counts
+    detail::opencl_pretend_slow(0.1, 0, 0);  // 100 ms for each chunk the device counts
     struct Restore {
         ~Restore() { detail::opencl_pretend_slow(0, 0, 0); }
     } restore;
