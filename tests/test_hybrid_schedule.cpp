@@ -112,17 +112,18 @@ TEST_CASE("Hybrid: a call picks the quickest of the split, the CPU alone and the
     CHECK(std::count(ran.begin(), ran.end(), HybridMode::DeviceAlone) == 4);
     CHECK(spent / (200 * 8) - 1 == Approx(0.02).margin(0.002));
     CHECK(ran[22] == HybridMode::Split);  // 25 calls after it was measured
-    // The quickest mode run on a denser surface of the same shape: that is its time now, and
-    // the others' follow by the same factor, so that it stays the quickest until a recheck
-    // says otherwise.
-    hybrid_record_mode(t, HybridMode::CpuAlone, 24);
-    CHECK(t.seconds[1] == Approx(24));
-    CHECK(t.seconds[0] == Approx(30));
-    CHECK(t.seconds[2] == Approx(36));
+    // The quickest mode slower by a quarter (a busier machine, a denser surface): that is its
+    // time now, and the others' follow by the same factor, so that it stays the quickest until
+    // a recheck says otherwise.
+    hybrid_record_mode(t, HybridMode::CpuAlone, 10);
+    CHECK(t.seconds[1] == Approx(10));
+    CHECK(t.seconds[0] == Approx(12.5));
+    CHECK(t.seconds[2] == Approx(15));
+    CHECK_FALSE(t.stale[0]);
     CHECK(hybrid_choose_mode(t) == HybridMode::CpuAlone);
     // A recheck that finds another mode quicker makes it the quickest.
-    hybrid_record_mode(t, HybridMode::DeviceAlone, 20);
-    CHECK(t.seconds[1] == Approx(24));
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 9);
+    CHECK(t.seconds[1] == Approx(10));
     CHECK(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
     // A mode measured as taking no time at all still counts as measured.
     HybridModeTimes z;
@@ -154,4 +155,40 @@ TEST_CASE("Hybrid: modes as quick as the best are rechecked often, slow ones sel
     }
     CHECK(split == 10);  // every fourth call
     CHECK(cpu == 0);
+}
+
+TEST_CASE("Hybrid: a change of the data brings rechecks of the modes close to the quickest forward", "[hybrid]") {
+    // A sparse surface: the CPU alone quickest, the device alone and the split close behind,
+    // the quickest's calls steady (a change of less than kHybridDataChange is no sign of one).
+    HybridModeTimes t;
+    hybrid_record_mode(t, HybridMode::Split, 1);
+    hybrid_record_mode(t, HybridMode::Split, 12);
+    hybrid_record_mode(t, HybridMode::CpuAlone, 10);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 11);
+    hybrid_record_mode(t, HybridMode::CpuAlone, 12);
+    CHECK(hybrid_choose_mode(t) == HybridMode::CpuAlone);
+    // A dense one of the same shape: the CPU takes 2.5x as long, the device only 1.2x. Without
+    // the change seen, the device's recheck would wait 10 calls, on the old order.
+    hybrid_record_mode(t, HybridMode::CpuAlone, 30);
+    CHECK(t.stale[0]);
+    CHECK(t.stale[2]);
+    REQUIRE(hybrid_choose_mode(t) == HybridMode::DeviceAlone);  // the closest first
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 13);
+    CHECK_FALSE(t.stale[2]);
+    REQUIRE(hybrid_choose_mode(t) == HybridMode::Split);  // still due, though now far behind
+    hybrid_record_mode(t, HybridMode::Split, 28);
+    for (int call = 0; call < 10; ++call) {
+        REQUIRE(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
+        hybrid_record_mode(t, HybridMode::DeviceAlone, 13);
+    }
+    // A mode more than twice as slow as the quickest is left to its paced rechecks.
+    HybridModeTimes f;
+    hybrid_record_mode(f, HybridMode::Split, 1);
+    hybrid_record_mode(f, HybridMode::Split, 10);
+    hybrid_record_mode(f, HybridMode::CpuAlone, 50);
+    hybrid_record_mode(f, HybridMode::DeviceAlone, 10.5);
+    hybrid_record_mode(f, HybridMode::Split, 10);
+    hybrid_record_mode(f, HybridMode::Split, 4);
+    CHECK(f.stale[2]);
+    CHECK_FALSE(f.stale[1]);
 }

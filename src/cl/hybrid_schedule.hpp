@@ -115,6 +115,7 @@ struct HybridModeTimes {
     std::uint64_t measured_at[kHybridModes] = {0, 0, 0};  // `calls` when last measured
     std::uint64_t calls = 0;                              // calls measured
     std::uint64_t split_calls = 0;                        // split calls, the first included
+    bool stale[kHybridModes] = {false, false, false};     // due for a recheck: the data changed
 };
 
 // How often a mode other than the quickest is measured again (a recheck), so that a change of
@@ -142,7 +143,8 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
         if (t.seconds[m] < t.seconds[best]) best = m;
     unsigned pick = best;
     for (unsigned m = 0; m < kHybridModes; ++m) {
-        if (m == best || t.calls - t.measured_at[m] < hybrid_recheck_calls(t.seconds[m] / t.seconds[best] - 1)) continue;
+        if (m == best || (!t.stale[m] && t.calls - t.measured_at[m] < hybrid_recheck_calls(t.seconds[m] / t.seconds[best] - 1)))
+            continue;
         if (pick == best || t.seconds[m] < t.seconds[pick]) pick = m;
     }
     return static_cast<HybridMode>(pick);
@@ -151,7 +153,11 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
 // A call in `mode` took `seconds` end to end: that is the mode's time now. Where the mode was
 // the quickest, the others' times follow its change by the same factor: the same shape can hold
 // a sparser or a denser surface than the calls they were timed on (or the machine can be
-// busier), and only a call in another mode can say that their order has changed.
+// busier), and only a call in another mode can say that their order has changed. A change of
+// more than kHybridDataChange times says the data changed, and the sides do not scale alike
+// with the surface (a GPU gains more on a dense one): the modes up to twice as slow as the
+// quickest are measured again in the next calls, closest first.
+constexpr double kHybridDataChange = 2;
 inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double seconds) {
     if (mode == HybridMode::Split && t.split_calls++ == 0) return;
     const auto m = static_cast<unsigned>(mode);
@@ -161,9 +167,14 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
         if (o != m && (t.seconds[o] <= 0 || t.seconds[o] < before)) quickest = false;
     t.seconds[m] = now;
     t.measured_at[m] = t.calls++;
-    if (quickest)
-        for (unsigned o = 0; o < kHybridModes; ++o)
-            if (o != m) t.seconds[o] *= now / before;
+    t.stale[m] = false;
+    if (!quickest) return;
+    const double change = now / before;
+    for (unsigned o = 0; o < kHybridModes; ++o) {
+        if (o == m) continue;
+        t.seconds[o] *= change;
+        if ((change > kHybridDataChange || change * kHybridDataChange < 1) && t.seconds[o] <= 2 * now) t.stale[o] = true;
+    }
 }
 
 }  // namespace voxmesh::detail
