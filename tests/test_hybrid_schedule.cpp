@@ -132,6 +132,16 @@ TEST_CASE("Hybrid: a call picks the quickest of the split, the CPU alone and the
     CHECK(hybrid_choose_mode(z) == HybridMode::CpuAlone);
 }
 
+// The times after a shape's first calls: an untimed split, then each mode once.
+static HybridModeTimes explored(double split_s, double cpu_s, double device_s) {
+    HybridModeTimes t;
+    hybrid_record_mode(t, HybridMode::Split, 1);
+    hybrid_record_mode(t, HybridMode::Split, split_s);
+    hybrid_record_mode(t, HybridMode::CpuAlone, cpu_s);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, device_s);
+    return t;
+}
+
 TEST_CASE("Hybrid: modes as quick as the best are rechecked often, slow ones seldom", "[hybrid]") {
     CHECK(hybrid_recheck_calls(0) == kHybridMinRecheckCalls);
     CHECK(hybrid_recheck_calls(0.02) == kHybridMinRecheckCalls);
@@ -141,11 +151,7 @@ TEST_CASE("Hybrid: modes as quick as the best are rechecked often, slow ones sel
     CHECK(hybrid_recheck_calls(1e300) == kHybridMaxRecheckCalls);
     // The split and the device alone nearly tied, the CPU alone far slower: of the rechecks due,
     // the mode closest to the quickest is measured; the near-tie swaps places as calls come in.
-    HybridModeTimes t;
-    hybrid_record_mode(t, HybridMode::Split, 1);
-    hybrid_record_mode(t, HybridMode::Split, 10.2);
-    hybrid_record_mode(t, HybridMode::CpuAlone, 50);
-    hybrid_record_mode(t, HybridMode::DeviceAlone, 10);
+    HybridModeTimes t = explored(10.2, 50, 10);
     int split = 0, cpu = 0;
     for (int call = 0; call < 40; ++call) {
         const HybridMode m = hybrid_choose_mode(t);
@@ -160,11 +166,7 @@ TEST_CASE("Hybrid: modes as quick as the best are rechecked often, slow ones sel
 TEST_CASE("Hybrid: a change of the data brings rechecks of the modes close to the quickest forward", "[hybrid]") {
     // A sparse surface: the CPU alone quickest, the device alone and the split close behind,
     // the quickest's calls steady (a change of less than kHybridDataChange is no sign of one).
-    HybridModeTimes t;
-    hybrid_record_mode(t, HybridMode::Split, 1);
-    hybrid_record_mode(t, HybridMode::Split, 12);
-    hybrid_record_mode(t, HybridMode::CpuAlone, 10);
-    hybrid_record_mode(t, HybridMode::DeviceAlone, 11);
+    HybridModeTimes t = explored(12, 10, 11);
     hybrid_record_mode(t, HybridMode::CpuAlone, 12);
     CHECK(hybrid_choose_mode(t) == HybridMode::CpuAlone);
     // A dense one of the same shape: the CPU takes 2.5x as long, the device only 1.2x. Without
@@ -182,11 +184,7 @@ TEST_CASE("Hybrid: a change of the data brings rechecks of the modes close to th
         hybrid_record_mode(t, HybridMode::DeviceAlone, 13);
     }
     // A mode more than twice as slow as the quickest is left to its paced rechecks.
-    HybridModeTimes f;
-    hybrid_record_mode(f, HybridMode::Split, 1);
-    hybrid_record_mode(f, HybridMode::Split, 10);
-    hybrid_record_mode(f, HybridMode::CpuAlone, 50);
-    hybrid_record_mode(f, HybridMode::DeviceAlone, 10.5);
+    HybridModeTimes f = explored(10, 50, 10.5);
     hybrid_record_mode(f, HybridMode::Split, 10);
     hybrid_record_mode(f, HybridMode::Split, 4);
     CHECK(f.stale[2]);
