@@ -4,6 +4,7 @@
 # needs (each under a timeout; SIGINT makes voxmesh-bench print what it finished), each engine at the SAME thread counts (the twelfth session divided Hybrid on 2
 # threads by OpenCL alone on 16: Options::threads also sets how many host threads fill and
 # empty the pinned copy blocks). Outputs go to $OUT (or bench/gpu/out).
+# Eight files, the most the device tool brings back.
 set -uo pipefail
 out=${OUT:-bench/gpu/out}
 mkdir -p "$out"
@@ -25,6 +26,10 @@ timeout 60 .gpu/voxmesh-cl-bandwidth > "$out/cl_bandwidth.txt" 2>&1
 threads=$(nproc)
 timeout -s INT -k 20 240 $bench --field sphere,gyroid,ct --type f32,u8 --sizes 256,512 --threads 2,"$threads" --backends cpu,opencl,hybrid \
   --interleave --repeat 7 --warmup 1 --setup-first --save "$out/backends.jsonl" > "$out/backends.txt" 2>&1
+# The same with one Mesh per combination (extract_into), as a sculpting loop: a fresh mesh's pages
+# cost the H200 machine about half of a dense call (thirty-sixth session).
+timeout -s INT -k 20 120 $bench --field sphere,gyroid,ct --type f32,u8 --sizes 256,512 --threads 2,"$threads" --backends cpu,opencl,hybrid \
+  --interleave --repeat 7 --warmup 1 --setup-first --reuse-mesh --save "$out/backends_reuse.jsonl" > "$out/backends_reuse.txt" 2>&1
 timeout -s INT -k 20 90 $bench --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 1,2,"$threads" --interleave --repeat 7 \
   --no-floor --reuse-mesh > "$out/scaling_into.txt" 2>&1
 # The whole suite last: the comparisons matter most when device time runs short.
