@@ -1,10 +1,11 @@
 #!/bin/bash
 # Runs on a lent GPU machine (see prepare.sh), from the repository root: finds the NVIDIA
-# OpenCL driver, runs the whole test suite on it, then the comparisons the next GPU session
-# needs (each under a timeout; SIGINT makes voxmesh-bench print what it finished), each engine at the SAME thread counts (the twelfth session divided Hybrid on 2
-# threads by OpenCL alone on 16: Options::threads also sets how many host threads fill and
-# empty the pinned copy blocks). Outputs go to $OUT (or bench/gpu/out).
-# Eight files, the most the device tool brings back.
+# OpenCL driver, measures the copy bandwidth and CPU / OpenCL / Hybrid (each engine at the SAME
+# thread counts: Options::threads also sets how many host threads fill and empty the pinned
+# copy blocks), with fresh meshes and with one reused, then thread scaling, then runs the whole
+# test suite there. Each step runs under a timeout (SIGINT makes voxmesh-bench print what it
+# finished). Outputs go to $OUT (or bench/gpu/out): eight files, the most the device tool
+# brings back.
 set -uo pipefail
 out=${OUT:-bench/gpu/out}
 mkdir -p "$out"
