@@ -143,9 +143,9 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
         if (t.seconds[m] < t.seconds[best]) best = m;
     unsigned pick = best;
     for (unsigned m = 0; m < kHybridModes; ++m) {
-        if (m == best || (!t.stale[m] && t.calls - t.measured_at[m] < hybrid_recheck_calls(t.seconds[m] / t.seconds[best] - 1)))
-            continue;
-        if (pick == best || t.seconds[m] < t.seconds[pick]) pick = m;
+        if (m == best) continue;
+        const bool due = t.stale[m] || t.calls - t.measured_at[m] >= hybrid_recheck_calls(t.seconds[m] / t.seconds[best] - 1);
+        if (due && (pick == best || t.seconds[m] < t.seconds[pick])) pick = m;
     }
     return static_cast<HybridMode>(pick);
 }
@@ -170,10 +170,11 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
     t.stale[m] = false;
     if (!quickest) return;
     const double change = now / before;
+    const bool data_changed = change > kHybridDataChange || change * kHybridDataChange < 1;
     for (unsigned o = 0; o < kHybridModes; ++o) {
         if (o == m) continue;
         t.seconds[o] *= change;
-        if ((change > kHybridDataChange || change * kHybridDataChange < 1) && t.seconds[o] <= 2 * now) t.stale[o] = true;
+        if (data_changed && t.seconds[o] <= 2 * now) t.stale[o] = true;
     }
 }
 
