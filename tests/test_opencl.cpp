@@ -198,6 +198,16 @@ private:
     void (*hook_)(bool);
 };
 
+// Makes the device and Hybrid's CPU worker slower for a scope (detail::opencl_pretend_slow).
+struct Slow {
+    Slow(double device_count_s, double device_generate_s, double cpu_count_s, double cpu_start_s = 0) {
+        detail::opencl_pretend_slow(device_count_s, device_generate_s, cpu_count_s, cpu_start_s);
+    }
+    ~Slow() { detail::opencl_pretend_slow(0, 0, 0); }
+    Slow(const Slow&) = delete;
+    Slow& operator=(const Slow&) = delete;
+};
+
 TEST_CASE("OpenCL without fp64 (float interpolation, f64 converted per chunk) matches the CPU engine", "[opencl]") {
     if (!have_device()) return;
     const Pretend no_fp64(detail::opencl_pretend_no_fp64);
@@ -455,10 +465,7 @@ TEST_CASE("Hybrid runs the CPU engine and OpenCL on one queue", "[opencl]") {
     // Both must take chunks whatever the machine's load: on a busy machine one side could
     // otherwise count all 48 chunks before the other's thread starts (PoCL runs on the same
     // cores). 2 ms more per chunk counted, on both sides alike.
-    struct Paced {
-        Paced() { detail::opencl_pretend_slow(0.002, 0, 0.002); }
-        ~Paced() { detail::opencl_pretend_slow(0, 0, 0); }
-    } paced;
+    const Slow paced(0.002, 0, 0.002);
 #endif
     Stats stats;
     require_same(cpu, run(v, o, Backend::Hybrid, &stats), v);
@@ -508,12 +515,6 @@ TEST_CASE("Hybrid hands chunks between a slow device and the CPU worker", "[open
     const VolumeView v = view_of(f.data(), ScalarType::F32, g);
     const Mesh cpu = run(v, Options{}, Backend::Cpu);
     const Pretend discrete(detail::opencl_pretend_discrete);
-    struct Slow {
-        Slow(double device_count_s, double device_generate_s, double cpu_count_s, double cpu_start_s = 0) {
-            detail::opencl_pretend_slow(device_count_s, device_generate_s, cpu_count_s, cpu_start_s);
-        }
-        ~Slow() { detail::opencl_pretend_slow(0, 0, 0); }
-    };
     const auto hybrid = [&](Stats& stats) {
         Options o;
         o.chunk_planes = 2;  // 48 chunks
@@ -582,16 +583,12 @@ TEST_CASE("Hybrid's planned split from earlier calls gives the same mesh", "[ope
     o.devices = {0};
     const Pretend split_only(detail::opencl_hybrid_split_only);  // the plan is what is tested
     const auto hybrid = [&](const Volume& vol, double device_count_s, double device_generate_s, double cpu_count_s) {
-        detail::opencl_pretend_slow(device_count_s, device_generate_s, cpu_count_s);
         Stats stats;
         Mesh m;
-        try {
+        {
+            const Slow slow(device_count_s, device_generate_s, cpu_count_s);
             m = run(vol.v, o, Backend::Hybrid, &stats);
-        } catch (...) {
-            detail::opencl_pretend_slow(0, 0, 0);
-            throw;
         }
-        detail::opencl_pretend_slow(0, 0, 0);
         require_same(vol.cpu, m, vol.v);
         REQUIRE(stats.devices.size() == 2);
         CHECK(stats.devices[0].voxels + stats.devices[1].voxels == vol.g.size());
@@ -642,10 +639,7 @@ TEST_CASE("Hybrid runs the quickest of the split, the CPU engine alone and the d
     const Mesh cpu = run(v, Options{}, Backend::Cpu);
     Options o;
     o.devices = {0};
-    detail::opencl_pretend_slow(0.1, 0, 0);  // 100 ms for each chunk the device counts
-    struct Restore {
-        ~Restore() { detail::opencl_pretend_slow(0, 0, 0); }
-    } restore;
+    const Slow slow(0.1, 0, 0);  // 100 ms for each chunk the device counts
     enum Ran { SplitOrCpu, CpuAlone, DeviceAlone };
     const auto hybrid = [&] {
         Stats stats;

@@ -288,7 +288,6 @@ private:
     const VolumeView& volume_;
     const Options& options_;
     bool hybrid_;
-    bool device_alone_ = false;  // Hybrid chose the device alone: from then on the OpenCL engine's
     Mesh storage_;  // the caller's arrays for the mesh to reuse
     std::size_t nx_, ny_, nz_, plane_;
     unsigned threads_;
@@ -1145,7 +1144,6 @@ Mesh Engine::run(Stats& stats) {
         // The OpenCL engine on this device, its host work (copies, the mesh's first touch) on
         // all the cores, as the split would use them.
         hybrid_ = false;
-        device_alone_ = true;
         threads_ = std::max(threads_, resolve_threads(0));
         stats.workers = 0;
     }
@@ -1217,7 +1215,7 @@ Mesh Engine::run(Stats& stats) {
         stats.devices.push_back(job.stats);
         for (int p = 0; p < 3; ++p) cpu_pass_seconds_[p] += job.pass_seconds[p];
     }
-    if (hybrid_ || device_alone_) stats.devices.push_back(cpu_stats_);
+    if (hybrid_ || mode == HybridMode::DeviceAlone) stats.devices.push_back(cpu_stats_);
     if (fallback_stats_.chunks > 0) stats.devices.push_back(fallback_stats_);
     stats.times.classify = cpu_pass_seconds_[0];
     stats.times.scan = cpu_pass_seconds_[1];

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <iterator>
 
 namespace voxmesh::detail {
 
@@ -131,6 +132,14 @@ inline std::uint64_t hybrid_recheck_calls(double gap) {
     return std::max(kHybridMinRecheckCalls, static_cast<std::uint64_t>(calls));
 }
 
+// The quickest of the measured modes (the first of equals); call once all are measured.
+inline unsigned hybrid_quickest_mode(const HybridModeTimes& t) {
+    unsigned best = 0;
+    for (unsigned m = 1; m < kHybridModes; ++m)
+        if (t.seconds[m] < t.seconds[best]) best = m;
+    return best;
+}
+
 // The mode for the next call: the split first (its first call builds the device's programs and
 // measures the rates later splits are planned by, so its time is not counted), then each mode
 // not measured yet, then the quickest, or a recheck that is due (the one closest to the quickest).
@@ -138,9 +147,7 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
     if (t.split_calls == 0) return HybridMode::Split;
     for (unsigned m = 0; m < kHybridModes; ++m)
         if (t.seconds[m] <= 0) return static_cast<HybridMode>(m);
-    unsigned best = 0;
-    for (unsigned m = 1; m < kHybridModes; ++m)
-        if (t.seconds[m] < t.seconds[best]) best = m;
+    const unsigned best = hybrid_quickest_mode(t);
     unsigned pick = best;
     for (unsigned m = 0; m < kHybridModes; ++m) {
         if (m == best) continue;
@@ -162,9 +169,8 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
     if (mode == HybridMode::Split && t.split_calls++ == 0) return;
     const auto m = static_cast<unsigned>(mode);
     const double before = t.seconds[m], now = std::max(seconds, 1e-9);
-    bool quickest = before > 0;
-    for (unsigned o = 0; o < kHybridModes; ++o)
-        if (o != m && (t.seconds[o] <= 0 || t.seconds[o] < before)) quickest = false;
+    const bool measured = std::all_of(std::begin(t.seconds), std::end(t.seconds), [](double s) { return s > 0; });
+    const bool quickest = measured && before <= t.seconds[hybrid_quickest_mode(t)];
     t.seconds[m] = now;
     t.measured_at[m] = t.calls++;
     t.stale[m] = false;
