@@ -188,6 +188,26 @@ TEST_CASE("identical meshes for every scalar type holding the same integer field
     }
 }
 
+TEST_CASE("extract_into a mesh too small for the result gives extract()'s mesh", "[core]") {
+    const Dims dims{40, 36, 38};
+    const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));
+    const voxmesh::VolumeView view = vmtest::view_of(values, dims);
+    for (bool normals : {true, false}) {
+        INFO("normals " << normals);
+        // Stale contents in storage smaller than the result: new storage, none of them kept.
+        voxmesh::Mesh mesh;
+        mesh.positions.assign(999, -7.f);
+        mesh.normals.assign(999, 3.f);
+        mesh.indices.assign(999, 0xdeadbeefu);
+        voxmesh::Options o = cpu_options(0.15, 2);
+        o.normals = normals;
+        voxmesh::Stats stats;
+        voxmesh::extract_into(view, o, mesh, stats);
+        REQUIRE(mesh.indices.size() > 999);
+        require_identical(voxmesh::extract(view, o), mesh);
+    }
+}
+
 TEST_CASE("extract_into gives extract()'s mesh in a reused mesh's storage", "[core]") {
     const Dims dims{33, 29, 31};
     const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));

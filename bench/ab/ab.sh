@@ -5,7 +5,8 @@
 # $AB_DIR (default /tmp/voxmesh-ab; revisions are git worktrees there: `rm -rf` it, then
 # `git worktree prune`) and wrapped as a shared object; then voxmesh-ab runs.
 # AB_BACKEND=opencl times the OpenCL engine, AB_BACKEND=cpu,opencl both (default: cpu);
-# AB_REUSE=1 meshes into one kept Mesh per build (extract_into), AB_PAUSE_MS=N sleeps after calls.
+# AB_REUSE=1 meshes into one kept Mesh per build (extract_into), AB_NORMALS=0 without normals,
+# AB_PAUSE_MS=N sleeps after calls.
 set -euo pipefail
 if [ $# -lt 6 ]; then sed -n 2,7p "$0"; exit 2; fi
 field=$1 type=$2 size=$3 threads=$4 rounds=$5; shift 5

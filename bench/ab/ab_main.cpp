@@ -71,7 +71,8 @@ int main(int argc, char** argv) try {
                      "  e.g. voxmesh-ab sphere u8 512 2 30 /tmp/a.so /tmp/b.so\n"
                      "  AB_BACKEND=cpu (default), opencl or cpu,opencl: the engines each build runs\n"
                      "  AB_PAUSE_MS=N: sleep N ms after every call (default 2; 0: back to back)\n"
-                     "  AB_REUSE=1: extract_into() one kept Mesh per build, not extract()\n");
+                     "  AB_REUSE=1: extract_into() one kept Mesh per build, not extract()\n"
+                     "  AB_NORMALS=0: no normals\n");
         return 2;
     }
     const voxmesh::Field field = parse_field(argv[1]);
@@ -92,6 +93,9 @@ int main(int argc, char** argv) try {
     // meshing repeatedly would; the default, extract(), pays fresh output pages every call.
     const char* reuse_text = std::getenv("AB_REUSE");
     const bool reuse = reuse_text && std::string(reuse_text) == "1";
+    // AB_NORMALS=0: meshes without normals (two output arrays instead of three).
+    const char* normals_text = std::getenv("AB_NORMALS");
+    const bool normals = !(normals_text && std::string(normals_text) == "0");
 
     std::vector<voxmesh::Backend> backends;
     const char* backend_list = std::getenv("AB_BACKEND");
@@ -141,6 +145,7 @@ int main(int argc, char** argv) try {
     voxmesh::Options options;
     options.iso = input.iso;
     options.threads = threads;
+    options.normals = normals;
 
     const std::size_t n = builds.size();
     std::vector<std::vector<double>> classify(n), generate(n), total(n), ratio(n), total_ratio(n);
@@ -171,8 +176,9 @@ int main(int argc, char** argv) try {
             total_ratio[b].push_back(t[b] / t[0]);
         }
     }
-    std::printf("%s %s %zu^3, %u threads, %u rounds, %s; medians in seconds, generate and total / first build's per round\n",
-                argv[1], argv[2], size, threads, rounds, reuse ? "extract_into()" : "extract()");
+    std::printf("%s %s %zu^3, %u threads, %u rounds, %s%s; medians in seconds, generate and total / first build's per round\n",
+                argv[1], argv[2], size, threads, rounds, reuse ? "extract_into()" : "extract()",
+                normals ? "" : ", no normals");
     for (std::size_t b = 0; b < n; ++b)
         std::printf("%-39s triangles %zu classify %.4f generate %.4f total %.4f generate/first %.3f total/first %.3f\n",
                     builds[b].label.c_str(), triangles[b], median(classify[b]), median(generate[b]), median(total[b]),

@@ -1,11 +1,13 @@
 #include "huge_pages.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdlib>
 #include <new>
 
 #if defined(__linux__)
 #include <sys/mman.h>
+#include <unistd.h>
 #endif
 
 namespace voxmesh::detail {
@@ -20,6 +22,45 @@ void advise_huge_pages(const void* data, std::size_t bytes) {
     (void)data;
     (void)bytes;
 #endif
+}
+
+bool populate_for_writing(void* data, std::size_t bytes) {
+#if defined(__linux__) && defined(MADV_POPULATE_WRITE)
+    // Whole pages only: the partial pages at the ends may hold another allocation's bytes, and
+    // the first write faults them in anyway.
+    const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
+    const auto begin = (reinterpret_cast<std::uintptr_t>(data) + page - 1) & ~(page - 1);
+    const auto end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(page - 1);
+    if (end <= begin) return true;
+    return madvise(reinterpret_cast<void*>(begin), end - begin, MADV_POPULATE_WRITE) == 0;
+#else
+    (void)data;
+    (void)bytes;
+    return false;
+#endif
+}
+
+std::vector<ByteRange> worker_share(const std::vector<ByteRange>& ranges, unsigned workers, unsigned w) {
+    constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
+    std::size_t total = 0;
+    for (const ByteRange& r : ranges) total += r.bytes;
+    const auto cut = [&](unsigned i) { return i >= workers ? total : total / workers * i + total % workers * i / workers; };
+    const std::size_t from = cut(w), to = cut(w + 1);
+    std::vector<ByteRange> share;
+    std::size_t start = 0;  // of range r, laid end to end
+    for (const ByteRange& r : ranges) {
+        const std::size_t end = start + r.bytes;
+        // A cut inside r, moved to the next 2 MiB address (or r's end); r's own ends stay.
+        const auto align = [&](std::size_t at) {
+            if (at <= start || at >= end) return std::clamp(at, start, end) - start;
+            const auto address = reinterpret_cast<std::uintptr_t>(r.data) + (at - start);
+            return std::min(r.bytes, at - start + static_cast<std::size_t>((kHuge - address % kHuge) % kHuge));
+        };
+        const std::size_t lo = align(from), hi = align(to);
+        if (hi > lo) share.push_back({r.data + lo, hi - lo});
+        start = end;
+    }
+    return share;
 }
 
 std::shared_ptr<void> allocate_zeroed(std::size_t bytes, bool huge_pages) {

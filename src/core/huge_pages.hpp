@@ -15,6 +15,22 @@ namespace voxmesh::detail {
 // left alone.
 void advise_huge_pages(const void* data, std::size_t bytes);
 
+// Faults in the whole pages of [data, data + bytes) for writing now (Linux's
+// MADV_POPULATE_WRITE, 5.14 and later): the kernel zeroes each fresh page there, so threads
+// that each populate a part share that work. Contents are unchanged. False where the kernel or
+// platform cannot (nothing happened: the first writes fault the pages in, as without it).
+bool populate_for_writing(void* data, std::size_t bytes);
+
+struct ByteRange {
+    char* data;
+    std::size_t bytes;
+};
+
+// Worker w's share of `ranges` laid end to end: one of `workers` about equal shares, each cut
+// moved forward to the next 2 MiB address inside its range, so that no huge page is faulted
+// in by two workers. The shares cover every range exactly once, in order.
+std::vector<ByteRange> worker_share(const std::vector<ByteRange>& ranges, unsigned workers, unsigned w);
+
 // `bytes` of zeroed memory, advised for huge pages when large and `huge_pages` (fresh pages
 // from the kernel are already zero, so nothing is written here: pages are faulted in by their
 // first user). Throws std::bad_alloc when the memory cannot be had.
