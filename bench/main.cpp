@@ -136,8 +136,9 @@ int main(int argc, char** argv) {
                  "sculpting: a built-in stroke path over a sphere, update latency p50/p95/p99 beside a full re-mesh "
                  "(sizes default 256,512)");
     app.add_flag("--mesh-ops", mesh_ops,
-                 "time analyze_topology (1 worker, all), keep_largest_components and write_mesh (stl, ply, obj) "
-                 "beside the extract of each --field/--type/--sizes volume (default sizes 256,512)");
+                 "time analyze_topology (1 worker, all), keep_largest_components, write_mesh (stl, ply, obj), "
+                 "vertex_edges, triangle_cells and edge_cell_ranges beside the extract of each "
+                 "--field/--type/--sizes volume (default sizes 256,512)");
     app.add_option("--dabs", dabs, "brush dabs of the --sculpt stroke path")->check(CLI::Range(1, 100000));
     app.add_flag("--csv", csv, "CSV output");
     app.add_flag("--json", json, "one JSON object per line");

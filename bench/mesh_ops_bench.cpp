@@ -1,6 +1,8 @@
 // voxmesh-bench --mesh-ops: what a program does with a mesh after extract, timed beside the
-// extract itself: analyze_topology (on one worker and on all), keep_largest_components and
-// write_mesh for each format (to a temporary directory, each file removed after its run).
+// extract itself: analyze_topology (on one worker and on all), keep_largest_components,
+// write_mesh for each format (to a temporary directory, each file removed after its run), and
+// the per-vertex and per-triangle queries in their vector forms (vertex_edges, triangle_cells,
+// edge_cell_ranges over vertex_edges' edges).
 // Medians over --repeat rounds, each round running every operation once, so that drift in
 // the machine's speed spreads over all of them; reported as ratios to the extract.
 #include "bench.hpp"
@@ -8,6 +10,7 @@
 #include "core/components.hpp"
 
 #include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -59,6 +62,7 @@ int run_mesh_ops(const std::vector<voxmesh::Field>& fields, const std::vector<vo
                 options.iso = fv.iso;
                 options.backend = voxmesh::Backend::Cpu;
                 voxmesh::Mesh mesh = voxmesh::extract(fv.volume.view(), options);  // untimed: the pages are warm after
+                const std::vector<std::uint64_t> edges = voxmesh::vertex_edges(fv.volume.view(), fv.iso);
                 std::vector<Operation> ops;
                 ops.push_back({"extract", [&] { mesh = voxmesh::extract(fv.volume.view(), options); }, {}});
                 ops.push_back({"analyze_topology_1_worker", [&] { (void)voxmesh::detail::topology_with_workers(mesh, 1); }, {}});
@@ -71,6 +75,9 @@ int run_mesh_ops(const std::vector<voxmesh::Field>& fields, const std::vector<vo
                                        std::filesystem::remove(path);
                                    }, {}});
                 }
+                ops.push_back({"vertex_edges", [&] { (void)voxmesh::vertex_edges(fv.volume.view(), fv.iso); }, {}});
+                ops.push_back({"triangle_cells", [&] { (void)voxmesh::triangle_cells(fv.volume.view(), fv.iso); }, {}});
+                ops.push_back({"edge_cell_ranges", [&] { (void)voxmesh::edge_cell_ranges(fv.volume.view(), edges, fv.iso); }, {}});
                 for (int round = 0; round < repeat && !g_interrupted; ++round)
                     for (Operation& op : ops) op.times.push_back(seconds_of(op.run));
                 if (g_interrupted) break;
