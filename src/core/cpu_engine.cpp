@@ -1,5 +1,6 @@
 #include "cpu_engine.hpp"
 
+#include "array_sizing.hpp"
 #include "bit_rows.hpp"
 #include "case_tables.hpp"
 #include "edge_vertex.hpp"
@@ -17,7 +18,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <functional>
 #include <memory>
 #include <string>
 #include <type_traits>
@@ -543,59 +543,16 @@ constexpr unsigned kClassifySlabsPerThread = 4, kGenerateSlabsPerThread = 4;
 
 }  // namespace
 
-// Sizes the mesh's arrays for the counts: each resize, largest first, on the least loaded
-// worker. Where more workers than arrays would run and the arrays take new storage (always
-// for a new Mesh), every worker first faults in an equal share of the new pages: the kernel's
-// zeroing of fresh pages is most of what a resize costs, and on a many-core machine one
-// thread per array left that to 3 of 16 cores (a 10 M-triangle mesh, 230 MB, took 70 ms into
-// a new Mesh and 27 ms into a reused one on the H200 machine's 16 cores). With as many
-// arrays as workers it is not done: the populate and the resize are then two passes over
-// memory where one would do (+1 % on this 2-core machine).
+// The mesh's arrays sized for the counts, in parallel (array_sizing.hpp: a new Mesh's fresh
+// pages are most of what that costs; a 10 M-triangle mesh, 230 MB, took 70 ms into a new
+// Mesh and 27 ms into a reused one on the H200 machine's 16 cores, with one thread per array).
 void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads) {
-    struct Array {
-        std::size_t bytes;  // what its resize writes
-        std::function<void()> resize;
-    };
-    std::vector<Array> arrays;
-    std::vector<ByteRange> fresh;
-    const auto add = [&](auto& array, std::uint64_t count) {
-        const auto n = static_cast<std::size_t>(count);
-        const std::size_t size = sizeof(*array.data());
-        if (n > array.capacity()) {
-            array.clear();  // nothing to keep: reserve copies no old contents
-            reserve_huge(array, n);
-            fresh.push_back({reinterpret_cast<char*>(array.data()), size * n});
-        }
-        // None where a reused mesh (extract_into) has the size already.
-        arrays.push_back({size * (n - std::min(n, array.size())), [&array, n] { array.resize(n); }});
-    };
-    add(mesh.indices, 3 * triangles);
-    add(mesh.positions, 3 * vertices);
-    if (normals) add(mesh.normals, 3 * vertices);
+    ArraySizing sizing;
+    sizing.add(mesh.indices, static_cast<std::size_t>(3 * triangles));
+    sizing.add(mesh.positions, static_cast<std::size_t>(3 * vertices));
+    if (normals) sizing.add(mesh.normals, static_cast<std::size_t>(3 * vertices));
     else mesh.normals.clear();  // a reused mesh may have had normals
-    std::size_t total = 0, fresh_total = 0;
-    for (const Array& array : arrays) total += array.bytes;
-    for (const ByteRange& range : fresh) fresh_total += range.bytes;
-    constexpr std::size_t kWorthThreads = std::size_t{8} << 20;
-    const unsigned cores = std::min(std::max(threads, 1u), resolve_threads(0));
-    if (fresh_total >= kWorthThreads && cores > arrays.size()) {
-        run_workers(cores, [&](unsigned w) {
-            for (const ByteRange& share : worker_share(fresh, cores, w)) populate_for_writing(share.data, share.bytes);
-        });
-    }
-    std::sort(arrays.begin(), arrays.end(), [](const Array& a, const Array& b) { return a.bytes > b.bytes; });
-    const unsigned workers = total < kWorthThreads ? 1u : std::min(cores, static_cast<unsigned>(arrays.size()));
-    std::vector<std::size_t> load(workers, 0);
-    std::vector<unsigned> owner(arrays.size());
-    for (std::size_t i = 0; i < arrays.size(); ++i) {  // largest first
-        const auto least = std::min_element(load.begin(), load.end()) - load.begin();
-        owner[i] = static_cast<unsigned>(least);
-        load[least] += arrays[i].bytes;
-    }
-    run_workers(workers, [&](unsigned w) {
-        for (std::size_t i = 0; i < arrays.size(); ++i)
-            if (owner[i] == w) arrays[i].resize();
-    });
+    sizing.run(std::max(threads, 1u));
 }
 
 // Infinite samples are refused with NaN: t = (iso - v0) / (v1 - v0) is undefined for them.

@@ -3,6 +3,7 @@
 // keeps them in the canonical mesh's order.
 #pragma once
 
+#include "array_sizing.hpp"
 #include "bit_rows.hpp"
 #include "cpu_engine.hpp"  // throw_non_finite, first_non_finite_plane, validate_volume
 #include "out_of_memory.hpp"
@@ -125,10 +126,13 @@ std::size_t list_query(const VolumeView& volume, double iso, std::size_t fewer_p
     });
 }
 
-// list_by_slabs' room for a list in `list`, sized to it.
-inline auto room_in(std::vector<std::uint64_t>& list) {
-    return [&list](std::size_t total) {
-        list.resize(total);
+// list_by_slabs' room for a list in `list`, sized to it on up to `threads` threads
+// (array_sizing.hpp).
+inline auto room_in(std::vector<std::uint64_t>& list, unsigned threads) {
+    return [&list, threads](std::size_t total) {
+        ArraySizing sizing;
+        sizing.add(list, total);
+        sizing.run(threads);
         return std::span<std::uint64_t>(list);
     };
 }

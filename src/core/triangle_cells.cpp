@@ -50,7 +50,7 @@ std::size_t cells_of_triangles(const VolumeView& volume, double iso, unsigned th
 
 std::vector<std::uint64_t> triangle_cells(const VolumeView& volume, double iso, unsigned threads) {
     std::vector<std::uint64_t> cells;
-    cells_of_triangles(volume, iso, threads, detail::room_in(cells));
+    cells_of_triangles(volume, iso, threads, detail::room_in(cells, threads));
     return cells;
 }
 

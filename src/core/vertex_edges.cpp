@@ -1,6 +1,7 @@
 // vertex_edges and edge_cell_ranges: which edge each vertex of the canonical mesh lies on, and
 // a per-edge statistic of the cells around it (scikit-image's `values`). A pass of its own over
 // the volume, not the engines': the canonical order fixes the answer, so it needs no mesh.
+#include "array_sizing.hpp"
 #include "bit_rows.hpp"
 #include "cpu_engine.hpp"
 #include "edge_vertex.hpp"  // prefetch
@@ -152,7 +153,7 @@ void cell_ranges(const VolumeView& volume, const std::uint64_t* edges, std::size
 
 std::vector<std::uint64_t> vertex_edges(const VolumeView& volume, double iso, unsigned threads) {
     std::vector<std::uint64_t> edges;
-    crossed_edges(volume, iso, threads, detail::room_in(edges));
+    crossed_edges(volume, iso, threads, detail::room_in(edges, threads));
     return edges;
 }
 
@@ -184,9 +185,13 @@ void edge_cell_ranges_into(const VolumeView& volume, std::span<const std::uint64
 
 std::vector<float> edge_cell_ranges(const VolumeView& volume, std::span<const std::uint64_t> edges, double offset,
                                     const std::uint8_t* cell_mask, unsigned threads) {
-    std::vector<float> ranges = detail::out_of_memory_as_error(
-        [&] { return "out of memory for the ranges of " + std::to_string(edges.size()) + " edges"; },
-        [&] { return std::vector<float>(edges.size()); });
+    std::vector<float> ranges;
+    detail::out_of_memory_as_error(
+        [&] { return "out of memory for the ranges of " + std::to_string(edges.size()) + " edges"; }, [&] {
+            detail::ArraySizing sizing;
+            sizing.add(ranges, edges.size());
+            sizing.run(threads);
+        });
     edge_cell_ranges_into(volume, edges, ranges, offset, cell_mask, threads);
     return ranges;
 }
