@@ -1,13 +1,20 @@
-// Fresh output pages shared out among workers (src/core/huge_pages.hpp): every worker's share
-// of the new arrays, and the prefault itself, which must leave contents alone.
+// Fresh output pages shared out among workers (src/core/huge_pages.hpp, array_sizing.hpp):
+// every worker's share of the new arrays, the prefault itself, which must leave contents
+// alone, and the residency test that tells fresh storage from storage a heap had.
 #include <catch2/catch.hpp>
 
+#include "core/array_sizing.hpp"
 #include "core/huge_pages.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <random>
 #include <vector>
+
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 using voxmesh::detail::ByteRange;
 using voxmesh::detail::populate_for_writing;
@@ -86,4 +93,44 @@ TEST_CASE("populating pages for writing leaves their contents alone", "[core][pa
     populate_for_writing(bytes.data(), 0);
     populate_for_writing(bytes.data() + 10, 100);  // within one page: nothing to do
     CHECK(bytes == before);
+}
+
+#if defined(__linux__)
+TEST_CASE("a page written is resident, a fresh mapping's is not", "[core][pages]") {
+    std::vector<unsigned char> written(1 << 20, 1);
+    CHECK(voxmesh::detail::page_resident(written.data() + written.size() / 2));
+    // A private anonymous mapping's pages come on first touch; MAP_NORESERVE keeps it light.
+    const std::size_t bytes = std::size_t{8} << 20;
+    void* fresh = mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    REQUIRE(fresh != MAP_FAILED);
+    char* middle = static_cast<char*>(fresh) + bytes / 2;
+    CHECK_FALSE(voxmesh::detail::page_resident(middle));
+    if (populate_for_writing(fresh, bytes)) CHECK(voxmesh::detail::page_resident(middle));
+    munmap(fresh, bytes);
+}
+#endif
+
+TEST_CASE("ArraySizing gives every array its size, whatever storage it had", "[core][pages]") {
+    const std::size_t large = (std::size_t{9} << 20) / sizeof(float);  // past the threaded sizing's 8 MiB
+    for (unsigned threads : {0u, 1u, 2u, 16u}) {
+        for (std::size_t n : {std::size_t{0}, std::size_t{1000}, large}) {
+            INFO("threads " << threads << ", n " << n);
+            std::vector<float> empty, small(10, 5.f), big(large + 7, 6.f);
+            std::vector<std::uint32_t> other(3, 9u);
+            voxmesh::detail::ArraySizing sizing;
+            sizing.add(empty, n);
+            sizing.add(small, n);
+            sizing.add(big, n);
+            sizing.add(other, 2 * n + 1);
+            sizing.run(threads);
+            CHECK(empty.size() == n);
+            CHECK(small.size() == n);
+            CHECK(big.size() == n);
+            CHECK(other.size() == 2 * n + 1);
+            // Elements past an array's old size are value-initialised, as resize makes them.
+            CHECK(std::all_of(empty.begin(), empty.end(), [](float v) { return v == 0.f; }));
+            if (n > 10) CHECK(std::all_of(small.begin(), small.end(), [](float v) { return v == 0.f; }));
+            if (n > 3) CHECK(std::all_of(other.begin() + 3, other.end(), [](std::uint32_t v) { return v == 0u; }));
+        }
+    }
 }

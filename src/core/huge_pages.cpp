@@ -40,6 +40,18 @@ bool populate_for_writing(void* data, std::size_t bytes) {
 #endif
 }
 
+bool page_resident(const void* p) {
+#if defined(__linux__)
+    const auto page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
+    unsigned char in_memory = 0;
+    void* start = reinterpret_cast<void*>(reinterpret_cast<std::uintptr_t>(p) & ~(page - 1));
+    return mincore(start, page, &in_memory) == 0 && (in_memory & 1);
+#else
+    (void)p;
+    return false;
+#endif
+}
+
 std::vector<ByteRange> worker_share(const std::vector<ByteRange>& ranges, unsigned workers, unsigned w) {
     constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
     std::size_t total = 0;

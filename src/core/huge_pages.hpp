@@ -21,6 +21,10 @@ void advise_huge_pages(const void* data, std::size_t bytes);
 // platform cannot (nothing happened: the first writes fault the pages in, as without it).
 bool populate_for_writing(void* data, std::size_t bytes);
 
+// Whether the page holding p is in memory (Linux's mincore; false where unknown). Storage a
+// heap hands out again is usually in memory already, and fresh mappings are not.
+bool page_resident(const void* p);
+
 struct ByteRange {
     char* data;
     std::size_t bytes;
