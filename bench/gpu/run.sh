@@ -24,6 +24,9 @@ bench=.gpu/voxmesh-bench
   $bench --list-devices
 } > "$out/machine.txt" 2>&1
 timeout 60 .gpu/voxmesh-cl-bandwidth > "$out/cl_bandwidth.txt" 2>&1
+# Sizing fresh and reused result arrays on one thread and on all (array_sizing.hpp), beside the
+# copies: both are what a fresh mesh costs on this machine.
+timeout 60 .gpu/voxmesh-array-sizing --repeat 9 40 240 >> "$out/cl_bandwidth.txt" 2>&1
 threads=$(nproc)
 timeout -s INT -k 20 240 $bench --field sphere,gyroid,ct --type f32,u8 --sizes 256,512 --threads 2,"$threads" --backends cpu,opencl,hybrid \
   --interleave --repeat 7 --warmup 1 --setup-first --save "$out/backends.jsonl" > "$out/backends.txt" 2>&1
