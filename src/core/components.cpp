@@ -2,6 +2,8 @@
 // vtkPolyDataConnectivityFilter). A CT's iso-surface is one large piece among many specks of
 // noise; keep_largest_components keeps the large ones.
 #include "components.hpp"
+#include "array_sizing.hpp"
+#include "huge_pages.hpp"
 #include "mesh_arrays.hpp"
 #include "out_of_memory.hpp"
 #include "parallel.hpp"
@@ -31,7 +33,8 @@ constexpr std::size_t kSidesPerWorker = std::size_t{1} << 20;
 class VertexSets {
 public:
     VertexSets(std::size_t vertices, unsigned workers)
-        : parent_(std::make_unique_for_overwrite<std::uint32_t[]>(vertices)) {
+        : parent_block_(allocate_zeroed(vertices * sizeof(std::uint32_t))),
+          parent_(static_cast<std::uint32_t*>(parent_block_.get())) {
         run_workers(workers, [&](unsigned w) {
             const Share mine = share_of(vertices, w, workers);
             for (std::size_t v = mine.begin; v < mine.end; ++v) parent_[v] = static_cast<std::uint32_t>(v);
@@ -59,7 +62,8 @@ public:
 
 private:
     std::atomic_ref<std::uint32_t> at(std::uint32_t v) { return std::atomic_ref<std::uint32_t>(parent_[v]); }
-    std::unique_ptr<std::uint32_t[]> parent_;
+    std::shared_ptr<void> parent_block_;  // fresh pages in huge pages, faulted in by the workers below
+    std::uint32_t* parent_;
 };
 
 // The pieces as vertex sets: each triangle's corners united, the triangles split among
@@ -101,8 +105,11 @@ MeshPieces mesh_pieces(const Mesh& mesh, unsigned workers) {
     const std::size_t triangles = mesh.triangle_count();
     // Pieces numbered in the order of their first triangle.
     constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
-    std::vector<std::uint32_t> piece_of_root(mesh.vertex_count(), kNone);
+    std::vector<std::uint32_t> piece_of_root;
+    reserve_huge(piece_of_root, mesh.vertex_count());  // huge pages: 4 KiB ones faulted one by one here
+    piece_of_root.assign(mesh.vertex_count(), kNone);
     MeshPieces pieces;
+    reserve_huge(pieces.of_triangle, triangles);
     pieces.of_triangle.resize(triangles);
     for (std::size_t t = 0; t < triangles; ++t) {
         std::uint32_t& piece = piece_of_root[sets.find(mesh.indices[3 * t])];
@@ -134,7 +141,9 @@ Mesh largest_pieces(const Mesh& mesh, std::size_t count) {
     // The kept triangles in their order, their vertices in theirs: a piece of a canonical mesh
     // stays in canonical order.
     constexpr std::uint32_t kDropped = std::numeric_limits<std::uint32_t>::max();
-    std::vector<std::uint32_t> new_index(mesh.vertex_count(), kDropped);
+    std::vector<std::uint32_t> new_index;
+    detail::reserve_huge(new_index, mesh.vertex_count());
+    new_index.assign(mesh.vertex_count(), kDropped);
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t)
         if (kept_piece[pieces.of_triangle[t]])
             for (std::size_t k = 0; k < 3; ++k) new_index[mesh.indices[3 * t + k]] = 0;
@@ -146,9 +155,11 @@ Mesh largest_pieces(const Mesh& mesh, std::size_t count) {
         if (kept_piece[piece]) triangles += pieces.triangles[piece];
 
     Mesh out;
-    out.positions.resize(3 * std::size_t{vertices});
-    if (!mesh.normals.empty()) out.normals.resize(3 * std::size_t{vertices});
-    out.indices.resize(3 * triangles);
+    detail::ArraySizing sizing;  // a new mesh's pages sized as extract's are (array_sizing.hpp)
+    sizing.add(out.positions, 3 * std::size_t{vertices});
+    if (!mesh.normals.empty()) sizing.add(out.normals, 3 * std::size_t{vertices});
+    sizing.add(out.indices, 3 * triangles);
+    sizing.run(0);
     for (std::size_t v = 0; v < mesh.vertex_count(); ++v) {
         if (new_index[v] == kDropped) continue;
         const std::size_t to = 3 * std::size_t{new_index[v]};
