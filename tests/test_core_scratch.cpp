@@ -9,6 +9,7 @@
 
 #include <voxmesh/voxmesh.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -199,11 +200,17 @@ TEST_CASE("a child forked while another thread is inside the scratch pool can me
     const auto data = vmtest::sample_field<float>(dims, vmtest::sphere({9.5, 9.5, 9.5}, 6));
     const voxmesh::Mesh expected = voxmesh::extract(vmtest::view_of(data, dims), vmtest::cpu_options(0.0, 2));
     std::promise<void> locked;
+    // The holder stays alive until the child is done: a thread that ends frees its allocator
+    // caches, and had it been doing that when fork() went on (right after it let go of the
+    // pool), the child would inherit the allocator's lock held (AddressSanitizer's allocator,
+    // in GCC 12, takes no locks across fork; the child's next malloc then waited for ever).
+    std::atomic<int> child_done{0};
     std::thread holder([&] {
         voxmesh::detail::with_scratch_pool_locked_for_testing([&] {
             locked.set_value();
             std::this_thread::sleep_for(std::chrono::milliseconds(200));  // the fork waits for this
         });
+        child_done.wait(0);
     });
     locked.get_future().wait();
     const std::string child = vmtest::output_of_child(
@@ -212,6 +219,8 @@ TEST_CASE("a child forked while another thread is inside the scratch pool can me
             return std::string(mesh.indices == expected.indices ? "same mesh" : "another mesh");
         },
         30);
+    child_done.store(1);
+    child_done.notify_one();
     holder.join();
     CHECK(child == "same mesh");
 }
