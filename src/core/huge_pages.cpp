@@ -1,5 +1,7 @@
 #include "huge_pages.hpp"
 
+#include "parallel.hpp"  // share_of
+
 #include <algorithm>
 #include <cstdint>
 #include <cstdlib>
@@ -12,9 +14,12 @@
 
 namespace voxmesh::detail {
 
+namespace {
+constexpr std::size_t kHuge = std::size_t{2} << 20;  // a transparent huge page on x86-64 and arm64
+}  // namespace
+
 void advise_huge_pages(const void* data, std::size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
     const auto begin = (reinterpret_cast<std::uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
     const auto end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(kHuge - 1);
     if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice: errors ignored
@@ -53,11 +58,9 @@ bool page_resident(const void* p) {
 }
 
 std::vector<ByteRange> worker_share(const std::vector<ByteRange>& ranges, unsigned workers, unsigned w) {
-    constexpr std::uintptr_t kHuge = std::uintptr_t{2} << 20;
     std::size_t total = 0;
     for (const ByteRange& r : ranges) total += r.bytes;
-    const auto cut = [&](unsigned i) { return i >= workers ? total : total / workers * i + total % workers * i / workers; };
-    const std::size_t from = cut(w), to = cut(w + 1);
+    const auto [from, to] = share_of(total, w, workers);
     std::vector<ByteRange> share;
     std::size_t start = 0;  // of range r, laid end to end
     for (const ByteRange& r : ranges) {
@@ -77,7 +80,7 @@ std::vector<ByteRange> worker_share(const std::vector<ByteRange>& ranges, unsign
 
 std::shared_ptr<void> allocate_zeroed(std::size_t bytes, bool huge_pages) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-    constexpr std::size_t kHuge = std::size_t{2} << 20, kWorthIt = 2 * kHuge;
+    constexpr std::size_t kWorthIt = 2 * kHuge;
     if (bytes >= kWorthIt && bytes <= SIZE_MAX - kHuge) {
         // A private anonymous mapping, one huge page longer so its start can be aligned. Mapped
         // even without the advice: calloc may take a block this large from a heap and zero it
