@@ -66,6 +66,39 @@ TEST_CASE("run_workers rethrows a worker's exception after all have returned", "
     CHECK(again == 6);
 }
 
+// Runs from several threads at once, some nested, take and give back the same cached threads
+// run after run. A run once waited for a worker's count of finished tasks to equal the count
+// it expected: a worker that finished, went idle and was taken by another run before the
+// first run looked was then never seen done, and the run waited for ever (within about 100
+// runs per caller). In a child, so that a hang fails the test after its deadline.
+TEST_CASE("run_workers: overlapping and nested runs on the same threads all return", "[core][parallel]") {
+    if (!vmtest::threads_after_fork_or_warn()) return;
+    constexpr unsigned kCallers = 3, kRuns = 1000;
+    const auto size_of = [](unsigned caller, unsigned run) { return 1 + (7 * run + 5 * caller) % 17; };
+    const auto nested = [](unsigned caller, unsigned run) { return (run + caller) % 4 == 0; };
+    unsigned long expected = 0;
+    for (unsigned c = 0; c < kCallers; ++c)
+        for (unsigned r = 0; r < kRuns; ++r) expected += size_of(c, r) * (nested(c, r) ? 4 : 1);
+    const std::string child = vmtest::output_of_child(
+        [&] {
+            std::atomic<unsigned long> calls{0};
+            const auto caller = [&](unsigned c) {
+                for (unsigned r = 0; r < kRuns; ++r)
+                    run_workers(size_of(c, r), [&](unsigned) {
+                        if (nested(c, r)) run_workers(3, [&](unsigned) { calls += 1; });
+                        calls += 1;
+                    });
+            };
+            std::vector<std::thread> others;
+            for (unsigned c = 1; c < kCallers; ++c) others.emplace_back(caller, c);
+            caller(0);
+            for (auto& t : others) t.join();
+            return std::to_string(calls.load());
+        },
+        60);
+    CHECK(child == std::to_string(expected));
+}
+
 #if defined(__linux__)
 // A worker woken after a long sleep could be put on the CPU of the thread that woke it, and
 // the two then took turns there (parallel.cpp); a run now wakes its workers off the caller's

@@ -28,8 +28,10 @@
 #include "parallel.hpp"
 #include "cpu_count.hpp"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cstdint>
 #include <condition_variable>
 #include <functional>
 #include <memory>
@@ -105,8 +107,40 @@ public:
         }
     }
 
-    // Runs task on an idle thread (or a new one), off caller_cpu if it can.
-    void post(std::function<void()> task, int caller_cpu) {
+    struct Worker {
+        std::mutex mutex;
+        std::condition_variable wake;
+        const std::function<void(unsigned)>* job = nullptr;  // the task: (*job)(index)
+        unsigned index = 0;
+        std::atomic<bool> has_task{false};  // job is set; read while spinning, without the lock
+        std::atomic<bool> spinning{false};  // awake, watching has_task: no wake-up to place
+        std::atomic<std::uint32_t> finished{0};  // tasks done; a Ticket waits on it
+        bool stop = false;
+        std::thread thread;
+#if defined(__linux__)
+        bool kept_off = false;      // its affinity is narrowed until it runs: restore `allowed`
+        cpu_set_t allowed;
+#endif
+    };
+
+    // A worker's part of a run: done once the worker's `finished` count has reached `target`.
+    // Reached, not equal: once done the worker is idle, and another run may have it finish
+    // more before this one looks.
+    struct Ticket {
+        Worker* worker;
+        std::uint32_t target;
+        bool reached(std::uint32_t count) const { return static_cast<std::int32_t>(count - target) >= 0; }
+        bool done() const { return reached(worker->finished.load(std::memory_order_acquire)); }
+        void wait() const {
+            for (std::uint32_t seen = worker->finished.load(std::memory_order_acquire); !reached(seen);
+                 seen = worker->finished.load(std::memory_order_acquire))
+                worker->finished.wait(seen, std::memory_order_acquire);
+        }
+    };
+
+    // Runs job(index) on an idle thread (or a new one), off caller_cpu if it can. job must
+    // outlive the ticket's wait(). Allocates only when it starts a thread.
+    Ticket post(const std::function<void(unsigned)>& job, unsigned index, int caller_cpu) {
         Worker* w = nullptr;
         {
             std::lock_guard<std::mutex> lock(mutex_);
@@ -117,6 +151,8 @@ public:
                 workers_.push_back(std::make_unique<Worker>());
                 w = workers_.back().get();
                 try {
+                    // Room for every worker, so that a worker going idle never allocates.
+                    idle_.reserve(workers_.size());
                     if (g_refuse_new_threads.load(std::memory_order_relaxed))
                         throw std::system_error(std::make_error_code(std::errc::resource_unavailable_try_again));
                     w->thread = std::thread([this, w] { loop(*w); });
@@ -126,15 +162,20 @@ public:
                 }
             }
         }
+        Ticket ticket{w, 0};
         {
             std::lock_guard<std::mutex> lock(w->mutex);
-            w->task = std::move(task);
+            w->job = &job;
+            w->index = index;
+            // Only this worker advances its count, and it is idle: the count is settled.
+            ticket.target = w->finished.load(std::memory_order_relaxed) + 1;
             // A spinning worker takes the task where it runs; only a sleeping one is placed
             // by the wake. (One whose spin is ending blocks on this lock and finds the task.)
             if (!w->spinning.load(std::memory_order_relaxed)) w->kept_off = keep_off(*w, caller_cpu);
             w->has_task.store(true, std::memory_order_release);
         }
         w->wake.notify_one();
+        return ticket;
     }
 
 private:
@@ -158,20 +199,6 @@ private:
         c->mutex_.unlock();
     }
 
-    struct Worker {
-        std::mutex mutex;
-        std::condition_variable wake;
-        std::function<void()> task;
-        std::atomic<bool> has_task{false};  // task is set; read while spinning, without the lock
-        std::atomic<bool> spinning{false};  // awake, watching has_task: no wake-up to place
-        bool stop = false;
-        std::thread thread;
-#if defined(__linux__)
-        bool kept_off = false;      // its affinity is narrowed until it runs: restore `allowed`
-        cpu_set_t allowed;
-#endif
-    };
-
 #if defined(__linux__)
     // On this project's 2-core VM (Linux 6.18) a thread woken, or started, after the process
     // had been idle for about 5 ms was put on the CPU of the thread that woke or started it,
@@ -193,18 +220,23 @@ private:
     static bool keep_off(Worker&, int) { return false; }
 #endif
 
+    // After its task a worker frees nothing and allocates nothing: the run it served may have
+    // returned, and its caller forked, at any point from the count's step on. (An allocator
+    // that takes no locks across fork, as ASan's, would leave the child a lock held.)
     void loop(Worker& w) {
         for (;;) {
-            std::function<void()> task;
             w.spinning.store(true, std::memory_order_relaxed);
             spin_until([&] { return w.has_task.load(std::memory_order_acquire); });
             w.spinning.store(false, std::memory_order_relaxed);
+            const std::function<void(unsigned)>* job = nullptr;
+            unsigned index = 0;
             {
                 std::unique_lock<std::mutex> lock(w.mutex);
-                w.wake.wait(lock, [&] { return w.stop || task_set(w); });
+                w.wake.wait(lock, [&] { return w.stop || w.job != nullptr; });
                 if (w.stop) return;
-                task = std::move(w.task);
-                w.task = nullptr;
+                job = w.job;
+                index = w.index;
+                w.job = nullptr;
                 w.has_task.store(false, std::memory_order_relaxed);
 #if defined(__linux__)
                 // On a CPU of the narrowed set, which the full one includes: nothing moves.
@@ -212,13 +244,15 @@ private:
                 w.kept_off = false;
 #endif
             }
-            task();  // never throws: run_workers' tasks catch everything
+            (*job)(index);  // never throws: run_workers' tasks catch everything
+            // Counted before the worker is idle again, so a run that takes it next reads the
+            // settled count for its target.
+            w.finished.fetch_add(1, std::memory_order_acq_rel);
+            w.finished.notify_one();
             std::lock_guard<std::mutex> lock(mutex_);
-            idle_.push_back(&w);
+            idle_.push_back(&w);  // within the room post() reserved
         }
     }
-
-    static bool task_set(const Worker& w) { return static_cast<bool>(w.task); }
 
     std::mutex mutex_;
     std::vector<std::unique_ptr<Worker>> workers_;
@@ -237,32 +271,21 @@ void run_on_threads(unsigned n, const std::function<void(unsigned)>& f) {
         f(0);
         return;
     }
-    // The count lives with the tasks: the last one may still be notifying when the caller,
-    // seeing 0, returns.
-    const auto pending = std::make_shared<std::atomic<unsigned>>(n - 1);
     const int caller_cpu = current_cpu();
+    std::vector<ThreadCache::Ticket> tickets;
+    tickets.reserve(n - 1);
     unsigned posted = 1;
     for (; posted < n; ++posted) {
         try {
-            cache().post(
-                [&f, pending, w = posted] {
-                    f(w);
-                    if (pending->fetch_sub(1, std::memory_order_acq_rel) == 1) pending->notify_one();
-                },
-                caller_cpu);
+            tickets.push_back(cache().post(f, posted, caller_cpu));
         } catch (...) {
             break;  // no thread to be had (a limit on threads or memory): the caller runs the rest
         }
     }
     f(0);
-    for (unsigned w = posted; w < n; ++w) {
-        f(w);
-        pending->fetch_sub(1, std::memory_order_acq_rel);
-    }
-    spin_until([&] { return pending->load(std::memory_order_acquire) == 0; });
-    for (unsigned left = pending->load(std::memory_order_acquire); left != 0;
-         left = pending->load(std::memory_order_acquire))
-        pending->wait(left, std::memory_order_acquire);
+    for (unsigned w = posted; w < n; ++w) f(w);
+    spin_until([&] { return std::all_of(tickets.begin(), tickets.end(), [](const auto& t) { return t.done(); }); });
+    for (const auto& t : tickets) t.wait();
 }
 
 void refuse_new_threads_for_testing(bool refuse) { g_refuse_new_threads.store(refuse); }
