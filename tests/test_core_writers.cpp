@@ -20,8 +20,11 @@
 #include <random>
 #include <iterator>
 #include <string>
+#include <fcntl.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <vector>
 
@@ -655,4 +658,111 @@ TEST_CASE("write_mesh: a symbolic link is written through and a replaced file ke
     }
     CHECK(no_temp_files(dir));
     CHECK(vmtest::directory_entries(dir.file("store")).size() <= 1);
+}
+
+// A shell's `>` writes into a FIFO or a device and refuses a file it may not write; a rename
+// replaced each of them (`-o /dev/null` run as root put a regular file in its place, and a
+// read-only file in a writable directory was replaced).
+TEST_CASE("write_mesh: a FIFO or a device is written into, a file it may not write refused, an owner kept", "[core]") {
+    vmtest::TempDir dir;
+    const voxmesh::Mesh mesh = test_mesh(false);
+    const std::string expected_path = dir.file("expected.stl");
+    voxmesh::write_mesh(expected_path, mesh);
+    const std::string expected = read_all(expected_path);
+
+    SECTION("a FIFO receives the bytes and stays a FIFO") {
+        const std::string pipe = dir.file("pipe.stl");
+        REQUIRE(::mkfifo(pipe.c_str(), 0600) == 0);
+        // A reader first (non-blocking, so a writer's open does not wait), and room in the pipe
+        // for the whole mesh, so that one thread writes and then reads: nothing can hang.
+        const int reader = ::open(pipe.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+        REQUIRE(reader >= 0);
+        const int room = ::fcntl(reader, F_SETPIPE_SZ, 1 << 20);
+        if (room < static_cast<int>(expected.size()) + 1) {
+            WARN("cannot make a pipe large enough here");
+        } else {
+            voxmesh::write_mesh(pipe, mesh);
+            std::string got;
+            char buffer[65536];
+            for (ssize_t n; (n = ::read(reader, buffer, sizeof buffer)) > 0;) got.append(buffer, static_cast<std::size_t>(n));
+            CHECK(got == expected);
+            struct stat st {};
+            REQUIRE(::stat(pipe.c_str(), &st) == 0);
+            CHECK(S_ISFIFO(st.st_mode));
+        }
+        ::close(reader);
+    }
+    SECTION("a character device (a node for /dev/null) stays itself") {
+        const std::string node = dir.file("null.stl");
+        if (::mknod(node.c_str(), S_IFCHR | 0666, makedev(1, 3)) != 0) {
+            WARN("cannot make a device node here (not root)");
+        } else {
+            voxmesh::write_mesh(node, mesh);
+            struct stat st {};
+            REQUIRE(::stat(node.c_str(), &st) == 0);
+            CHECK(S_ISCHR(st.st_mode));
+        }
+    }
+    SECTION("a file it may not write is refused and left as it was") {
+        const std::string path = dir.file("ro.stl");
+        { std::ofstream(path) << "previous mesh"; }
+        if (geteuid() != 0) {
+            fs::permissions(path, fs::perms::owner_read | fs::perms::group_read | fs::perms::others_read);
+            CHECK_THROWS_WITH(voxmesh::write_mesh(path, mesh), "cannot write '" + path + "': Permission denied");
+            CHECK(read_all(path) == "previous mesh");
+        } else {
+            // Root writes anything: a child as nobody tries a root-owned 0644 file in a
+            // directory it may write (exit 0 refused and untouched, 3 cannot reach it).
+            fs::permissions(dir.path(), fs::perms::all);
+            const pid_t child = ::fork();
+            REQUIRE(child >= 0);
+            if (child == 0) {
+                if (::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(3);
+                if (::access(dir.path().c_str(), W_OK | X_OK) != 0) ::_exit(3);
+                try {
+                    voxmesh::write_mesh(path, mesh);
+                    ::_exit(1);
+                } catch (const voxmesh::Error& e) {
+                    const bool named = std::string(e.what()) == "cannot write '" + path + "': Permission denied";
+                    ::_exit(named && read_all(path) == "previous mesh" ? 0 : 2);
+                }
+            }
+            int status = 0;
+            REQUIRE(::waitpid(child, &status, 0) == child);
+            REQUIRE(WIFEXITED(status));
+            if (WEXITSTATUS(status) == 3) WARN("cannot run as nobody here");
+            else CHECK(WEXITSTATUS(status) == 0);
+            CHECK(read_all(path) == "previous mesh");
+        }
+    }
+    SECTION("a writable file in a directory it may not write: the message says what was refused") {
+        if (geteuid() == 0) {
+            WARN("running as root: permissions do not stop writes");
+        } else {
+            const std::string ro = dir.file("ro");
+            REQUIRE(fs::create_directory(ro));
+            const std::string path = ro + "/m.stl";
+            { std::ofstream(path) << "previous mesh"; }
+            fs::permissions(ro, fs::perms::owner_read | fs::perms::owner_exec);
+            CHECK_THROWS_WITH(voxmesh::write_mesh(path, mesh),
+                              Catch::Contains("cannot create a temporary file in '" + ro + "'"));
+            fs::permissions(ro, fs::perms::owner_all, fs::perm_options::add);
+            CHECK(read_all(path) == "previous mesh");
+        }
+    }
+    SECTION("a replaced file keeps its owner where the process may give it") {
+        const std::string path = dir.file("theirs.stl");
+        { std::ofstream(path) << "previous mesh"; }
+        if (geteuid() != 0 || ::chown(path.c_str(), 65534, 65534) != 0) {
+            WARN("not root: cannot give a file away");
+        } else {
+            voxmesh::write_mesh(path, mesh);
+            struct stat st {};
+            REQUIRE(::stat(path.c_str(), &st) == 0);
+            CHECK(st.st_uid == 65534u);
+            CHECK(st.st_gid == 65534u);
+            CHECK(read_all(path) == expected);
+        }
+    }
+    CHECK(no_temp_files(dir));
 }

@@ -221,7 +221,10 @@ void release_scratch_memory();
 // file renamed into place: a failure never leaves a partial file. A malformed mesh (see
 // analyze_topology) or a NaN or infinite coordinate or normal is an Error; nothing is written.
 // A symbolic link at `path` is written through (the file it names is replaced, the link
-// kept), and a file replaced keeps its permission bits, as a shell's `>` would do.
+// kept), a file replaced keeps its permission bits (and its owner, where the process may set
+// it), a file the process may not write is an Error, and a FIFO or device is written into
+// rather than replaced, as a shell's `>` would do. A file with other hard links becomes a new
+// file under `path`; its other names keep the old contents.
 void write_mesh(const std::string& path, const Mesh& mesh);
 // The bytes write_mesh would write, in memory, for a service to send or store without a file:
 // `name` stands for the path ("part.stl"; its extension picks the format, errors name it).

@@ -117,20 +117,62 @@ std::filesystem::path target_directory(const std::string& path) {
     return dir;
 }
 
+namespace {
+
+// A FIFO, a device or a socket is written into, as a shell's `>` writes into it: a rename
+// would put a regular file in its place (`-o /dev/null` run as root replaced /dev/null).
+void write_into_special_file(const std::string& path, const std::string& destination,
+                             const std::function<void(std::FILE*)>& write) {
+    const int fd = ::open(destination.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    std::FILE* file = fdopen(fd, "wb");
+    if (!file) {
+        ::close(fd);
+        throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    }
+    try {
+        write_to_stream(file, path, write);
+    } catch (...) {
+        std::fclose(file);
+        throw;
+    }
+    if (std::fclose(file) != 0) throw Error("cannot write '" + path + "': " + std::strerror(errno));
+}
+
+}  // namespace
+
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
     const std::string destination = followed_path(path);
     const std::filesystem::path target(destination);
     const std::filesystem::path dir = target_directory(destination);
 
+    struct stat existing {};
+    const bool exists = ::stat(destination.c_str(), &existing) == 0;
+    if (exists && !S_ISREG(existing.st_mode)) return write_into_special_file(path, destination, write);
+    // A file this process may not write is refused, as `>` refuses it, though the directory
+    // would let a rename replace it.
+    if (exists && ::faccessat(AT_FDCWD, destination.c_str(), W_OK, AT_EACCESS) != 0)
+        throw Error("cannot write '" + path + "': " + std::strerror(errno));
+
     std::string temp;
     // Listed while it exists; a signal after the rename unlinks a name that is gone.
     ListedTemporary listed;
     const int fd = create_temp(dir, target.filename().string(), temp, listed);
-    if (fd < 0) throw Error("cannot write '" + path + "': " + std::strerror(errno));
-    // A file replaced keeps its permissions (as `>` would), not the umask's: a private output
-    // stays private. Not its set-id bits.
-    if (struct stat existing {}; ::stat(destination.c_str(), &existing) == 0 && S_ISREG(existing.st_mode))
+    if (fd < 0) {
+        const std::string reason = std::strerror(errno);
+        if (exists)  // the file itself is writable: say what was refused
+            throw Error("cannot write '" + path + "': cannot create a temporary file in '" + dir.string() + "' (" +
+                        reason + "); outputs are written beside their target and renamed over it");
+        throw Error("cannot write '" + path + "': " + reason);
+    }
+    // A file replaced keeps its owner where this process may give it (root may) and its
+    // permissions (as `>` would), not the umask's: a private output stays private. Not its
+    // set-id bits.
+    if (exists) {
+        if (existing.st_uid != ::geteuid() || existing.st_gid != ::getegid())
+            (void)::fchown(fd, existing.st_uid, existing.st_gid);
         (void)::fchmod(fd, existing.st_mode & 0777);
+    }
     std::FILE* file = fdopen(fd, "wb");
     if (!file) {
         ::close(fd);
