@@ -289,7 +289,7 @@ TEST_CASE("cli: every input format from standard input", "[cli]") {
     const struct {
         std::string producer, args, names;
     } refused[] = {
-        {"echo hello", "info -", "not a volume (NRRD, NIfTI-1, MetaImage .mha, legacy VTK) or a model"},
+        {"echo hello", "info -", "not a volume (NRRD, NIfTI-1, MetaImage .mha, legacy VTK, NumPy .npy) or a model"},
         {"echo hello", "mesh - -o " + quote(s.path("x.stl")), "not a volume"},
         {"printf ''", "voxelize - -o " + quote(s.path("x.nrrd")) + " --resolution 8", "is empty"},
         {"head -c 2000 " + quote(head), "mesh - -o " + quote(s.path("x.stl")), "ends early"},
@@ -507,6 +507,20 @@ TEST_CASE("cli: bad input exits 2 with a message and leaves no output", "[cli]")
     fs::remove(out);
 
     expect_rejected(s, "mesh " + head + " -o " + quote(s.path("out.xyz")), "out.xyz", s.path("out.xyz"), "format");
+
+    // A volume one sample thick: the message names the file, as the readers' do.
+    const std::string thin = s.write("thin.nrrd", "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 1 4 4\nencoding: raw\n\n" +
+                                                     std::string(16, '\x01'));
+    expect_rejected(s, "mesh " + quote(thin) + " -o " + quote(out), "thin.nrrd", out, "dimension x is 1");
+    // Values CLI11 would read as 0 or print as a 300-digit range, and an iso no volume reaches.
+    expect_rejected(s, "mesh " + head + " -o " + quote(out) + " --iso ''", "--iso", out, "empty value");
+    expect_rejected(s, "mesh " + head + " -o " + quote(out) + " --threads ''", "--threads", out, "empty value");
+    expect_rejected(s, "mesh " + head + " -o " + quote(out) + " --device -1", "--device", out, "not a number 0 or more");
+    for (const char* iso : {"inf", "-inf", "1e400"}) expect_rejected(s, "mesh " + head + " -o " + quote(out) + " --iso " + iso, "--iso", out, "finite");
+    {
+        const Result r = run(s, "mesh " + head + " -o " + quote(out) + " --device -1");
+        CHECK(r.err.size() < 200);
+    }
     const std::string odd = s.write("volume.foo", "abc");
     expect_rejected(s, "mesh " + quote(odd) + " -o " + quote(out), "volume.foo", out);
     expect_rejected(s, "info " + quote(empty), "empty.nrrd", "");

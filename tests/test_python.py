@@ -180,6 +180,19 @@ class ExtractTest(unittest.TestCase):
             voxmesh.extract(np.zeros((4, 4, 4)), spacing=(1, 1))
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "threads"):
             voxmesh.extract(np.zeros((4, 4, 4)), threads=-1)
+        # Numbers the C field cannot hold were cut to their low bits (2**32 ran on every CPU,
+        # 2**32 + 1 on one), fractions to their whole part.
+        volume = np.zeros((4, 4, 4), dtype=np.float32)
+        for threads in (2 ** 32, 2 ** 32 + 1, 2 ** 64):
+            with self.assertRaisesRegex(voxmesh.VoxmeshError, "threads must be at most 4294967295"):
+                voxmesh.extract(volume, threads=threads)
+            with self.assertRaisesRegex(voxmesh.VoxmeshError, "threads must be at most"):
+                voxmesh.vertex_edges(volume, threads=threads)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "threads must be a whole number"):
+            voxmesh.extract(volume, threads=1.5)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "chunk_planes must be at most"):
+            voxmesh.extract(volume, chunk_planes=2 ** 64)
+        self.assertEqual(voxmesh.extract(volume, threads=np.int64(2)).triangle_count, 0)
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "dimension"):
             voxmesh.extract(np.zeros((1, 4, 4), dtype=np.float32))  # the library's own check
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "NaN"):

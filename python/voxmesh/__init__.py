@@ -25,6 +25,7 @@ that made this package put it.
 
 import collections
 import ctypes
+import operator
 import os
 import warnings
 
@@ -496,11 +497,33 @@ def read_mesh(source, name=None):
     return Mesh(pointer.value)
 
 
+_UINT_MAX = 2 ** (8 * ctypes.sizeof(ctypes.c_uint)) - 1
+_SIZE_MAX = 2 ** (8 * ctypes.sizeof(ctypes.c_size_t)) - 1
+# The C fields' widths: ctypes would keep a larger number's low bits without a word
+# (threads=2**32 became 0, every CPU; 2**32 + 1 one thread).
+_LIMITS = {"threads": _UINT_MAX}
+
+
+def _whole_number(name, value, negative_message):
+    """value as an int that fits its C field (threads: unsigned int, sizes: size_t); a float,
+    a negative number or one too large is a VoxmeshError."""
+    try:
+        number = operator.index(value)
+    except TypeError:
+        raise VoxmeshError(f"{name} must be a whole number; got {value!r}") from None
+    if number < 0:
+        raise VoxmeshError(negative_message)
+    limit = _LIMITS.get(name, _SIZE_MAX)
+    if number > limit:
+        raise VoxmeshError(f"{name} must be at most {limit}; got {value}")
+    return number
+
+
 def _check_automatic(**values):
-    """Numbers where 0 means automatic (threads, chunk sizes): refused when negative."""
+    """Numbers where 0 means automatic (threads, chunk sizes): refused when negative, not whole
+    or beyond their C field."""
     for name, value in values.items():
-        if int(value) < 0:
-            raise VoxmeshError(f"{name} must be 0 (automatic) or more; got {value}")
+        _whole_number(name, value, f"{name} must be 0 (automatic) or more; got {value}")
 
 
 _FIELDS = {"occupancy": 0, "distance": 1}
@@ -510,8 +533,7 @@ def _voxelize_options(resolution, padding, field, band, threads):
     if field not in _FIELDS:
         raise VoxmeshError(f"unknown field '{field}' (distance, occupancy)")
     for name, value in (("resolution", resolution), ("padding", padding), ("threads", threads)):
-        if int(value) < 0:
-            raise VoxmeshError(f"{name} must not be negative; got {value}")
+        _whole_number(name, value, f"{name} must not be negative; got {value}")
     options = _lib.voxmesh_default_voxelize_options()
     options.resolution = int(resolution)
     options.padding = int(padding)
@@ -792,8 +814,7 @@ def _sculpt_options(iso, threads, block_size, normals, inside_below, strength_sc
     if backend not in _BACKENDS:
         raise VoxmeshError(f"unknown backend '{backend}' (cpu, opencl, auto)")
     for name, value in (("threads", threads), ("block_size", block_size)):
-        if int(value) < 0:
-            raise VoxmeshError(f"{name} must not be negative; got {value}")
+        _whole_number(name, value, f"{name} must not be negative; got {value}")
     options = _lib.voxmesh_default_sculpt_options()
     options.iso = float(iso)
     options.threads = int(threads)

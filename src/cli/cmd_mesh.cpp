@@ -3,6 +3,7 @@
 #include "common.hpp"
 #include "stdin_input.hpp"
 
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -76,7 +77,14 @@ int run_mesh(const MeshArgs& a) {
         throw BadInput("'" + a.input + "': a model, not a volume: voxelize it first (voxmesh voxelize " + a.input +
                        " --resolution N -o model.nrrd), then mesh that; or voxelize and re-mesh it in one step with voxmesh sculpt");
     }
+    if (a.iso_option->count() && !std::isfinite(a.iso))
+        throw BadInput("--iso is " + format_double(a.iso) + "; give a finite value");
     const Volume volume = load_volume(a.input, a.raw, a.threads);
+    // Named here: extract() would say the same without the file.
+    for (int d = 0; d < 3; ++d)
+        if (volume.dims[d] < 2)
+            throw BadInput("'" + input_name(a.input) + "': volume dimension " + std::string(1, "xyz"[d]) + " is " +
+                           std::to_string(volume.dims[d]) + "; marching cubes needs at least 2 samples along every axis");
 
     double iso = a.iso;
     std::string iso_source = "given";
@@ -143,7 +151,7 @@ Command add_mesh(CLI::App& app) {
     sub->add_option("--backend", a->backend, "auto, cpu, opencl or hybrid (default auto)")
         ->check(CLI::IsMember({"auto", "cpu", "opencl", "hybrid"}));
     sub->add_option("--threads", a->threads, "CPU worker threads (default: every CPU this process may use)");
-    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(CLI::NonNegativeNumber);
+    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(kNonNegative);
     sub->add_flag("--no-normals", a->no_normals, "do not compute vertex normals");
     sub->add_flag("--inside-below", a->inside_below, "values below iso are inside (SDFs): flips winding and normals");
     add_largest_option(sub, a->largest, "drops the specks of noise around a CT's surface");

@@ -112,7 +112,7 @@ Command add_sculpt(CLI::App& app) {
                     "where each update re-meshes: cpu (threads), opencl (a device; the CPU with a warning when there "
                     "is none) or auto (a GPU when there is one); default cpu")
         ->check(CLI::IsMember({"auto", "cpu", "opencl"}));
-    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(CLI::NonNegativeNumber);
+    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(kNonNegative);
     sub->add_option("--threads", a->threads, "CPU threads (default: every CPU this process may use)");
     sub->add_flag("--frames", a->frames, "print every frame's edit and update time");
     add_largest_option(sub, a->largest, "drops what a brush cut off or left floating");

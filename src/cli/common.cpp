@@ -32,6 +32,22 @@ ScalarType parse_scalar(const std::string& name) {
 
 }  // namespace
 
+const CLI::Validator kNonNegative(
+    [](std::string& text) {
+        double value = 0;
+        if (CLI::detail::lexical_cast(text, value) && value >= 0) return std::string();
+        return "'" + text + "' is not a number 0 or more";
+    },
+    "NONNEGATIVE", "NONNEGATIVE");
+
+void refuse_empty_values(CLI::App& app) {
+    const CLI::Validator non_empty([](std::string& text) { return text.empty() ? std::string("empty value") : std::string(); },
+                                   "", "NONEMPTY");
+    for (CLI::App* sub : app.get_subcommands({}))
+        for (CLI::Option* option : sub->get_options())
+            if (option->get_expected_min() > 0 && option->get_type_size_max() > 0) option->check(non_empty);
+}
+
 void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& why) {
     sub->add_option("--largest", largest, "write only the N connected pieces with the most triangles (" + why + ")")
         ->check(CLI::Range(std::size_t(1), std::size_t(1) << 32));

@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
     std::vector<Command> commands;
     try {
         for (auto make : {add_mesh, add_voxelize, add_sculpt, add_info, add_devices, add_demo}) commands.push_back(make(app));
+        refuse_empty_values(app);
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
         const int code = app.exit(e);

@@ -63,9 +63,9 @@ bool is_binary_stl(const std::string& head, std::size_t size) {
 
 std::string kind_text(InputKind kind) {
     switch (kind) {
-        case InputKind::Volume: return "a volume (NRRD, NIfTI-1, MetaImage .mha, legacy VTK; raw samples with --dims and --type)";
+        case InputKind::Volume: return "a volume (NRRD, NIfTI-1, MetaImage .mha, legacy VTK, NumPy .npy; raw samples with --dims and --type)";
         case InputKind::Model: return "a model (STL, PLY, OBJ)";
-        case InputKind::VolumeOrModel: return "a volume (NRRD, NIfTI-1, MetaImage .mha, legacy VTK) or a model (STL, PLY, OBJ)";
+        case InputKind::VolumeOrModel: return "a volume (NRRD, NIfTI-1, MetaImage .mha, legacy VTK, NumPy .npy) or a model (STL, PLY, OBJ)";
         case InputKind::Raw: return "raw samples";
         case InputKind::Text: return "text";
     }
