@@ -661,8 +661,8 @@ TEST_CASE("write_mesh: a symbolic link is written through and a replaced file ke
 }
 
 // A shell's `>` writes into a FIFO or a device and refuses a file it may not write; a rename
-// replaced each of them (`-o /dev/null` run as root put a regular file in its place, and a
-// read-only file in a writable directory was replaced).
+// replaced each of them (a device node or a FIFO became a regular file, and a read-only file
+// in a writable directory was replaced).
 TEST_CASE("write_mesh: a FIFO or a device is written into, a file it may not write refused, an owner kept", "[core]") {
     vmtest::TempDir dir;
     const voxmesh::Mesh mesh = test_mesh(false);

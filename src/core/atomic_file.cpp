@@ -120,7 +120,8 @@ std::filesystem::path target_directory(const std::string& path) {
 namespace {
 
 // A FIFO, a device or a socket is written into, as a shell's `>` writes into it: a rename
-// would put a regular file in its place (`-o /dev/null` run as root replaced /dev/null).
+// would put a regular file in its place (an out.ply linked to /dev/null, written through, would
+// have replaced /dev/null itself when run as root).
 void write_into_special_file(const std::string& path, const std::string& destination,
                              const std::function<void(std::FILE*)>& write) {
     const int fd = ::open(destination.c_str(), O_WRONLY | O_CLOEXEC);
