@@ -7,6 +7,7 @@
 //   voxmesh-bench --sculpt                    # stroke latency p50/p95/p99 at 256^3 and 512^3
 #include "bench.hpp"
 
+#include "cli/empty_values.hpp"
 #include "core/exit_signals.hpp"
 
 #include <voxmesh/fields.hpp>
@@ -149,6 +150,7 @@ int main(int argc, char** argv) {
     app.add_flag("--list-devices", list, "list OpenCL devices and exit");
     app.add_option("--write-volume", write_path,
                    "write the (one) built-in field as a raw NRRD for bench/peers, with its iso, and exit");
+    voxmesh::cli::refuse_empty_values(app);
     CLI11_PARSE(app, argc, argv);
     settings.normals = !no_normals;
     settings.floor_in_rounds = settings.interleave && !no_floor;

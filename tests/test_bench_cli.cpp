@@ -263,6 +263,8 @@ TEST_CASE("bench: bad arguments fail with a message", "[bench][errors]") {
         {"--input " + shell_quote(s.dir + "/missing.nrrd"), "missing.nrrd"},
         {"--field sphere,gyroid --write-volume " + shell_quote(s.dir + "/x.nrrd"), "exactly one"},
         {"--repeat 0", "--repeat"},
+        {"--threads ''", "--threads: empty value"},  // CLI11 alone read '' as 0 (every CPU)
+        {"--iso ''", "--iso: empty value"},
     };
     for (const auto& [args, message] : bad) {
         INFO(args);

@@ -40,14 +40,6 @@ const CLI::Validator kNonNegative(
     },
     "NONNEGATIVE", "NONNEGATIVE");
 
-void refuse_empty_values(CLI::App& app) {
-    const CLI::Validator non_empty([](std::string& text) { return text.empty() ? std::string("empty value") : std::string(); },
-                                   "", "NONEMPTY");
-    for (CLI::App* sub : app.get_subcommands({}))
-        for (CLI::Option* option : sub->get_options())
-            if (option->get_expected_min() > 0 && option->get_type_size_max() > 0) option->check(non_empty);
-}
-
 void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& why) {
     sub->add_option("--largest", largest, "write only the N connected pieces with the most triangles (" + why + ")")
         ->check(CLI::Range(std::size_t(1), std::size_t(1) << 32));

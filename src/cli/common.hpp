@@ -7,6 +7,7 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include "core/dims_text.hpp"
+#include "empty_values.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -48,9 +49,6 @@ Command add_sculpt(CLI::App& app);
 // A number 0 or more, refused in a short message (CLI11's own range check prints the whole
 // range up to DBL_MAX).
 extern const CLI::Validator kNonNegative;
-// Every option that takes a value refuses an empty one: CLI11 reads '' as 0, so an unset
-// shell variable (--iso "$ISO") would mesh at 0 without a word.
-void refuse_empty_values(CLI::App& app);
 
 // Before any OpenCL call: pin PoCL's worker threads where that is safe (pocl_threads.cpp).
 void pin_pocl_workers();
