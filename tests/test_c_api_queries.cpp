@@ -97,6 +97,13 @@ TEST_CASE("C API: vertex edges and cell ranges refuse with the problem named", "
     REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("last sample"));
     REQUIRE(voxmesh_edge_cell_ranges(&view, nullptr, 1, 0.0, nullptr, 0, &range) == VOXMESH_ERROR);
     REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("edges"));
+    // Counts near SIZE_MAX wrapped the piece count to 0: success, nothing done. Refused before
+    // any edge is read, so the one-edge arrays are enough.
+    for (const std::size_t huge : {SIZE_MAX, SIZE_MAX - 1, SIZE_MAX - 65535, SIZE_MAX / 2}) {
+        INFO(huge);
+        REQUIRE(voxmesh_edge_cell_ranges(&view, &past, huge, 0.0, nullptr, 0, &range) == VOXMESH_ERROR);
+        REQUIRE_THAT(voxmesh_last_error(), Catch::Contains("too many edges"));
+    }
     view.type = 42;
     REQUIRE(voxmesh_vertex_edges(&view, 0.0, 0, nullptr, 0, &count) == VOXMESH_ERROR);
 }

@@ -193,6 +193,21 @@ class ExtractTest(unittest.TestCase):
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "chunk_planes must be at most"):
             voxmesh.extract(volume, chunk_planes=2 ** 64)
         self.assertEqual(voxmesh.extract(volume, threads=np.int64(2)).triangle_count, 0)
+        # Device indices are C ints: 2**32 ran on device 0.
+        for devices in ([2 ** 32], [-2 ** 32], [2 ** 32 + 1], [-1]):
+            with self.assertRaisesRegex(voxmesh.VoxmeshError, "devices\\[\\] must be a device index"):
+                voxmesh.extract(volume, backend="opencl", devices=devices)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "device must be a device index from -1"):
+            voxmesh.Sculpt(volume, device=2 ** 32)
+        # count: a whole number, and one numpy cannot allocate is a VoxmeshError.
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "count must be a whole number"):
+            voxmesh.vertex_edges(volume, count=3.9)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "count must be a whole number"):
+            voxmesh.triangle_cells(volume, count="3")
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "no room"):
+            voxmesh.vertex_edges(volume, count=2 ** 63)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "indices must be integers"):
+            voxmesh.Mesh.from_arrays(np.eye(3), [[0.5, 1, 2]])
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "dimension"):
             voxmesh.extract(np.zeros((1, 4, 4), dtype=np.float32))  # the library's own check
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "NaN"):

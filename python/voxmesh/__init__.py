@@ -364,6 +364,8 @@ class Mesh:
     def from_arrays(cls, positions, indices):
         positions = np.ascontiguousarray(positions, dtype=np.float32)
         indices = np.asarray(indices)
+        if indices.size and indices.dtype.kind not in "iu":
+            raise VoxmeshError(f"indices must be integers; got {indices.dtype}")
         if positions.ndim != 2 or positions.shape[1] != 3:
             raise VoxmeshError(f"positions must be shaped (V, 3); got {positions.shape}")
         if indices.ndim != 2 or indices.shape[1] != 3:
@@ -519,6 +521,22 @@ def _whole_number(name, value, negative_message):
     return number
 
 
+_INT_MAX = 2 ** (8 * ctypes.sizeof(ctypes.c_int) - 1) - 1
+
+
+def _device_index(name, value, allow_every=False):
+    """An OpenCL device index as the C int it is passed as (-1: every device, where allowed);
+    ctypes would keep a larger number's low bits and run on another device."""
+    try:
+        number = operator.index(value)
+    except TypeError:
+        raise VoxmeshError(f"{name} must be a whole number; got {value!r}") from None
+    low = -1 if allow_every else 0
+    if not low <= number <= _INT_MAX:
+        raise VoxmeshError(f"{name} must be a device index from {low} to {_INT_MAX}; got {value}")
+    return number
+
+
 def _check_automatic(**values):
     """Numbers where 0 means automatic (threads, chunk sizes): refused when negative, not whole
     or beyond their C field."""
@@ -656,7 +674,7 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
         raise VoxmeshError(f"unknown backend '{backend}' (auto, cpu, opencl, hybrid)")
     if device_type not in _DEVICE_TYPES:
         raise VoxmeshError(f"unknown device type '{device_type}' (any, cpu, gpu, accelerator)")
-    chosen = [int(d) for d in (devices or [])]
+    chosen = [_device_index("devices[]", d) for d in (devices or [])]
     _check_automatic(threads=threads, chunk_planes=chunk_planes, memory_budget=memory_budget)
     view, array = _as_view(volume, spacing, origin)  # `array` keeps the samples alive for the call
     options = _lib.voxmesh_default_options()
@@ -723,14 +741,17 @@ def _list_query(call, volume, iso, threads, count, per, found_what):
     """A uint64 array from one of the C calls that list one entry per vertex or triangle
     (voxmesh_vertex_edges, voxmesh_triangle_cells): asked for the count first unless given."""
     _check_automatic(threads=threads)
-    if count is not None and int(count) < 0:
-        raise VoxmeshError(f"count must be the mesh's {per} count, not negative; got {count}")
+    if count is not None:
+        count = _whole_number("count", count, f"count must be the mesh's {per} count, not negative; got {count}")
     view, array = _as_view(volume, None, None)  # `array` keeps the samples alive for the call
     found = ctypes.c_size_t()
     if count is None:
         _check(call(ctypes.byref(view), float(iso), int(threads), None, 0, ctypes.byref(found)))
         count = found.value
-    out = np.empty(int(count), dtype=np.uint64)
+    try:
+        out = np.empty(count, dtype=np.uint64)
+    except (ValueError, MemoryError):
+        raise VoxmeshError(f"count {count}: no room for that many {found_what}") from None
     _check(call(ctypes.byref(view), float(iso), int(threads), out.ctypes.data, len(out), ctypes.byref(found)))
     if found.value != len(out):
         raise VoxmeshError(f"count {len(out)} given, but the volume has {found.value} {found_what}")
@@ -823,7 +844,7 @@ def _sculpt_options(iso, threads, block_size, normals, inside_below, strength_sc
     options.inside_below = 1 if inside_below else 0
     options.strength_scale = float(strength_scale)
     options.backend = _BACKENDS[backend]
-    options.device = int(device)
+    options.device = _device_index("device", device, allow_every=True)
     return options
 
 

@@ -173,7 +173,9 @@ void edge_cell_ranges_into(const VolumeView& volume, std::span<const std::uint64
     // volume does not hold throws from its piece; run_slabs passes on the lowest piece's, so the
     // first such edge is named on any thread count.
     const std::size_t piece = std::size_t{1} << 16;
-    const std::size_t pieces = (edges.size() + piece - 1) / piece;
+    // Rounded up without adding first: a count near SIZE_MAX wrapped to 0 pieces, and the call
+    // returned having done nothing.
+    const std::size_t pieces = edges.size() / piece + (edges.size() % piece != 0);
     if (pieces > std::numeric_limits<unsigned>::max()) throw Error("edge_cell_ranges: too many edges");
     run_slabs(static_cast<unsigned>(pieces), resolved, [&](unsigned w, unsigned) {
         const std::size_t begin = std::size_t{w} * piece, end = std::min(edges.size(), begin + piece);
