@@ -206,6 +206,9 @@ class ExtractTest(unittest.TestCase):
             voxmesh.triangle_cells(volume, count="3")
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "no room"):
             voxmesh.vertex_edges(volume, count=2 ** 63)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "dimension"):  # not the mask's shape (-1, 4, 4)
+            voxmesh.edge_cell_ranges(np.zeros((0, 5, 5), np.float32), np.zeros(0, np.uint64),
+                                     cell_mask=np.ones((0, 4, 4), bool))
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "indices must be integers"):
             voxmesh.Mesh.from_arrays(np.eye(3), [[0.5, 1, 2]])
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "dimension"):

@@ -777,7 +777,8 @@ def edge_cell_ranges(volume, edges, offset=0.0, cell_mask=None, threads=0):
         raise VoxmeshError(f"edges must not be negative; got {edges.min()}")
     edges = np.ascontiguousarray(edges, dtype=np.uint64)
     mask = None
-    if cell_mask is not None:
+    # A volume under 2 samples on an axis has no cells: the library names that, not the mask.
+    if cell_mask is not None and min(array.shape) >= 2:
         cells = tuple(n - 1 for n in array.shape)
         mask = np.ascontiguousarray(cell_mask, dtype=bool)
         if mask.shape != cells:
