@@ -506,13 +506,19 @@ _SIZE_MAX = 2 ** (8 * ctypes.sizeof(ctypes.c_size_t)) - 1
 _LIMITS = {"threads": _UINT_MAX}
 
 
+def _integer(name, value):
+    """value as an int (a Python or numpy integer); anything else, a float included, is a
+    VoxmeshError rather than a number cut to its whole part."""
+    try:
+        return operator.index(value)
+    except TypeError:
+        raise VoxmeshError(f"{name} must be a whole number; got {value!r}") from None
+
+
 def _whole_number(name, value, negative_message):
     """value as an int that fits its C field (threads: unsigned int, sizes: size_t); a float,
     a negative number or one too large is a VoxmeshError."""
-    try:
-        number = operator.index(value)
-    except TypeError:
-        raise VoxmeshError(f"{name} must be a whole number; got {value!r}") from None
+    number = _integer(name, value)
     if number < 0:
         raise VoxmeshError(negative_message)
     limit = _LIMITS.get(name, _SIZE_MAX)
@@ -527,10 +533,7 @@ _INT_MAX = 2 ** (8 * ctypes.sizeof(ctypes.c_int) - 1) - 1
 def _device_index(name, value, allow_every=False):
     """An OpenCL device index as the C int it is passed as (-1: every device, where allowed);
     ctypes would keep a larger number's low bits and run on another device."""
-    try:
-        number = operator.index(value)
-    except TypeError:
-        raise VoxmeshError(f"{name} must be a whole number; got {value!r}") from None
+    number = _integer(name, value)
     low = -1 if allow_every else 0
     if not low <= number <= _INT_MAX:
         raise VoxmeshError(f"{name} must be a device index from {low} to {_INT_MAX}; got {value}")
