@@ -71,6 +71,7 @@ struct Result {
     double peak_rss_mb = 0;     // process peak while extracting (VmHWM after a reset)
     double extract_rss_mb = 0;  // that peak minus the RSS just before extract()
     double setup_rss_mb = -1;   // --setup-first: that call's peak minus the RSS before it (-1: not done)
+    double setup_s = -1;        // --setup-first: that call's seconds
     std::string rss_scope;      // "run" (VmHWM reset per run) or "process" (lifetime peak)
     double volume_mb = 0, mesh_mb = 0;
 
@@ -118,7 +119,7 @@ class Runner {
 public:
     Runner(const Input& input, const Combo& combo, const Settings& settings);
     bool run(bool timed);  // false once the combination failed (status and error set)
-    void setup();          // --setup-first: the volume's first 3 z-planes meshed once, untimed
+    void setup();          // --setup-first: the whole volume meshed once, untimed, then the heap trimmed
     Result finish();       // medians of the timed runs
 
 private:

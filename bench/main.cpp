@@ -130,8 +130,9 @@ int main(int argc, char** argv) {
                    "(its worker threads then wake from a sleep)")
         ->check(CLI::Range(0.0, 10000.0));
     app.add_flag("--setup-first", settings.setup_first,
-                 "before its runs, each combination meshes the volume's first 3 z-planes once (OpenCL runtime and "
-                 "program builds paid there; its memory is printed as a note)");
+                 "before its runs, each combination meshes the volume once, untimed, and trims the heap (OpenCL "
+                 "runtime, program builds and PoCL's per-launch kernel compiles paid there; its time and memory are "
+                 "printed as a note)");
     app.add_flag("--paper", paper, "the paper's Table 1 grid: sizes 64..512 x threads 1,2,4,6,16 on the CPU");
     app.add_flag("--sculpt", sculpt,
                  "sculpting: a built-in stroke path over a sphere, update latency p50/p95/p99 beside a full re-mesh "

@@ -126,8 +126,8 @@ void print_table(const std::vector<Result>& results) {
                     r.floor_ratio, speed.c_str(), ceiling.c_str(), floor_speed.c_str(), r.peak_rss_mb,
                     r.extract_rss_mb, over, r.classify_s, r.scan_s, r.generate_s, kernel.c_str(), transfer.c_str());
         if (r.setup_rss_mb >= 0)
-            std::printf("    note: set-up (--setup-first, the first 3 z-planes meshed once before the runs) took %.0f MB\n",
-                        r.setup_rss_mb);
+            std::printf("    note: set-up (--setup-first, one untimed extract before the runs) took %.3f s and %.0f MB\n",
+                        r.setup_s, r.setup_rss_mb);
         for (const auto& w : r.warnings) std::printf("    note: %s\n", w.c_str());
     }
     bool any = false;
@@ -211,7 +211,8 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
           << ",\"floor_speedup\":" << (r.floor_speedup > 0 ? num(r.floor_speedup) : "null")
           << ",\"peak_rss_mb\":" << opt(r.peak_rss_mb)
           << ",\"extract_rss_mb\":" << opt(r.extract_rss_mb)
-          << ",\"setup_rss_mb\":" << (r.setup_rss_mb >= 0 ? num(r.setup_rss_mb) : "null") << ",\"rss_scope\":\"" << r.rss_scope
+          << ",\"setup_rss_mb\":" << (r.setup_rss_mb >= 0 ? num(r.setup_rss_mb) : "null")
+          << ",\"setup_s\":" << (r.setup_s >= 0 ? num(r.setup_s) : "null") << ",\"rss_scope\":\"" << r.rss_scope
           << "\",\"volume_mb\":" << num(r.volume_mb) << ",\"mesh_mb\":" << opt(r.mesh_mb) << ",\"warnings\":[";
         for (std::size_t i = 0; i < r.warnings.size(); ++i) o << (i ? "," : "") << '"' << json_escape(r.warnings[i]) << '"';
         o << "]}";

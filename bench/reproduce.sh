@@ -26,8 +26,9 @@ trap 'rm -rf "$TMP"' EXIT
     --interleave --no-floor --save "$OUT/scaling.jsonl" > "$OUT/scaling.txt"
 
 # 2b. Memory: one extract per fresh process (over%: beyond the mesh, in % of volume + mesh),
-#     set-up included (memory.txt) and after set-up (--setup-first: the OpenCL runtime and
-#     programs come with meshing the first 3 z-planes once; memory_after_setup.txt).
+#     set-up included (memory.txt) and after set-up (--setup-first: one untimed extract loads
+#     the OpenCL runtime and compiles every kernel launch, then what the engines keep is freed;
+#     memory_after_setup.txt).
 : > "$OUT/memory.txt"
 : > "$OUT/memory_after_setup.txt"
 for field in sphere gyroid; do for type in f32 u8; do for backend in cpu opencl; do

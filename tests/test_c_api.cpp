@@ -406,6 +406,12 @@ TEST_CASE("C API: the device list and device choice are the C++ API's", "[capi]"
         const MeshPtr mesh(made, voxmesh_mesh_free);
         CHECK(voxmesh_mesh_stats(mesh.get()).backend == VOXMESH_BACKEND_OPENCL);
         require_same(mesh.get(), expected);
+        // What the device kept is let go of; the next call makes it again, to the same mesh.
+        voxmesh_release_scratch_memory();
+        voxmesh_mesh* again = nullptr;
+        REQUIRE(voxmesh_extract(&view, &options, &again) == VOXMESH_OK);
+        const MeshPtr second(again, voxmesh_mesh_free);
+        require_same(second.get(), expected);
     }
     // A device that does not exist, or a type there is none of: the C++ API's refusal.
     options.devices = missing;

@@ -8,6 +8,7 @@
 
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
 #include <string>
 #include <thread>
@@ -101,7 +102,21 @@ TEST_CASE("extract from several threads at once, every backend, gives the canoni
                 }
             }
         });
+    // Meanwhile another thread keeps freeing what the engines keep between calls: a device or
+    // scratch block in use stays with its call, and the next call makes what it needs again.
+    std::atomic<bool> done{false};
+    unsigned releases = 0;
+    std::thread releaser([&] {
+        while (!done) {
+            release_scratch_memory();
+            ++releases;
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        }
+    });
     for (std::thread& c : callers) c.join();
+    done = true;
+    releaser.join();
+    CHECK(releases > 0);
     std::string report;
     for (unsigned t = 0; t < kCallers; ++t) report += "caller " + std::to_string(t) + ": " + reports[t] + "\n";
     INFO(report);

@@ -306,6 +306,40 @@ TEST_CASE("OpenCL with copies in and out (a discrete GPU's path) matches the CPU
     REQUIRE(stats.devices.size() == 1);
     CHECK(stats.devices[0].chunks >= 4);
 }
+
+// The devices keep their buffers (and, copying in and out, two pinned blocks) from call to
+// call; release_scratch_memory() lets them go, and the next call makes them again.
+TEST_CASE("release_scratch_memory frees what the OpenCL devices keep between calls", "[opencl]") {
+    if (!have_device()) return;
+    const Pretend discrete(detail::opencl_pretend_discrete);
+    Grid g{{45, 38, 41}};
+    const std::vector<float> f = torus(g);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, Options{}, Backend::Cpu);
+    require_same(cpu, run(v, Options{}, Backend::OpenCL), v);
+    const std::size_t kept = detail::opencl_kept_bytes();
+    CHECK(kept >= g.size() * sizeof(float));  // the samples' buffer at least
+    release_scratch_memory();
+    CHECK(detail::opencl_kept_bytes() == 0);
+    require_same(cpu, run(v, Options{}, Backend::OpenCL), v);
+    CHECK(detail::opencl_kept_bytes() > 0);
+
+    // From a log callback (the engine's last step) the device is still this call's: it keeps
+    // its buffers, and the call neither waits on itself nor loses what it is using.
+    Options o;
+    o.chunk_planes = 31;
+    o.memory_budget = 45 * 38 * 4 * 2 * 8;  // cut smaller than asked, with a warning
+    int logged = 0;
+    o.log = [&](const std::string&) {
+        ++logged;
+        release_scratch_memory();
+    };
+    require_same(cpu, run(v, o, Backend::OpenCL), v);
+    CHECK(logged > 0);
+    CHECK(detail::opencl_kept_bytes() > 0);
+    release_scratch_memory();
+    CHECK(detail::opencl_kept_bytes() == 0);
+}
 #endif  // VOXMESH_HAS_OPENCL
 
 TEST_CASE("OpenCL matches the CPU engine on random odd-sized volumes", "[opencl]") {

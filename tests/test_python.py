@@ -159,6 +159,10 @@ class ExtractTest(unittest.TestCase):
             mesh = voxmesh.extract(volume, backend="opencl", devices=[d["index"]])
             self.assertEqual(mesh.stats["backend"], "opencl")
             np.testing.assert_array_equal(mesh.indices, reference.indices)
+            # The device's kept buffers let go of, then made again by the next call.
+            voxmesh.release_scratch_memory()
+            again = voxmesh.extract(volume, backend="opencl", devices=[d["index"]])
+            np.testing.assert_array_equal(again.indices, reference.indices)
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "does not exist|no usable OpenCL|without OpenCL"):
             voxmesh.extract(volume, backend="opencl", devices=[len(found) + 3])
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "unknown device type"):

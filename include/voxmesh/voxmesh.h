@@ -92,6 +92,10 @@ typedef struct voxmesh_device {
     char platform[128], name[128], version[128]; /* truncated to fit, always terminated */
 } voxmesh_device;
 size_t voxmesh_device_count(void);
+/* Frees the scratch memory the CPU engine and the OpenCL devices keep from one extract to the
+ * next (voxmesh::release_scratch_memory), for a program done meshing large volumes; compiled
+ * OpenCL programs stay, and a device another thread is meshing on keeps its buffers. */
+void voxmesh_release_scratch_memory(void);
 /* Device `index` (0 .. voxmesh_device_count() - 1). */
 voxmesh_status voxmesh_get_device(size_t index, voxmesh_device* device);
 

@@ -213,8 +213,10 @@ void edge_cell_ranges_into(const VolumeView& volume, std::span<const std::uint64
 // a later extract does not page-fault it in again: after a 512³ volume on 2 threads, 28 MB
 // for float samples and 11 MB for 8-bit ones. A kept block left unused while later calls
 // made 128 requests for scratch (about 35 calls on 2 threads) is freed by the pool itself.
-// This frees what is kept at once, for a program done meshing large volumes; the next
-// extract allocates anew.
+// The OpenCL devices keep their buffers and pinned copy blocks between calls too (on PoCL in
+// host memory). This frees what both engines keep at once, for a program done meshing large
+// volumes; the next extract allocates anew. Compiled programs stay, and no device is opened
+// by it. A device another thread is meshing on keeps its buffers.
 void release_scratch_memory();
 
 // Writes .stl (binary), .ply (binary) or .obj, chosen by extension, through a temporary

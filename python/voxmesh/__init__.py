@@ -32,6 +32,7 @@ import warnings
 import numpy as np
 
 __all__ = ["extract", "marching_cubes", "vertex_edges", "triangle_cells", "edge_cell_ranges", "value_range", "ValueRange", "read_volume", "read_raw", "write_nrrd", "read_mesh", "voxelize", "devices",
+           "release_scratch_memory",
            "Mesh", "Volume", "Topology", "Sculpt", "Block", "UpdateResult", "StrokeFrame", "VoxmeshError", "VoxmeshMemoryError",
            "version"]
 
@@ -184,6 +185,8 @@ def _load():
     lib.voxmesh_volume_free.argtypes = [handle]
     lib.voxmesh_device_count.restype = ctypes.c_size_t
     lib.voxmesh_device_count.argtypes = []
+    lib.voxmesh_release_scratch_memory.restype = None
+    lib.voxmesh_release_scratch_memory.argtypes = []
     lib.voxmesh_get_device.restype = ctypes.c_int
     lib.voxmesh_get_device.argtypes = [ctypes.c_size_t, ctypes.POINTER(_Device)]
     _declare_sculpt(lib, handle)
@@ -283,6 +286,12 @@ def _declare_sculpt(lib, handle):
 
 
 _lib = _load()
+
+
+def release_scratch_memory():
+    """Frees the scratch memory the CPU engine and the OpenCL devices keep from one extract
+    to the next, for a program done meshing large volumes; the next extract allocates anew."""
+    _lib.voxmesh_release_scratch_memory()
 
 
 def devices():

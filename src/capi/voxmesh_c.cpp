@@ -355,6 +355,14 @@ voxmesh_options voxmesh_default_options(void) {
     return options;
 }
 
+void voxmesh_release_scratch_memory(void) {
+    try {
+        voxmesh::release_scratch_memory();
+    } catch (...) {
+        // Nothing to report: whatever was not freed stays kept, as before the call.
+    }
+}
+
 size_t voxmesh_device_count(void) {
     try {
         return voxmesh::list_devices().size();

@@ -1238,6 +1238,8 @@ Mesh opencl_extract(const VolumeView& volume, const Options& options, Stats& sta
     }
 }
 
+void opencl_release_memory() { cl_engine::release_kept_memory(); }
+
 std::vector<DeviceInfo> opencl_devices() {
     std::vector<DeviceInfo> out;
     for (const auto& d : cl_engine::devices()) out.push_back(d->info);
@@ -1263,6 +1265,8 @@ std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t
 }
 
 void opencl_split_devices(bool split) { cl_engine::split_devices(split); }
+
+std::size_t opencl_kept_bytes() { return cl_engine::kept_bytes(); }
 
 void opencl_with_registry_locked(bool as_discovery, const std::function<void()>& f) {
     cl_engine::with_device_registry_locked_for_testing(as_discovery, f);

@@ -320,6 +320,12 @@ void Device::release_memory() {
     staging_.reset();
 }
 
+std::size_t Device::kept_bytes() const {
+    std::size_t bytes = staging_ ? 2 * staging_->block_bytes() : 0;
+    for (const auto& [id, buffer] : buffers_) bytes += buffer.second;
+    return bytes;
+}
+
 // Devices discovered (and perhaps opened) by the process this one was forked from.
 bool forked_since_discovery(const Registry& r) {
     return r.forked_while_discovering || (r.discovered && r.discovered_in != getpid() && !r.devices.empty());
@@ -346,6 +352,32 @@ bool devices_left_in_parent() {
     Registry& r = registry();
     const RegistryLock lock(r);
     return forked_since_discovery(r);
+}
+
+// The devices discovered so far, without discovering any (none in a forked child).
+std::vector<std::shared_ptr<Device>> discovered_devices() {
+    Registry& r = registry();
+    const RegistryLock lock(r);
+    if (!r.discovered || forked_since_discovery(r)) return {};
+    return r.devices;
+}
+
+void release_kept_memory() {
+    for (const auto& d : discovered_devices()) {
+        // try_lock, not lock: a log callback runs while its extract holds the device, and
+        // POSIX's trylock fails (defined) on a mutex the calling thread holds.
+        std::unique_lock<std::mutex> device_lock(d->mutex, std::try_to_lock);
+        if (device_lock.owns_lock()) d->release_memory();
+    }
+}
+
+std::size_t kept_bytes() {
+    std::size_t bytes = 0;
+    for (const auto& d : discovered_devices()) {
+        const std::lock_guard<std::mutex> device_lock(d->mutex);
+        bytes += d->kept_bytes();
+    }
+    return bytes;
 }
 
 void with_device_registry_locked_for_testing(bool as_discovery, const std::function<void()>& f) {

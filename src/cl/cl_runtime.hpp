@@ -75,6 +75,8 @@ public:
     void drop_buffers();
     // Frees the buffers and the pinned blocks, keeping the context, queue and programs.
     void release_memory();
+    // What buffer() and staging() keep now, in bytes.
+    std::size_t kept_bytes() const;
     // Pinned blocks for copies to and from host memory (pinned_staging.hpp), made on first use.
     PinnedStaging& staging();
 
@@ -99,6 +101,11 @@ private:
 std::vector<std::shared_ptr<Device>> devices();
 // Whether devices() is empty because this process is such a child.
 bool devices_left_in_parent();
+// release_memory() on every device this process has discovered, discovering none; a device
+// another thread is meshing on (or this one, from a log callback) keeps its memory.
+void release_kept_memory();
+// The bytes kept by the devices discovered so far (0 before discovery); waits for busy ones.
+std::size_t kept_bytes();
 // Why devices() is empty, for an error or warning.
 std::string why_no_devices();
 // Test hook: present each partitionable device as sub-devices of 1 compute unit each (at

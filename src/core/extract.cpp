@@ -113,7 +113,10 @@ void extract_into(const VolumeView& volume, const Options& options, Mesh& mesh, 
     mesh = run_engine(volume, options, stats, std::move(storage));
 }
 
-void release_scratch_memory() { detail::release_scratch(); }
+void release_scratch_memory() {
+    detail::release_scratch();
+    detail::opencl_release_memory();
+}
 
 std::vector<DeviceInfo> list_devices() { return detail::opencl_devices(); }
 bool opencl_available() { return !detail::opencl_devices().empty(); }

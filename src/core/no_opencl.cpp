@@ -8,4 +8,6 @@ Mesh opencl_extract(const VolumeView&, const Options&, Stats&, bool, Mesh) {
 
 std::vector<DeviceInfo> opencl_devices() { return {}; }
 
+void opencl_release_memory() {}
+
 }  // namespace voxmesh::detail

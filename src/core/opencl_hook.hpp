@@ -19,6 +19,9 @@ Mesh opencl_extract(const VolumeView& volume, const Options& options, Stats& sta
 
 // Every usable OpenCL device; empty when there is none (never throws for a missing platform).
 std::vector<DeviceInfo> opencl_devices();
+// Frees the buffers and pinned blocks the devices opened so far keep between calls (their
+// programs stay); opens none. A device busy meshing keeps its own.
+void opencl_release_memory();
 
 // Test and benchmark hooks, defined only when the library is built with the OpenCL engine
 // (then VOXMESH_HAS_OPENCL is defined for everything linking voxmesh).
@@ -32,6 +35,8 @@ std::vector<std::uint32_t> opencl_exclusive_scan(const std::vector<std::uint32_t
 // Presents each partitionable OpenCL device as (at most two) sub-devices of one compute
 // unit each, or undoes that; list_devices() indices change. Not for use while meshing.
 void opencl_split_devices(bool split);
+// The bytes of buffers and pinned blocks the opened devices keep (0 before any is opened).
+std::size_t opencl_kept_bytes();
 // Treats every device as lacking cl_khr_fp64 (float interpolation, f64 volumes converted per
 // chunk), so that the code path of most GPUs runs on PoCL too.
 void opencl_pretend_no_fp64(bool pretend);
