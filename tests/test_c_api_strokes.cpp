@@ -225,6 +225,11 @@ TEST_CASE("C API stroke scripts: a callback that stops, a malformed line, NULL a
     CHECK_THAT(std::string(voxmesh_last_error()), Catch::StartsWith("bad.txt:8:"));
     voxmesh::Sculpt untouched = cpp_sculpt(cpp_options);
     require_same_mesh(c.get(), untouched);
+    // A NUL inside `size` bytes: named by its value, the whole message kept.
+    const std::string nul = std::string(kScript) + std::string("car\0ve 1 2 3 4 1\n", 17);
+    REQUIRE(voxmesh_sculpt_run_strokes(c.get(), nul.data(), nul.size(), "nul.txt", nullptr, nullptr) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()) == "nul.txt:8: control byte 0x00 in the script (not a text file?)");
+    require_same_mesh(c.get(), untouched);
     // Only `size` bytes are read: cut after its first dab's line, the script is that dab alone.
     const std::size_t first_dab = std::strchr(std::strchr(kScript, '\n') + 1, '\n') + 1 - kScript;
     REQUIRE(voxmesh_sculpt_run_strokes(c.get(), kScript, first_dab, nullptr, nullptr, nullptr) == VOXMESH_OK);

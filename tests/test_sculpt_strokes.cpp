@@ -58,6 +58,12 @@ TEST_CASE("sculpt strokes: errors name the line", "[sculpt]") {
     REQUIRE_THROWS_WITH(parse("add 1 2 3 -4 1\n"), Catch::Contains("radius must be positive"));
     REQUIRE_THROWS_WITH(parse("add 1 2 3 4 inf\n"), Catch::Contains("s.txt:1:"));
     REQUIRE_THROWS_WITH(parse("add 1 2 3 4 nan\n"), Catch::Contains("s.txt:1:"));
+    // A control byte is refused by its value: quoted in a message, a NUL cut it short.
+    REQUIRE_THROWS_WITH(parse(std::string("add 1 2 3 4 1\nbogus\0line 1 2 3 4 1\n", 35)),
+                        Catch::Equals("s.txt:2: control byte 0x00 in the script (not a text file?)"));
+    REQUIRE_THROWS_WITH(parse("add 1 2 3 4 1\x1b[0m\n"), Catch::Contains("s.txt:1: control byte 0x1b"));
+    REQUIRE_THROWS_WITH(parse("# \x7f\n"), Catch::Contains("control byte 0x7f"));
+    CHECK(parse("add\t1 2 3 4 1\r\n").size() == 1);  // tabs and CRLF line ends are text
     REQUIRE_THROWS_WITH(parse("add 1 2 3 4 1e999\n"), Catch::Contains("s.txt:1:"));
     REQUIRE_THROWS_WITH(parse("units parsecs\n"), Catch::Contains("s.txt:1:") && Catch::Contains("units"));
     REQUIRE_THROWS_WITH(voxmesh::read_stroke_script("/nonexistent/strokes.txt"), Catch::Contains("/nonexistent/strokes.txt"));

@@ -9,7 +9,9 @@
 #include <algorithm>
 #include <charconv>
 #include <chrono>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <fstream>
 #include <iomanip>
@@ -57,6 +59,16 @@ std::vector<ScriptDab> parse_script_lines(std::istream& in, const std::string& n
     std::size_t line = 0;
     while (std::getline(in, text)) {
         ++line;
+        // A control byte (a NUL above all) would end or garble the error messages that quote
+        // the line's words; a stroke script is text, so such a byte means the wrong file.
+        for (const char c : text) {
+            const auto byte = static_cast<unsigned char>(c);
+            if ((byte < 0x20 && !std::isspace(byte)) || byte == 0x7f) {
+                char hex[8];
+                std::snprintf(hex, sizeof hex, "0x%02x", static_cast<unsigned>(byte));
+                script_error(name, line, std::string("control byte ") + hex + " in the script (not a text file?)");
+            }
+        }
         const std::size_t hash = text.find('#');
         if (hash != std::string::npos) text.resize(hash);
         std::istringstream fields(text);
