@@ -400,6 +400,18 @@ TEST_CASE("ply: header counts are checked against the file before allocating", "
     const std::string ascii = "ply\nformat ascii 1.0\nelement vertex 3\n" + props + "end_header\n";
     CHECK_THROWS_WITH(read_ply(s.file("short.ply", ascii + "0 0 0 0 0 0 0 0")), Contains("file too short"));
     CHECK(read_ply(s.file("exact.ply", ascii + "0 0 0 0 0 0 0 0 0")).positions.size() == 9);
+    // A face's list count, in either body: 4e9 corners would reserve 48 GB of indices if
+    // trusted; the rest of the file cannot hold them, which is the error.
+    const std::string faces = "element face 2\nproperty list uint int vertex_indices\nend_header\n";
+    const std::string text_head = "ply\nformat ascii 1.0\nelement vertex 3\n" + props + faces;
+    CHECK_THROWS_WITH(read_ply(s.file("list.ply", text_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n4000000000 0 1 2\n")),
+                      Contains("line 14: file ends inside face 1 of 2 (too few values)"));
+    CHECK(read_ply(s.file("list_exact.ply", text_head + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 2 1 0")).indices.size() == 6);
+    std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 3\n" + props + faces;
+    binary.append(36, '\0');  // three vertices at the origin
+    const auto u32 = [&](std::uint32_t v) { binary.append(reinterpret_cast<const char*>(&v), 4); };
+    for (std::uint32_t v : {3u, 0u, 1u, 2u, 4000000000u, 0u, 1u, 2u}) u32(v);
+    CHECK_THROWS_WITH(read_ply(s.file("blist.ply", binary)), Contains("file ends inside face 1 of 2 (truncated)"));
 }
 
 TEST_CASE("ply: a header declaring tens of thousands of properties reads quickly", "[io][ply]") {

@@ -394,7 +394,11 @@ public:
     void skip(const Property& p) { skip_value(p.type); }
     long long count(const Property& p) { return whole(word(), p.count_type); }
     long long item(const Property& p) { return whole(word(), p.type); }
-    void expect_items(const Property&, std::uint64_t) {}  // each word is checked as it is read
+    // Each item is a word and a blank after it (but the file's last): a count the rest of the
+    // text cannot hold is refused before anything is sized from it.
+    void expect_items(const Property&, std::uint64_t n) {
+        if (n > (text_.size() - pos_ + 1) / 2) ends_inside();
+    }
     void skip_items(const Property& p, std::uint64_t n) {
         for (std::uint64_t i = 0; i < n; ++i) skip_value(p.type);
     }
@@ -419,11 +423,13 @@ private:
     std::string_view word() {
         skip_blanks();
         word_ = pos_;
-        if (pos_ == text_.size())
-            fail(path_, "line " + std::to_string(line()) + ": file ends inside " + io::shown(element_->name) + " " +
-                            std::to_string(index_) + " of " + std::to_string(element_->count) + " (too few values)");
+        if (pos_ == text_.size()) ends_inside();
         while (pos_ < text_.size() && !is_blank(text_[pos_])) ++pos_;
         return text_.substr(word_, pos_ - word_);
+    }
+    [[noreturn]] void ends_inside() const {
+        fail(path_, "line " + std::to_string(line()) + ": file ends inside " + io::shown(element_->name) + " " +
+                        std::to_string(index_) + " of " + std::to_string(element_->count) + " (too few values)");
     }
     // The line of the latest word, counted only when an error needs it.
     std::size_t line() const {
