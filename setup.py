@@ -55,6 +55,9 @@ class BinaryDistribution(Distribution):
         return True
 
 
+# setuptools refuses an egg_base that does not exist, and a fresh checkout has none.
+os.makedirs("build-python", exist_ok=True)
+
 setup(
     version=project_version(),
     package_dir={"": "python"},

@@ -3,6 +3,7 @@ command line tool, which runs the C++ library directly. Run by ctest with PYTHON
 build's python/ folder; exits 77 (skipped) where numpy is missing, except under CI."""
 
 import os
+import pathlib
 import subprocess
 import sys
 import tempfile
@@ -282,6 +283,18 @@ class VoxelizeTest(unittest.TestCase):
             voxmesh.voxelize((positions, indices), resolution=1)
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "missing.stl"):
             voxmesh.read_mesh("/nonexistent/missing.stl")
+        # A NUL ended the path in C: 'torus.stl\\0.ply' read torus.stl. Refused as open() does.
+        torus = os.path.join(DATA, "torus.stl")
+        with self.assertRaisesRegex(ValueError, "embedded null byte"):
+            voxmesh.read_mesh(torus + "\0.ply")
+        with self.assertRaisesRegex(ValueError, "embedded null byte"):
+            voxmesh.read_volume(pathlib.Path(torus + "\0.nrrd"))
+        with self.assertRaisesRegex(ValueError, "embedded null byte"):
+            voxmesh.read_mesh(open(torus, "rb").read(), name="part.stl\0.ply")
+        with tempfile.TemporaryDirectory() as d:
+            with self.assertRaisesRegex(ValueError, "embedded null byte"):
+                voxmesh.read_mesh(torus).write(os.path.join(d, "out.stl\0.obj"))
+            self.assertEqual(os.listdir(d), [])
 
 
 class ScikitImageTest(unittest.TestCase):

@@ -430,7 +430,7 @@ class Mesh:
 
     def write(self, path):
         """.stl, .ply or .obj by extension, through a temporary file renamed into place."""
-        _check(_lib.voxmesh_write_mesh(os.fsencode(path), self._handle.pointer))
+        _check(_lib.voxmesh_write_mesh(_path(path), self._handle.pointer))
 
     def topology(self):
         """voxmesh::analyze_topology: closed or not, Euler characteristic, connected pieces."""
@@ -488,13 +488,22 @@ def _is_bytes(source):
     return isinstance(source, (bytes, bytearray, memoryview))
 
 
+def _path(path):
+    """A path (str, bytes or os.PathLike) as the C API takes it. A NUL would end it early
+    there, naming another file: refused, as open() refuses it."""
+    encoded = os.fsencode(path)
+    if b"\0" in encoded:
+        raise ValueError(f"embedded null byte in the path {path!r}")
+    return encoded
+
+
 def _bytes_call(source, name, call):
     """call(address, size, name, &object) over the bytes of `source`; `name` says the format."""
     if not name:
         raise VoxmeshError("reading bytes needs name=, whose extension says the format (e.g. 'scan.nrrd')")
     data = np.frombuffer(source, dtype=np.uint8)  # no copy; the library copies what it keeps
     pointer = ctypes.c_void_p()
-    _check(call(data.ctypes.data if data.size else None, data.size, os.fsencode(name), ctypes.byref(pointer)))
+    _check(call(data.ctypes.data if data.size else None, data.size, _path(name), ctypes.byref(pointer)))
     return pointer.value
 
 
@@ -504,7 +513,7 @@ def read_mesh(source, name=None):
     if _is_bytes(source):
         return Mesh(_bytes_call(source, name, _lib.voxmesh_read_mesh_from_memory))
     pointer = ctypes.c_void_p()
-    _check(_lib.voxmesh_read_mesh(os.fsencode(source), ctypes.byref(pointer)))
+    _check(_lib.voxmesh_read_mesh(_path(source), ctypes.byref(pointer)))
     return Mesh(pointer.value)
 
 
@@ -631,7 +640,7 @@ def read_volume(source, name=None):
     if _is_bytes(source):
         return Volume(_bytes_call(source, name, _lib.voxmesh_read_volume_from_memory), readonly=False)
     pointer = ctypes.c_void_p()
-    _check(_lib.voxmesh_read_volume(os.fsencode(source), ctypes.byref(pointer)))
+    _check(_lib.voxmesh_read_volume(_path(source), ctypes.byref(pointer)))
     return Volume(pointer.value)
 
 
@@ -656,7 +665,7 @@ def read_raw(path, shape, dtype, big_endian=False, offset=0, spacing=None, origi
     layout.spacing[:] = _triple("spacing", spacing, 1.0)
     layout.origin[:] = _triple("origin", origin, 0.0)
     pointer = ctypes.c_void_p()
-    _check(_lib.voxmesh_read_raw(os.fsencode(path), ctypes.byref(layout), ctypes.byref(pointer)))
+    _check(_lib.voxmesh_read_raw(_path(path), ctypes.byref(layout), ctypes.byref(pointer)))
     return Volume(pointer.value)
 
 
@@ -666,7 +675,7 @@ def write_nrrd(path, volume, spacing=None, origin=None):
     view, array = _as_view(volume, spacing, origin)  # `array` keeps the samples alive for the call
     if path is None:
         return _take_bytes(lambda out: _lib.voxmesh_write_nrrd_to_memory(ctypes.byref(view), b"volume.nrrd", out))
-    _check(_lib.voxmesh_write_nrrd(os.fsencode(path), ctypes.byref(view)))
+    _check(_lib.voxmesh_write_nrrd(_path(path), ctypes.byref(view)))
     del array
 
 
@@ -962,11 +971,11 @@ class Sculpt:
         called; an exception from on_frame stops the strokes there and is raised."""
         text = script.encode() if isinstance(script, str) else bytes(script)
         _run_strokes(lambda callback: _lib.voxmesh_sculpt_run_strokes(self._handle.pointer, text, len(text),
-                                                                      str(name).encode(), callback, None), on_frame)
+                                                                      _path(str(name)), callback, None), on_frame)
 
     def run_stroke_script(self, path, on_frame=None):
         """run_strokes with the script read from the file at `path` (errors name the file)."""
-        _run_strokes(lambda callback: _lib.voxmesh_sculpt_run_stroke_script(self._handle.pointer, os.fsencode(path),
+        _run_strokes(lambda callback: _lib.voxmesh_sculpt_run_stroke_script(self._handle.pointer, _path(path),
                                                                             callback, None), on_frame)
 
     def invalidate_all(self):
