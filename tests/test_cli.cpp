@@ -213,6 +213,47 @@ TEST_CASE("cli: voxelize then mesh round trip on a real STL", "[cli]") {
     }
 }
 
+// A thin model's distance field is not symmetric about 0 (the inside never reaches the band's
+// depth), so the value range's midpoint moved the surface: a plate 0.05 thick came back 0.081
+// in volume. voxelize records the iso its field is meshed at, and mesh takes it.
+TEST_CASE("cli: mesh takes the iso voxelize recorded in the file", "[cli]") {
+    Scratch s;
+    const std::string plate = s.write("plate.obj",
+                                      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 0.05\nv 1 0 0.05\nv 1 1 0.05\nv 0 1 0.05\n"
+                                      "f 1 3 2\nf 1 4 3\nf 5 6 7\nf 5 7 8\nf 1 2 6\nf 1 6 5\n"
+                                      "f 4 8 7\nf 4 7 3\nf 1 5 8\nf 1 8 4\nf 2 3 7\nf 2 7 6\n");
+    const auto volume_of = [&](const std::string& mesh) {
+        const Result info = run(s, "info " + quote(mesh));
+        const std::size_t at = info.out.find("volume:");
+        REQUIRE(at != std::string::npos);
+        return std::stod(info.out.substr(at + 7));
+    };
+    for (const char* field : {"distance", "occupancy"}) {
+        INFO(field);
+        const std::string vol = s.path(std::string(field) + ".nrrd"), out = s.path(std::string(field) + ".stl");
+        REQUIRE(run(s, "voxelize " + quote(plate) + " -o " + quote(vol) + " --resolution 64 --field " + field).code == 0);
+        CHECK_THAT(iotest::read_file(vol), Catch::Contains(std::string("\nvoxmesh_iso:=") +
+                                                            (field == std::string("distance") ? "0" : "127.5") + "\n"));
+        const Result m = run(s, "mesh " + quote(vol) + " -o " + quote(out));
+        INFO(m.err);
+        REQUIRE(m.code == 0);
+        CHECK(m.out.find("(default: the file's voxmesh_iso)") != std::string::npos);
+        // Occupancy has no sub-voxel position: its surface is the staircase's (about 0.062).
+        if (field == std::string("distance")) CHECK(volume_of(out) == Approx(0.05).epsilon(0.03));
+    }
+    // --iso wins over the file's; a recorded iso that is not a number is refused, naming it.
+    const std::string vol = s.path("distance.nrrd");
+    const Result given = run(s, "mesh " + quote(vol) + " -o " + quote(s.path("given.stl")) + " --iso -0.01");
+    CHECK(given.out.find("; iso -0.01;") != std::string::npos);
+    const voxmesh::Volume field = voxmesh::read_volume(vol);
+    for (const char* bad : {"zero", "", "nan", "1e999"}) {
+        const std::string path = s.path("bad.nrrd");
+        voxmesh::write_nrrd(path, field.view(), {{"voxmesh_iso", bad}});
+        expect_rejected(s, "mesh " + quote(path) + " -o " + quote(s.path("bad.stl")), "voxmesh_iso", s.path("bad.stl"),
+                        "is not a finite number");
+    }
+}
+
 // "-" reads standard input in any format the tool reads, told from its first bytes: it is
 // copied to a temporary file (TMPDIR) that is gone when the command ends, however it ends.
 TEST_CASE("cli: every input format from standard input", "[cli]") {

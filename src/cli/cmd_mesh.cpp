@@ -3,8 +3,10 @@
 #include "common.hpp"
 #include "stdin_input.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <iostream>
+#include <map>
 #include <memory>
 #include <sstream>
 
@@ -23,6 +25,17 @@ struct MeshArgs {
     RawFlags raw;
     CLI::Option* iso_option = nullptr;
 };
+
+// The iso a file records under kIsoKey: a finite number, or the file is refused.
+double recorded_iso(const std::string& name, const std::string& text) {
+    double value = 0;
+    const char* end = text.data() + text.size();
+    const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+    if (text.empty() || ec != std::errc() || ptr != end || !std::isfinite(value))
+        throw BadInput("'" + name + "': its " + kIsoKey + " ('" + text +
+                       "') is not a finite number; give --iso to mesh it at another value");
+    return value;
+}
 
 // "2 threads", or "16 threads asked for, run on 2 CPUs" where the process may use fewer.
 std::string threads_text(const Stats& stats) {
@@ -79,7 +92,8 @@ int run_mesh(const MeshArgs& a) {
     }
     if (a.iso_option->count() && !std::isfinite(a.iso))
         throw BadInput("--iso is " + format_double(a.iso) + "; give a finite value");
-    const Volume volume = load_volume(a.input, a.raw, a.threads);
+    std::map<std::string, std::string> key_values;
+    const Volume volume = load_volume(a.input, a.raw, a.threads, &key_values);
     // Named here: extract() would say the same without the file.
     for (int d = 0; d < 3; ++d)
         if (volume.dims[d] < 2)
@@ -88,7 +102,11 @@ int run_mesh(const MeshArgs& a) {
 
     double iso = a.iso;
     std::string iso_source = "given";
-    if (a.iso_option->count() == 0) {
+    const auto recorded = key_values.find(kIsoKey);
+    if (a.iso_option->count() == 0 && recorded != key_values.end()) {
+        iso = recorded_iso(input_name(a.input), recorded->second);
+        iso_source = std::string("default: the file's ") + kIsoKey;
+    } else if (a.iso_option->count() == 0) {
         const ValueRange r = value_range(volume.view(), std::nullopt, a.threads);
         iso = 0.5 * (r.min + r.max);
         iso_source = "default: midpoint of value range " + format_double(r.min) + ".." + format_double(r.max);

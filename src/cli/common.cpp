@@ -136,12 +136,13 @@ void write_mesh_output(const std::string& output, const std::string& format, con
     });
 }
 
-void write_volume_output(const std::string& output, const VolumeView& volume) {
+void write_volume_output(const std::string& output, const VolumeView& volume,
+                         const std::map<std::string, std::string>& key_values) {
     const std::string name = output_name(output);
     about_file(name, [&] {
-        if (!is_stdout(output)) return write_nrrd(output, volume);
+        if (!is_stdout(output)) return write_nrrd(output, volume, key_values);
         std::cout.flush();
-        detail::write_nrrd_to(stdout, volume, {}, name);
+        detail::write_nrrd_to(stdout, volume, key_values, name);
     });
 }
 
@@ -177,7 +178,8 @@ Volume finite_samples(Volume v, const std::string& name, unsigned threads) {
 
 }  // namespace
 
-Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads) {
+Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads,
+                   std::map<std::string, std::string>* key_values) {
     if (arg == "-" && raw.any_given()) {  // raw samples piped in: the flags say what they are
         return finite_samples(about_file(kStdinName, [&] { return read_raw(std::cin, kStdinName, raw_layout(kStdinName, raw)); }),
                               kStdinName, threads);
@@ -195,6 +197,7 @@ Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads
         std::cerr << "voxmesh: warning: '" << input.display()
                   << "': the direction matrix is not axis-aligned; its rotation is dropped and the mesh is in the "
                      "volume's index axes (spacing and origin as written)\n";
+    if (key_values) *key_values = info.key_values;
     return finite_samples(std::move(v), input.display(), threads);
 }
 

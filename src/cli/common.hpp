@@ -15,6 +15,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <functional>
+#include <map>
 #include <ostream>
 #include <stdexcept>
 #include <string>
@@ -111,12 +112,20 @@ void add_mesh_format_option(CLI::App* sub, std::string& format);
 void check_mesh_output(const std::string& output, const std::string& format);
 // The mesh to `output` (a file, atomically, or standard output in `format`); BadInput naming it.
 void write_mesh_output(const std::string& output, const std::string& format, const Mesh& mesh);
-// The volume to `output` as NRRD (a file, atomically, or standard output); BadInput naming it.
-void write_volume_output(const std::string& output, const VolumeView& volume);
+// The volume to `output` as NRRD (a file, atomically, or standard output), with `key_values`
+// as its "key:=value" lines; BadInput naming it.
+void write_volume_output(const std::string& output, const VolumeView& volume,
+                         const std::map<std::string, std::string>& key_values = {});
+// The NRRD key under which `voxelize` records the iso its field is meshed at, and which
+// `mesh` takes when no --iso is given (a distance field of a thin model is not symmetric about
+// 0, so the value range's midpoint would move the surface).
+inline constexpr const char* kIsoKey = "voxmesh_iso";
 
 // Reads a volume file (raw with the flags, else by extension) and rejects NaN/inf samples,
 // scanning for them on `threads` threads (0: every CPU this process may use).
-Volume load_volume(const std::string& path, const RawFlags& raw, unsigned threads = 0);
+// key_values (may be null): the file's NRRD "key:=value" lines (none for other formats).
+Volume load_volume(const std::string& path, const RawFlags& raw, unsigned threads = 0,
+                   std::map<std::string, std::string>* key_values = nullptr);
 RawLayout raw_layout(const std::string& path, const RawFlags& raw);
 
 
