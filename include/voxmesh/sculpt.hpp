@@ -173,6 +173,9 @@ public:
 
 private:
     explicit Sculpt(std::unique_ptr<Impl> impl);
+    // Takes over the samples of a volume Volume::allocate made (writable; a reader's may be
+    // a read-only map), instead of copying them: from_mesh's grid is then held once.
+    static Sculpt adopting(Volume&& volume, const SculptOptions& options);
     std::unique_ptr<Impl> impl_;
 };
 

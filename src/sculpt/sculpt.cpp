@@ -631,8 +631,10 @@ Sculpt::~Sculpt() = default;
 
 namespace {
 
+// adopt: samples to take over (Volume::allocate's, of these dims and type); null: allocate.
 std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarType type, std::array<double, 3> spacing,
-                                        std::array<double, 3> origin, const SculptOptions& options);
+                                        std::array<double, 3> origin, const SculptOptions& options,
+                                        Volume* adopt = nullptr);
 
 // extract() refuses NaN and infinite samples; so does the sculpt, which must mesh alike (with
 // the engine's own test, naming the first plane holding one).
@@ -650,6 +652,13 @@ Sculpt::Sculpt(const VolumeView& volume, const SculptOptions& options) {
     const std::size_t bytes = impl_->volume.byte_size();
     std::memcpy(impl_->volume.data, volume.data, bytes);
     check_samples_finite(impl_->volume);
+}
+
+Sculpt Sculpt::adopting(Volume&& volume, const SculptOptions& options) {
+    detail::validate_volume(volume.view());
+    std::unique_ptr<Impl> impl = make_impl(volume.dims, volume.type, volume.spacing, volume.origin, options, &volume);
+    check_samples_finite(impl->volume);
+    return Sculpt(std::move(impl));
 }
 
 Sculpt Sculpt::from_function(std::array<std::size_t, 3> dims, ScalarType type,
@@ -706,7 +715,7 @@ void choose_backend(Sculpt::Impl& im) {
 }
 
 std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarType type, std::array<double, 3> spacing,
-                                        std::array<double, 3> origin, const SculptOptions& options) {
+                                        std::array<double, 3> origin, const SculptOptions& options, Volume* adopt) {
     dispatch_sculpt_type(type, [](auto) {});  // rejects other types
     if (options.block_size < 2 || options.block_size > 256)
         throw Error("sculpt: block size must be 2..256 cells, got " + std::to_string(options.block_size));
@@ -743,7 +752,7 @@ std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarT
             if (im.options.strength_scale == 0) im.options.strength_scale = 1;
             im.threads = detail::resolve_threads(options.threads);
             im.bs = options.block_size;
-            im.volume = Volume::allocate(type, dims);
+            im.volume = adopt ? std::move(*adopt) : Volume::allocate(type, dims);
             im.volume.spacing = spacing;
             im.volume.origin = origin;
             im.n = dims;

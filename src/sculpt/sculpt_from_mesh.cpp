@@ -23,10 +23,10 @@ Sculpt Sculpt::from_mesh(const Mesh& model, const VoxelizeOptions& voxelize_opti
     // Brush strengths and the iso value 0 are in distance units; occupancy has neither.
     if (voxelize_options.field != VoxelField::Distance)
         throw Error("sculpt: a model is sculpted as a distance field; voxelize it with field Distance");
-    const Volume volume = voxelize(model, voxelize_options);
+    Volume volume = voxelize(model, voxelize_options);
     SculptOptions so = options;
     if (so.strength_scale == 0) so.strength_scale = volume.spacing[0];
-    return Sculpt(volume.view(), so);
+    return adopting(std::move(volume), so);
 }
 
 Sculpt Sculpt::from_stl(const std::string& path, std::size_t resolution, const SculptOptions& options) {
