@@ -348,6 +348,14 @@ TEST_CASE("cli: every input format from standard input", "[cli]") {
         CHECK(bad.err.find("standard input") != std::string::npos);
         CHECK(bad.err.find("voxmesh-stdin") == std::string::npos);
     }
+    // A directory as standard input: the reading fails, not the copy (which was named).
+    const Result directory = vmtest::run_program(
+        "sh", "-c " + quote("TMPDIR=" + quote(tmp) + " " + quote(VOXMESH_CLI_PATH) + " mesh - -o " +
+                            quote(s.path("x.stl")) + " < " + quote(s.dir.string())),
+        s.dir.string());
+    CHECK(directory.code == 2);
+    CHECK_THAT(directory.err, Catch::Contains("cannot read standard input: Is a directory"));
+    CHECK(directory.err.find("voxmesh-stdin") == std::string::npos);
     CHECK_FALSE(fs::exists(s.path("x.stl")));
     CHECK(fs::is_empty(tmp));  // no copy of standard input left behind
 }

@@ -72,8 +72,10 @@ std::string kind_text(InputKind kind) {
     return "";
 }
 
-// Copies all of file descriptor `in` into `path`; false with errno set on failure.
-bool copy_all(int in, const std::string& path, std::size_t& copied) {
+// Copies all of file descriptor `in` into `path`; false with errno set on failure, and
+// read_failed set where reading `in` failed (not the copy).
+bool copy_all(int in, const std::string& path, std::size_t& copied, bool& read_failed) {
+    read_failed = false;
     const int out = ::open(path.c_str(), O_WRONLY | O_TRUNC | O_CLOEXEC);  // made by make_temp_file
     if (out < 0) return false;
     std::vector<char> buffer(1 << 20);
@@ -81,7 +83,10 @@ bool copy_all(int in, const std::string& path, std::size_t& copied) {
     for (;;) {
         const ssize_t got = ::read(in, buffer.data(), buffer.size());
         if (got < 0 && errno == EINTR) continue;
-        if (got < 0) break;
+        if (got < 0) {
+            read_failed = true;  // standard input itself (a directory, a read error), not the copy
+            break;
+        }
         if (got == 0) return ::close(out) == 0;
         for (ssize_t done = 0; done < got;) {
             const ssize_t put = ::write(out, buffer.data() + done, static_cast<std::size_t>(got - done));
@@ -167,8 +172,11 @@ InputPath::InputPath(const std::string& arg, InputKind kind) : path_(arg), displ
     spooled_ = true;  // from here the destructor's to remove, so the constructor cleans up on throw
     try {
         std::size_t size = 0;
-        if (!copy_all(STDIN_FILENO, spooled, size))
+        bool read_failed = false;
+        if (!copy_all(STDIN_FILENO, spooled, size, read_failed)) {
+            if (read_failed) throw BadInput(std::string("cannot read ") + kStdinName + ": " + std::strerror(errno));
             throw BadInput(std::string("cannot copy ") + kStdinName + " to '" + spooled + "': " + std::strerror(errno));
+        }
         if (size == 0) throw BadInput(std::string("'") + kStdinName + "': is empty");
         const std::string ext = sniff_format(read_head(spooled), size, kind);
         if (ext.empty())
