@@ -292,6 +292,79 @@ TEST_CASE("voxelize: rays through vertices and along edges leave no streaks", "[
     }
 }
 
+namespace {
+
+// The distance from p to triangle abc, the plain way: the foot of the perpendicular where it
+// falls inside, else the nearest of the three edges.
+double oracle_distance(const std::array<double, 3>& p, const std::array<std::array<double, 3>, 3>& t) {
+    const auto sub = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
+        return std::array<double, 3>{u[0] - v[0], u[1] - v[1], u[2] - v[2]};
+    };
+    const auto dot = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
+        return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
+    };
+    const auto cross = [](const std::array<double, 3>& u, const std::array<double, 3>& v) {
+        return std::array<double, 3>{u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+    };
+    const std::array<double, 3> n = cross(sub(t[1], t[0]), sub(t[2], t[0]));
+    const double n2 = dot(n, n);
+    bool inside = n2 > 0;
+    for (int e = 0; e < 3 && inside; ++e) inside = dot(cross(sub(t[(e + 1) % 3], t[e]), sub(p, t[e])), n) >= 0;
+    if (inside) return std::abs(dot(sub(p, t[0]), n)) / std::sqrt(n2);
+    double best = 1e300;
+    for (int e = 0; e < 3; ++e) {
+        const std::array<double, 3> d = sub(t[(e + 1) % 3], t[e]), w = sub(p, t[e]);
+        const double s = dot(d, d) > 0 ? std::clamp(dot(w, d) / dot(d, d), 0.0, 1.0) : 0.0;
+        const std::array<double, 3> r{w[0] - s * d[0], w[1] - s * d[1], w[2] - s * d[2]};
+        best = std::min(best, std::sqrt(dot(r, r)));
+    }
+    return best;
+}
+
+}  // namespace
+
+// Long thin triangles lying across the axes (a cone's side and its base, fans from one
+// point): each is scanned only near itself, not over its bounding box, and every sample
+// within the band must still get its exact distance to the nearest triangle.
+TEST_CASE("voxelize: distances near fans of long thin triangles match a brute-force oracle", "[voxelize]") {
+    constexpr int kFan = 90;
+    voxmesh::Mesh cone;
+    for (int i = 0; i < kFan; ++i) {
+        const double a = 2 * std::numbers::pi * i / kFan;
+        cone.positions.insert(cone.positions.end(), {float(std::cos(a)), float(std::sin(a)), 0.f});
+    }
+    cone.positions.insert(cone.positions.end(), {0.2f, -0.1f, 1.3f, 0.f, 0.f, 0.f});  // apex, base centre
+    for (std::uint32_t i = 0; i < kFan; ++i) {
+        const std::uint32_t j = (i + 1) % kFan;
+        cone.indices.insert(cone.indices.end(), {i, j, std::uint32_t(kFan), j, i, std::uint32_t(kFan + 1)});
+    }
+    std::vector<std::array<std::array<double, 3>, 3>> tris;
+    for (std::size_t t = 0; t < cone.triangle_count(); ++t) {
+        std::array<std::array<double, 3>, 3> tri;
+        for (int c = 0; c < 3; ++c)
+            for (int d = 0; d < 3; ++d) tri[c][d] = cone.positions[3 * cone.indices[3 * t + c] + d];
+        tris.push_back(tri);
+    }
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 40;
+    const voxmesh::Volume v = voxmesh::voxelize(cone, vo);
+    const double h = v.spacing[0], cap = vo.band * h;
+    std::size_t near = 0, wrong = 0;
+    for_each_sample(v, [&](std::size_t idx, double x, double y, double z) {
+        double expect = 1e300;
+        for (const auto& t : tris) expect = std::min(expect, oracle_distance({x, y, z}, t));
+        const double got = std::abs(static_cast<const float*>(v.data)[idx]);
+        if (expect < cap * (1 - 1e-6)) {
+            ++near;
+            if (std::abs(got - expect) > 1e-5 * h) ++wrong;
+        } else if (expect > cap * (1 + 1e-6) && got != Approx(cap).epsilon(1e-6)) {
+            ++wrong;
+        }
+    });
+    CHECK(near > 5000);
+    CHECK(wrong == 0);
+}
+
 TEST_CASE("voxelize: open, non-manifold and empty meshes are rejected", "[voxelize]") {
     voxmesh::VoxelizeOptions vo;
     vo.resolution = 16;

@@ -212,6 +212,28 @@ struct GridTriangle {
     double n2 = 0;    // |n|^2
 };
 
+// The range of coordinate `out` over the points of t whose coordinate `axis` lies in
+// [lo, hi]: its vertices there and its edges' crossings of lo and hi (t is convex). False
+// where none is.
+bool range_in_slab(const GridTriangle& t, int axis, double lo, double hi, int out, double& x_lo, double& x_hi) {
+    const Vec3* v[3] = {&t.a, &t.b, &t.c};
+    x_lo = std::numeric_limits<double>::infinity();
+    x_hi = -x_lo;
+    const auto take = [&](double x) {
+        x_lo = std::min(x_lo, x);
+        x_hi = std::max(x_hi, x);
+    };
+    for (int e = 0; e < 3; ++e) {
+        const Vec3& p = *v[e];
+        const Vec3& q = *v[(e + 1) % 3];
+        if (p[axis] >= lo && p[axis] <= hi) take(p[out]);
+        for (const double bound : {lo, hi})
+            if ((p[axis] - bound) * (q[axis] - bound) < 0)
+                take(p[out] + (bound - p[axis]) / (q[axis] - p[axis]) * (q[out] - p[out]));
+    }
+    return x_lo <= x_hi;
+}
+
 double triangle_distance2(const Vec3& p, const GridTriangle& t) {
     if (t.n2 > 0) {
         const Vec3 ap = sub(p, t.a);
@@ -338,10 +360,30 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
                 range(std::min({t.a[1], t.b[1], t.c[1]}) - band, std::max({t.a[1], t.b[1], t.c[1]}) + band, ny, j0, j1);
                 range(std::min({t.a[0], t.b[0], t.c[0]}) - band, std::max({t.a[0], t.b[0], t.c[0]}) + band, nx, i0, i1);
                 const double nlen = std::sqrt(t.n2), reach = band * nlen, na = dot(t.n, t.a);
-                for (std::size_t k = k0; k < k1; ++k)
-                    for (std::size_t j = j0; j < j1; ++j) {
+                // A sample within `band` of a point q of the triangle has each coordinate
+                // within `band` of q's: so its y lies within `band` of the y range of the
+                // triangle's part in the plane's z slab, and its x within `band` of the x
+                // ranges of its parts in the row's z slab and y slab. Without this a long thin
+                // triangle lying across the axes (a fan in a cylinder's cap, a cone's side)
+                // was scanned over its whole bounding box. A little beyond `band`, for
+                // rounding: a superset of the samples, so the distances do not change.
+                const double slack = band + 1e-6;
+                for (std::size_t k = k0; k < k1; ++k) {
+                    const double z_lo = double(k) - slack, z_hi = double(k) + slack;
+                    double zx_lo = 0, zx_hi = 0, zy_lo = 0, zy_hi = 0;
+                    if (!range_in_slab(t, 2, z_lo, z_hi, 0, zx_lo, zx_hi)) continue;
+                    range_in_slab(t, 2, z_lo, z_hi, 1, zy_lo, zy_hi);
+                    std::size_t ja = 0, jb = 0;
+                    range(zy_lo - slack, zy_hi + slack, ny, ja, jb);
+                    for (std::size_t j = std::max(j0, ja); j < std::min(j1, jb); ++j) {
+                        double yx_lo = 0, yx_hi = 0;
+                        if (!range_in_slab(t, 1, double(j) - slack, double(j) + slack, 0, yx_lo, yx_hi)) continue;
+                        std::size_t xa = i0, xb = i1, near0 = 0, near1 = 0;
+                        range(std::max(zx_lo, yx_lo) - slack, std::min(zx_hi, yx_hi) + slack, nx, near0, near1);
+                        xa = std::max(xa, near0);
+                        xb = std::min(xb, near1);
+                        if (xa >= xb) continue;
                         // Only the x span within `band` of the triangle's plane can be near it.
-                        std::size_t xa = i0, xb = i1;
                         if (t.n2 > 0) {
                             const double c = na - t.n[1] * double(j) - t.n[2] * double(k);
                             if (std::abs(t.n[0]) > 1e-9 * nlen) {
@@ -360,6 +402,7 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
                             if (d2 < row[i]) row[i] = d2;
                         }
                     }
+                }
             }
         }
 
