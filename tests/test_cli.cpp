@@ -238,6 +238,9 @@ TEST_CASE("cli: mesh takes the iso voxelize recorded in the file", "[cli]") {
         INFO(m.err);
         REQUIRE(m.code == 0);
         CHECK(m.out.find("(default: the file's voxmesh_iso)") != std::string::npos);
+        CHECK_THAT(run(s, "info " + quote(vol)).out,
+                   Catch::Contains(std::string("iso:       ") + (field == std::string("distance") ? "0" : "127.5") +
+                                   " (voxmesh_iso"));
         // Occupancy has no sub-voxel position: its surface is the staircase's (about 0.062).
         if (field == std::string("distance")) CHECK(volume_of(out) == Approx(0.05).epsilon(0.03));
     }

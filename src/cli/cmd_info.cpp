@@ -2,6 +2,7 @@
 // value range; for a model (.stl, .ply, .obj), its size, bounds, topology, area and volume.
 #include "common.hpp"
 #include "stdin_input.hpp"
+#include "io/header_text.hpp"
 
 #include <algorithm>
 #include <array>
@@ -119,6 +120,8 @@ int run_info(const InfoArgs& a) {
     if (info.value_scale != 1 || info.value_offset != 0)
         std::cout << "scaling:   physical = stored * " << format_double(info.value_scale) << " + "
                   << format_double(info.value_offset) << " (not applied; values below are stored values)\n";
+    if (const auto iso = info.key_values.find(kIsoKey); iso != info.key_values.end())
+        std::cout << "iso:       " << io::shown(iso->second) << " (" << kIsoKey << ", as voxelize records it: mesh's default)\n";
     std::cout.flush();
 
     // The value range needs the samples (memory-mapped where the reader can).
