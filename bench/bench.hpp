@@ -163,7 +163,7 @@ int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::siz
 // --mesh-ops: analyze_topology, keep_largest_components and write_mesh per format, beside the
 // extract of the same built-in volume (CPU engine, all cores). Returns the exit code.
 int run_mesh_ops(const std::vector<voxmesh::Field>& fields, const std::vector<voxmesh::ScalarType>& types,
-                 const std::vector<std::size_t>& sizes, int repeat, bool json, bool quiet);
+                 const std::vector<std::size_t>& sizes, int repeat, std::uint32_t seed, bool json, bool quiet);
 
 // ---- volume_files.cpp ----
 // NRRD with the iso and field as key/value pairs (voxmesh_iso:=...).

@@ -16,6 +16,7 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -66,6 +67,7 @@ std::vector<Combo> parse_devices(const std::string& spec) {
     std::istringstream list(spec);
     std::string item;
     while (std::getline(list, item, ',')) {
+        if (item.empty()) throw voxmesh::Error("bad --devices '" + spec + "': an empty entry (expected all, I,J or I+J)");
         Combo c;
         c.device = "#" + item;
         std::istringstream parts(item);
@@ -75,14 +77,35 @@ std::vector<Combo> parse_devices(const std::string& spec) {
                 std::size_t used = 0;
                 const int i = std::stoi(p, &used);
                 if (used != p.size() || i < 0) throw std::invalid_argument(p);
+                if (std::find(c.devices.begin(), c.devices.end(), i) != c.devices.end())
+                    throw std::invalid_argument(p);  // a device twice in one group
                 c.devices.push_back(i);
             } catch (const std::exception&) {
-                throw voxmesh::Error("bad --devices entry '" + item + "' (expected all, I,J or I+J)");
+                throw voxmesh::Error("bad --devices entry '" + item + "' (expected all, I,J or I+J, each device once)");
             }
         }
+        for (const Combo& earlier : out)
+            if (earlier.device == c.device) throw voxmesh::Error("--devices lists '" + item + "' twice");
         out.push_back(c);
     }
     return out;
+}
+
+// Each value once, in the order given: a repeated size or thread count made a second series
+// under the same key, whose speed-ups were taken against the first copy's runs.
+template <class T>
+void drop_repeats(std::vector<T>& values) {
+    std::vector<T> kept;
+    for (const T& v : values)
+        if (std::find(kept.begin(), kept.end(), v) == kept.end()) kept.push_back(v);
+    values = std::move(kept);
+}
+
+// The options a mode (--sculpt, --mesh-ops, --paper) would accept and ignore: refused instead.
+void refuse_options(CLI::App& app, const char* mode, std::initializer_list<const char*> names) {
+    for (const char* name : names)
+        if (app.get_option(name)->count() > 0)
+            throw voxmesh::Error(std::string(name) + " does not apply to " + mode);
 }
 
 }  // namespace
@@ -111,9 +134,22 @@ int main(int argc, char** argv) {
         });
     app.add_option("--type", types, "scalar types of built-in fields: f32, u8, u16, i16, i8, u32, i32, f64")
         ->delimiter(',');
-    auto* sizes_opt = app.add_option("--sizes", sizes, "cube sizes of built-in fields (default 64,128,256)")->delimiter(',');
+    // Ranges checked on the text: a negative number given for an unsigned type wraps around.
+    // An empty value is left to refuse_empty_values' message.
+    const auto at_most_65536 = [](long long lo) {
+        return [lo](const std::string& text) {
+            if (text.empty()) return std::string();
+            const auto checked = CLI::Range(lo, 65536LL)(text);
+            return checked;
+        };
+    };
+    auto* sizes_opt = app.add_option("--sizes", sizes, "cube sizes of built-in fields (default 64,128,256)")
+                          ->delimiter(',')
+                          ->check(at_most_65536(1));
     auto* threads_opt =
-        app.add_option("--threads", threads, "CPU thread counts (default 1 and all cores; 0 = all cores)")->delimiter(',');
+        app.add_option("--threads", threads, "CPU thread counts (default 1 and all cores; 0 = all cores)")
+            ->delimiter(',')
+            ->check(at_most_65536(0));
     app.add_option("--backends", backends, "cpu, opencl, hybrid, auto (comma list)")->delimiter(',');
     app.add_option("--devices", devices, "OpenCL devices: all (together), I,J (each alone) or I+J (together)");
     app.add_option("--repeat", settings.repeat, "timed runs per combination (median/min/max)")->check(CLI::Range(1, 1000));
@@ -128,7 +164,11 @@ int main(int argc, char** argv) {
     app.add_option("--pause", settings.pause_ms,
                    "milliseconds to sleep before each run (each dab with --sculpt), as a program meshing once a frame "
                    "(its worker threads then wake from a sleep)")
-        ->check(CLI::Range(0.0, 10000.0));
+        ->check(CLI::Range(0.0, 10000.0))
+        ->check([](const std::string& text) {  // CLI::Range lets NaN through
+            return std::isnan(std::strtod(text.c_str(), nullptr)) ? "--pause must be a number, not '" + text + "'"
+                                                                   : std::string();
+        });
     app.add_flag("--setup-first", settings.setup_first,
                  "before its runs, each combination meshes the volume once, untimed, and trims the heap (OpenCL "
                  "runtime, program builds and PoCL's per-launch kernel compiles paid there; its time and memory are "
@@ -171,6 +211,28 @@ int main(int argc, char** argv) {
                             double(d.global_memory) / 1048576.0, double(d.max_allocation) / 1048576.0);
             return 0;
         }
+        if (sculpt)
+            refuse_options(app, "--sculpt",
+                           {"--field", "--input", "--iso", "--type", "--devices", "--repeat", "--warmup", "--seed",
+                            "--no-normals", "--reuse-mesh", "--interleave", "--setup-first", "--paper", "--mesh-ops",
+                            "--csv", "--save", "--no-floor", "--write-volume"});
+        if (mesh_ops)
+            refuse_options(app, "--mesh-ops",
+                           {"--input", "--iso", "--threads", "--backends", "--devices", "--warmup", "--no-normals",
+                            "--reuse-mesh", "--interleave", "--pause", "--setup-first", "--paper", "--dabs", "--csv",
+                            "--save", "--no-floor", "--write-volume"});
+        if (paper) refuse_options(app, "--paper (the CPU engine's table)", {"--backends", "--devices"});
+        const auto is_nrrd_name = [](std::string name) {
+            for (char& ch : name) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+            return name.size() > 5 && name.compare(name.size() - 5, 5, ".nrrd") == 0;
+        };
+        if (!write_path.empty() && !is_nrrd_name(write_path))
+            throw voxmesh::Error("--write-volume writes NRRD: give a name ending in .nrrd, not '" + write_path + "'");
+        drop_repeats(fields);
+        drop_repeats(inputs);
+        drop_repeats(types);
+        drop_repeats(sizes);
+        drop_repeats(backends);
         if (sculpt) {
             handle_signal_unless_ignored(SIGINT, on_sigint);
             return run_sculpt(sizes_opt->count() ? sizes : std::vector<std::size_t>{256, 512},
@@ -184,6 +246,7 @@ int main(int argc, char** argv) {
         if (threads.empty()) threads = {1u, hardware_threads()};
         for (auto& t : threads)
             if (t == 0) t = hardware_threads();
+        drop_repeats(threads);
         if (fields.empty() && inputs.empty()) fields = {"sphere"};
         std::vector<voxmesh::Field> field_ids;
         for (const auto& f : fields) field_ids.push_back(voxmesh::parse_field(f));
@@ -192,7 +255,7 @@ int main(int argc, char** argv) {
         if (mesh_ops) {
             handle_signal_unless_ignored(SIGINT, on_sigint);
             return run_mesh_ops(field_ids, type_ids, sizes_opt->count() ? sizes : std::vector<std::size_t>{256, 512},
-                                settings.repeat, json, settings.quiet);
+                                settings.repeat, seed, json, settings.quiet);
         }
         std::vector<voxmesh::Backend> backend_ids;
         for (const auto& b : backends) backend_ids.push_back(parse_backend(b));
@@ -266,24 +329,40 @@ int main(int argc, char** argv) {
 
         handle_signal_unless_ignored(SIGINT, on_sigint);
 
+        // Files, and the iso each needs, checked before any run: a bad one found after hours of
+        // runs threw those results away.
+        for (const Recipe& rc : recipes) {
+            if (!rc.file) continue;
+            (void)voxmesh::read_volume_info(rc.path);
+            double file_iso = 0;
+            if (std::isnan(iso) && !read_nrrd_iso(rc.path, file_iso))
+                throw voxmesh::Error("'" + rc.path + "' has no voxmesh_iso: give --iso");
+        }
+
         std::vector<Result> results;
+        std::string failure;  // an input that could not be made or read: reported after the results
         std::size_t done = 0;
         for (const Recipe& rc : recipes) {
             if (g_interrupted) break;
             Input in;
             const double g0 = now_s();
-            if (rc.file) {
-                in.field = rc.path;
-                in.volume = voxmesh::read_volume(rc.path);
-                double file_iso = 0;
-                if (!std::isnan(iso)) in.iso = iso;
-                else if (read_nrrd_iso(rc.path, file_iso)) in.iso = file_iso;
-                else throw voxmesh::Error("'" + rc.path + "' has no voxmesh_iso: give --iso");
-            } else {
-                voxmesh::FieldVolume fv = voxmesh::make_field(rc.field, rc.size, rc.type, seed);
-                in.field = voxmesh::field_name(rc.field);
-                in.iso = std::isnan(iso) ? fv.iso : iso;
-                in.volume = std::move(fv.volume);
+            try {
+                if (rc.file) {
+                    in.field = rc.path;
+                    in.volume = voxmesh::read_volume(rc.path);
+                    double file_iso = 0;
+                    if (!std::isnan(iso)) in.iso = iso;
+                    else if (read_nrrd_iso(rc.path, file_iso)) in.iso = file_iso;
+                    else throw voxmesh::Error("'" + rc.path + "' has no voxmesh_iso: give --iso");
+                } else {
+                    voxmesh::FieldVolume fv = voxmesh::make_field(rc.field, rc.size, rc.type, seed);
+                    in.field = voxmesh::field_name(rc.field);
+                    in.iso = std::isnan(iso) ? fv.iso : iso;
+                    in.volume = std::move(fv.volume);
+                }
+            } catch (const std::exception& e) {
+                failure = e.what();
+                break;
             }
             in.type = voxmesh::scalar_name(in.volume.type);
             in.dims = in.volume.dims;
@@ -303,7 +382,8 @@ int main(int argc, char** argv) {
             }
             for (std::size_t ci = 0; ci < combos.size(); ++ci) {
                 const Combo& c = combos[ci];
-                if (g_interrupted) break;
+                // Interleaved, every combination has run its rounds: keep those that finished any.
+                if (g_interrupted && !settings.interleave) break;
                 ++done;
                 if (!settings.quiet)
                     std::fprintf(stderr, "[%zu/%zu] %s %s %s %s %s t=%u ...", done, total, in.field.c_str(),
@@ -311,7 +391,10 @@ int main(int argc, char** argv) {
                                  c.device.c_str(), c.threads);
                 std::fflush(stderr);
                 Result r = settings.interleave ? std::move(interleaved[ci]) : measure(in, c, settings);
-                if (r.status == "interrupted") break;
+                if (r.status == "interrupted") {
+                    if (settings.interleave) continue;
+                    break;
+                }
                 if (!r.floor_in_rounds && !no_floor && !g_interrupted) {  // else read between the runs
                     auto it = floors.find(c.threads);
                     if (it == floors.end())
@@ -368,7 +451,17 @@ int main(int argc, char** argv) {
             }
         }
         std::fflush(stdout);
-        return g_interrupted ? 130 : 0;
+        if (!failure.empty()) {
+            std::fprintf(stderr, "voxmesh-bench: %s\n", failure.c_str());
+            return 1;
+        }
+        if (g_interrupted) return 130;
+        // Nothing could run (no such device, an engine not built): a failure, not a result.
+        if (std::none_of(results.begin(), results.end(), [](const Result& r) { return r.status == "ok"; })) {
+            std::fprintf(stderr, "voxmesh-bench: no combination could run here\n");
+            return 1;
+        }
+        return 0;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "voxmesh-bench: %s\n", e.what());
         return 1;

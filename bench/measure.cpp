@@ -137,6 +137,9 @@ std::vector<double> timed_rounds(unsigned threads, int rounds, const std::functi
 // Reads of the whole volume by `threads` threads, each its contiguous share (like the
 // engine's z-slabs); the seconds of each of warmup + repeat reads (timed_rounds).
 std::vector<double> floor_reads(const voxmesh::VolumeView& view, unsigned threads, int warmup, int repeat) {
+    // No more readers than cores, as the CPU engine runs no more workers than cores: a thread
+    // per requested count (--threads 100000) aborted the process.
+    threads = std::clamp(threads, 1u, hardware_threads());
     const std::size_t bytes = voxmesh::scalar_size(view.type) * view.dims[0] * view.dims[1] * view.dims[2];
     const auto* base = static_cast<const unsigned char*>(view.data);
     std::vector<std::uint64_t> sums(threads);

@@ -47,7 +47,7 @@ struct Operation {
 }  // namespace
 
 int run_mesh_ops(const std::vector<voxmesh::Field>& fields, const std::vector<voxmesh::ScalarType>& types,
-                 const std::vector<std::size_t>& sizes, int repeat, bool json, bool quiet) {
+                 const std::vector<std::size_t>& sizes, int repeat, std::uint32_t seed, bool json, bool quiet) {
     std::string dir_template = (std::filesystem::temp_directory_path() / "voxmesh-bench-XXXXXX").string();
     if (!mkdtemp(dir_template.data()))
         throw voxmesh::Error("--mesh-ops: cannot make a temporary directory like " + dir_template);
@@ -57,7 +57,7 @@ int run_mesh_ops(const std::vector<voxmesh::Field>& fields, const std::vector<vo
         for (voxmesh::ScalarType type : types)
             for (std::size_t n : sizes) {
                 if (g_interrupted) break;
-                const voxmesh::FieldVolume fv = voxmesh::make_field(field, n, type);
+                const voxmesh::FieldVolume fv = voxmesh::make_field(field, n, type, seed);
                 voxmesh::Options options;
                 options.iso = fv.iso;
                 options.backend = voxmesh::Backend::Cpu;
@@ -79,14 +79,23 @@ int run_mesh_ops(const std::vector<voxmesh::Field>& fields, const std::vector<vo
                 ops.push_back({"triangle_cells", [&] { (void)voxmesh::triangle_cells(fv.volume.view(), fv.iso); }, {}});
                 ops.push_back({"edge_cell_ranges", [&] { (void)voxmesh::edge_cell_ranges(fv.volume.view(), edges, fv.iso); }, {}});
                 for (int round = 0; round < repeat && !g_interrupted; ++round)
-                    for (Operation& op : ops) op.times.push_back(seconds_of(op.run));
-                if (g_interrupted) break;
+                    for (Operation& op : ops) {
+                        if (g_interrupted) break;
+                        op.times.push_back(seconds_of(op.run));
+                    }
+                // Interrupted: the complete rounds (those the last operation finished) are printed.
+                const int rounds = static_cast<int>(ops.back().times.size());
+                if (g_interrupted) {
+                    for (Operation& op : ops) op.times.resize(static_cast<std::size_t>(rounds));
+                    std::fprintf(stderr, "\ninterrupted: %d complete round(s) of %d\n", rounds, repeat);
+                    if (rounds == 0) break;
+                }
                 const double extract_s = median(ops[0].times);
                 const std::string what = std::string(voxmesh::field_name(field)) + " " + voxmesh::scalar_name(type) +
                                          " " + std::to_string(n) + "^3";
                 if (!json)
                     std::printf("%s: %zu vertices, %zu triangles, %u threads, medians of %d\n", what.c_str(),
-                                mesh.vertex_count(), mesh.triangle_count(), hardware_threads(), repeat);
+                                mesh.vertex_count(), mesh.triangle_count(), hardware_threads(), rounds);
                 for (const Operation& op : ops) {
                     const double s = median(op.times), fastest = *std::min_element(op.times.begin(), op.times.end());
                     if (json)
@@ -100,6 +109,7 @@ int run_mesh_ops(const std::vector<voxmesh::Field>& fields, const std::vector<vo
                 }
                 std::fflush(stdout);
                 if (!quiet) std::fprintf(stderr, "[mesh-ops] %s done\n", what.c_str());
+                if (g_interrupted) break;
             }
     return g_interrupted ? 130 : 0;
 }

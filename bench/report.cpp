@@ -117,13 +117,16 @@ void print_table(const std::vector<Result>& results) {
         std::string floor_speed = r.floor_speedup > 0 ? num(r.floor_speedup, "%.2f") : "-";
         std::string kernel = r.kernel_s > 0 ? num(r.kernel_s, "%.4f") : "-";
         std::string transfer = r.transfer_s > 0 ? num(r.transfer_s, "%.4f") : "-";
+        // No floor (--no-floor, or interrupted before it was read): shown as missing, not 0.
+        std::string floor_s = r.floor_s > 0 ? num(r.floor_s, "%.6f") : "-";
+        std::string floor_ratio = r.floor_ratio > 0 ? num(r.floor_ratio, "%.2f") : "-";
         // Memory the extraction took beyond its mesh, in % of volume + mesh (issue 6: <= 10 %).
         const double over = 100 * (r.extract_rss_mb - r.mesh_mb) / std::max(r.volume_mb + r.mesh_mb, 1e-9);
-        std::printf("%-8s %-4s %-6s %-10s %-8s %3u %9.4f %9.4f %9.4f %8.1f %10zu %9.6f %8.2f %6s %6s %6s %7.0f %7.0f "
+        std::printf("%-8s %-4s %-6s %-10s %-8s %3u %9.4f %9.4f %9.4f %8.1f %10zu %9s %8s %6s %6s %6s %7.0f %7.0f "
                     "%6.1f %8.4f %8.4f %8.4f %8s %8s\n",
                     r.field.c_str(), r.type.c_str(), r.size_label().c_str(), backend_label(r).c_str(),
-                    r.device.c_str(), r.threads, r.median_s, r.min_s, r.max_s, r.mvox_s, r.triangles, r.floor_s,
-                    r.floor_ratio, speed.c_str(), ceiling.c_str(), floor_speed.c_str(), r.peak_rss_mb,
+                    r.device.c_str(), r.threads, r.median_s, r.min_s, r.max_s, r.mvox_s, r.triangles, floor_s.c_str(),
+                    floor_ratio.c_str(), speed.c_str(), ceiling.c_str(), floor_speed.c_str(), r.peak_rss_mb,
                     r.extract_rss_mb, over, r.classify_s, r.scan_s, r.generate_s, kernel.c_str(), transfer.c_str());
         if (r.setup_rss_mb >= 0)
             std::printf("    note: set-up (--setup-first, one untimed extract before the runs) took %.3f s and %.0f MB\n",
@@ -170,7 +173,8 @@ void print_csv(const std::vector<Result>& results) {
           << csv_field(r.error) << ',' << num(r.median_s) << ',' << num(r.min_s) << ',' << num(r.max_s) << ','
           << num(r.classify_s) << ',' << num(r.scan_s) << ',' << num(r.generate_s) << ',' << num(r.total_s) << ','
           << num(r.kernel_s) << ',' << num(r.transfer_s) << ',' << r.triangles << ',' << r.vertices << ','
-          << num(r.mvox_s) << ',' << num(r.floor_s) << ',' << num(r.floor_ratio) << ','
+          << num(r.mvox_s) << ',' << (r.floor_s > 0 ? num(r.floor_s) : "") << ','
+          << (r.floor_ratio > 0 ? num(r.floor_ratio) : "") << ','
           << (r.speedup > 0 ? num(r.speedup) : "") << ',' << r.speedup_base_threads << ','
           << (r.compute_ceiling > 0 ? num(r.compute_ceiling) : "") << ','
           << (r.floor_speedup > 0 ? num(r.floor_speedup) : "") << ',' << num(r.peak_rss_mb)
@@ -203,7 +207,7 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
           << ",\"triangles\":" << (ok ? std::to_string(r.triangles) : "null")
           << ",\"vertices\":" << (ok ? std::to_string(r.vertices) : "null") << ",\"mvox_s\":" << opt(r.mvox_s)
           << ",\"floor_s\":" << (r.floor_s > 0 ? num(r.floor_s) : "null")
-          << ",\"floor_ratio\":" << opt(r.floor_ratio)
+          << ",\"floor_ratio\":" << (r.floor_ratio > 0 ? opt(r.floor_ratio) : "null")
           << ",\"floor_in_rounds\":" << (r.floor_in_rounds ? "true" : "false")
           << ",\"speedup\":" << (r.speedup > 0 ? num(r.speedup) : "null")
           << ",\"speedup_base_threads\":" << r.speedup_base_threads

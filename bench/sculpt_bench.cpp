@@ -32,6 +32,7 @@ int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::siz
             options.threads = threads;
             options.pause_ms = pause_ms;
             options.backend = backend;
+            options.stop = [] { return g_interrupted != 0; };  // Ctrl-C: the dabs so far are printed
             const auto log = [&](const std::string& line) {
                 if (!quiet) std::fprintf(stderr, "[sculpt %zu^3 %s] %s\n", n, voxmesh::backend_name(backend), line.c_str());
             };

@@ -251,6 +251,29 @@ TEST_CASE("bench: killed while writing a volume, leaves the whole file or none, 
     CHECK(killed > 0);  // 2 ms is too early for any machine to have written 131 MB
 }
 
+// A size or thread count given twice made a second series under the same key, whose speed-ups
+// were taken against the first copy; a floor not measured read 0.
+TEST_CASE("bench: repeated list entries run once, and a floor not measured is shown as missing", "[bench]") {
+    Scratch s;
+    const auto r = bench(s, "--sizes 12,12 --threads 1,1,2 --type u8,u8 --repeat 1 --no-floor");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    std::vector<std::string> rows;
+    for (const std::string& line : lines_of(r.out))
+        if (line.rfind("sphere", 0) == 0) rows.push_back(line);
+    REQUIRE(rows.size() == 2);  // threads 1 and 2, once each
+    std::istringstream row(rows[1]);
+    std::vector<std::string> cells;
+    for (std::string cell; row >> cell;) cells.push_back(cell);
+    REQUIRE(cells.size() > 13);
+    CHECK(cells[5] == "2");
+    CHECK(cells[11] == "-");  // floor_s
+    CHECK(cells[12] == "-");  // x_floor
+    const auto json = bench(s, "--sizes 12 --threads 1 --repeat 1 --no-floor --json");
+    CHECK(json_value(json.out, "floor_s") == "null");
+    CHECK(json_value(json.out, "floor_ratio") == "null");
+}
+
 TEST_CASE("bench: bad arguments fail with a message", "[bench][errors]") {
     Scratch s;
     const std::vector<std::pair<std::string, std::string>> bad = {
@@ -265,6 +288,17 @@ TEST_CASE("bench: bad arguments fail with a message", "[bench][errors]") {
         {"--repeat 0", "--repeat"},
         {"--threads ''", "--threads: empty value"},  // CLI11 alone read '' as 0 (every CPU)
         {"--iso ''", "--iso: empty value"},
+        // Found by a review: each was accepted, then crashed, ran something else or was ignored.
+        {"--threads 100000", "--threads: Value 100000 not in range"},  // aborted (a thread each)
+        {"--sizes -5", "--sizes: Value -5 not in range"},                // wrapped to 2^64 - 5
+        {"--pause nan", "--pause must be a number"},
+        {"--backends opencl --devices 0,,1", "an empty entry"},
+        {"--backends opencl --devices 0+0", "each device once"},
+        {"--backends opencl --devices 7", "no combination could run here"},  // exited 0
+        {"--write-volume " + shell_quote(s.dir + "/v.nii"), "writes NRRD"},  // wrote NRRD named .nii
+        {"--sculpt --save x.json", "--save does not apply to --sculpt"},
+        {"--mesh-ops --csv", "--csv does not apply to --mesh-ops"},
+        {"--paper --backends opencl", "--backends does not apply to --paper"},
     };
     for (const auto& [args, message] : bad) {
         INFO(args);

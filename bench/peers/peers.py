@@ -14,6 +14,7 @@ Needs Debian's python3-vtk9, python3-skimage and python3-numpy: run it with /usr
 import argparse
 import glob
 import json
+import math
 import os
 import shutil
 import statistics
@@ -256,7 +257,16 @@ def main():
                     help="pass skimage's `mask` to skimage and pymc, keeping the cells in the first FRACTION of x "
                          "(the other tools mesh everything)")
     args = ap.parse_args()
-    tools = set(args.tools.split(","))
+    known = {"voxmesh", "py", "pymc", "fe", "mc", "skimage"}
+    tools = set(t for t in args.tools.split(",") if t)
+    if not tools or not tools <= known:
+        ap.error(f"--tools: unknown {sorted(tools - known) or 'empty list'}; choose from {','.join(sorted(known))}")
+    if args.repeat < 1:
+        ap.error("--repeat must be at least 1")
+    if args.threads < 1:
+        ap.error("--threads must be at least 1")
+    if args.iso is not None and not math.isfinite(args.iso):
+        ap.error("--iso must be a finite number")
     normals = not args.no_normals
 
     vol, file_iso = read_nrrd(args.volume)
@@ -268,16 +278,20 @@ def main():
               "use a half-integer iso", file=sys.stderr)
     nz, ny, nx = vol.shape
     results = []
+    failed = False  # a tool asked for that gave no result: the exit status says so
 
     if "voxmesh" in tools:
         bench = find_bench(args.bench)
         if not bench:
             print("voxmesh-bench not found: build it or pass --bench", file=sys.stderr)
+            failed = True
         else:
             r, cmd = voxmesh_run(bench, os.path.abspath(args.volume), iso, args.threads, args.repeat, normals)
             if r:
                 r["command"] = " ".join(cmd)
                 results.append(r)
+            else:
+                failed = True
     which = {n for k, n in (("fe", "vtkFlyingEdges3D"), ("mc", "vtkMarchingCubes")) if k in tools}
     vtk_info = {}
     if which:
@@ -341,7 +355,7 @@ def main():
                     status = 1
                 elif not args.json:
                     print(f"triangle count agrees with {r['tool']}: {r['triangles']}")
-    return status
+    return 1 if failed else status
 
 
 if __name__ == "__main__":

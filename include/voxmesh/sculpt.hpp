@@ -235,6 +235,9 @@ struct SculptBenchOptions {
     Backend backend = Backend::Cpu;   // where update() re-meshes (SculptOptions::backend)
     int device = -1;                  // SculptOptions::device
     double pause_ms = 0;              // sleep before each dab, as between an interactive program's frames
+    // Asked before each dab; true ends the stroke there (the latencies are those of the dabs
+    // done). Empty: every dab.
+    std::function<bool()> stop;
 };
 
 struct SculptBenchResult {

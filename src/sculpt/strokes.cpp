@@ -264,6 +264,7 @@ SculptBenchResult run_sculpt_benchmark(const SculptBenchOptions& options,
     cpu_ms.reserve(path.size());
     std::size_t remeshed = 0;
     for (const ScriptDab& d : path) {
+        if (options.stop && options.stop()) break;
         if (options.pause_ms > 0)
             std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(options.pause_ms));
         const auto t0 = Clock::now();
@@ -281,8 +282,8 @@ SculptBenchResult run_sculpt_benchmark(const SculptBenchOptions& options,
     r.update = summarize_latencies(update_ms);
     r.frame = summarize_latencies(frame_ms);
     r.update_cpu = summarize_latencies(cpu_ms);
-    r.mean_blocks_remeshed = path.empty() ? 0 : static_cast<double>(remeshed) / static_cast<double>(path.size());
-    say("sculpt " + std::to_string(n) + "^3: " + std::to_string(path.size()) + " dabs replayed");
+    r.mean_blocks_remeshed = update_ms.empty() ? 0 : static_cast<double>(remeshed) / static_cast<double>(update_ms.size());
+    say("sculpt " + std::to_string(n) + "^3: " + std::to_string(update_ms.size()) + " dabs replayed");
 
     t = Clock::now();
     const Mesh assembled = sculpt.mesh();
