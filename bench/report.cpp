@@ -26,9 +26,33 @@ std::string series_key(const Result& r) {
     return r.field + "|" + r.type + "|" + r.size_label() + "|" + r.backend + "|" + r.device;
 }
 
+// The length of the well-formed UTF-8 sequence at s[i], or 0 where it is not one.
+std::size_t utf8_length(const std::string& s, std::size_t i) {
+    const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(s[k]); };
+    const unsigned char b = byte(i);
+    const std::size_t n = b < 0x80 ? 1 : (b >> 5) == 0x6 ? 2 : (b >> 4) == 0xe ? 3 : (b >> 3) == 0x1e ? 4 : 0;
+    if (n == 0 || i + n > s.size()) return 0;
+    for (std::size_t k = 1; k < n; ++k)
+        if ((byte(i + k) >> 6) != 0x2) return 0;
+    return n;
+}
+
+// A JSON string's contents. Bytes that are not UTF-8 (a file name in another encoding) become
+// U+FFFD: JSON text must be UTF-8, and the line must stay parseable.
 std::string json_escape(const std::string& s) {
     std::string o;
-    for (char c : s) {
+    for (std::size_t i = 0; i < s.size(); ++i) {
+        const char c = s[i];
+        if (static_cast<unsigned char>(c) >= 0x80) {
+            const std::size_t n = utf8_length(s, i);
+            if (n == 0) {
+                o += "\\ufffd";
+            } else {
+                o.append(s, i, n);
+                i += n - 1;
+            }
+            continue;
+        }
         switch (c) {
             case '"': o += "\\\""; break;
             case '\\': o += "\\\\"; break;
@@ -163,7 +187,8 @@ void print_csv(const std::vector<Result>& results) {
     std::printf("field,type,size,nx,ny,nz,iso,backend,backend_ran,device,device_names,threads,normals,repeat,warmup,"
                 "status,error,median_s,min_s,max_s,classify_s,scan_s,generate_s,total_s,kernel_s,transfer_s,"
                 "triangles,vertices,mvox_s,floor_s,floor_ratio,speedup,speedup_base_threads,compute_ceiling,"
-                "floor_speedup,peak_rss_mb,extract_rss_mb,rss_scope,volume_mb,mesh_mb,warnings\n");
+                "floor_speedup,peak_rss_mb,extract_rss_mb,rss_scope,volume_mb,mesh_mb,warnings,reuse_mesh,interleaved,"
+                "pause_ms,cpu_share,setup_s,setup_rss_mb\n");
     for (const auto& r : results) {
         std::ostringstream o;
         o << csv_field(r.field) << ',' << r.type << ',' << r.size_label() << ',' << r.dims[0] << ',' << r.dims[1]
@@ -179,7 +204,9 @@ void print_csv(const std::vector<Result>& results) {
           << (r.compute_ceiling > 0 ? num(r.compute_ceiling) : "") << ','
           << (r.floor_speedup > 0 ? num(r.floor_speedup) : "") << ',' << num(r.peak_rss_mb)
           << ',' << num(r.extract_rss_mb) << ',' << r.rss_scope << ',' << num(r.volume_mb) << ','
-          << num(r.mesh_mb) << ',' << csv_field(joined(r.warnings, "; "));
+          << num(r.mesh_mb) << ',' << csv_field(joined(r.warnings, "; ")) << ',' << (r.reuse_mesh ? 1 : 0) << ','
+          << (r.interleaved ? 1 : 0) << ',' << num(r.pause_ms) << ',' << (r.cpu_share >= 0 ? num(r.cpu_share) : "")
+          << ',' << (r.setup_s >= 0 ? num(r.setup_s) : "") << ',' << (r.setup_rss_mb >= 0 ? num(r.setup_rss_mb) : "");
         std::printf("%s\n", o.str().c_str());
     }
 }

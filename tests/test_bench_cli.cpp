@@ -272,6 +272,12 @@ TEST_CASE("bench: repeated list entries run once, and a floor not measured is sh
     const auto json = bench(s, "--sizes 12 --threads 1 --repeat 1 --no-floor --json");
     CHECK(json_value(json.out, "floor_s") == "null");
     CHECK(json_value(json.out, "floor_ratio") == "null");
+    // A file name that is not UTF-8 made a JSON line no parser takes: such bytes are U+FFFD.
+    const std::string odd = s.dir + "/odd\xff\xc3\xa9.nrrd";
+    REQUIRE(bench(s, "--sizes 12 --write-volume " + shell_quote(odd)).code == 0);
+    const auto named = bench(s, "--input " + shell_quote(odd) + " --threads 1 --repeat 1 --no-floor --json");
+    INFO(named.err);
+    CHECK(json_value(named.out, "field") == s.dir + "/odd\\ufffd\xc3\xa9.nrrd");
 }
 
 TEST_CASE("bench: bad arguments fail with a message", "[bench][errors]") {
