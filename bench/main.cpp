@@ -9,6 +9,7 @@
 
 #include "cli/empty_values.hpp"
 #include "core/exit_signals.hpp"
+#include "io/input_file.hpp"
 
 #include <voxmesh/fields.hpp>
 #include <voxmesh/io.hpp>
@@ -16,7 +17,6 @@
 #include <CLI/CLI.hpp>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -138,9 +138,7 @@ int main(int argc, char** argv) {
     // An empty value is left to refuse_empty_values' message.
     const auto at_most_65536 = [](long long lo) {
         return [lo](const std::string& text) {
-            if (text.empty()) return std::string();
-            const auto checked = CLI::Range(lo, 65536LL)(text);
-            return checked;
+            return text.empty() ? std::string() : CLI::Range(lo, 65536LL)(text);
         };
     };
     auto* sizes_opt = app.add_option("--sizes", sizes, "cube sizes of built-in fields (default 64,128,256)")
@@ -222,11 +220,7 @@ int main(int argc, char** argv) {
                             "--reuse-mesh", "--interleave", "--pause", "--setup-first", "--paper", "--dabs", "--csv",
                             "--save", "--no-floor", "--write-volume"});
         if (paper) refuse_options(app, "--paper (the CPU engine's table)", {"--backends", "--devices"});
-        const auto is_nrrd_name = [](std::string name) {
-            for (char& ch : name) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-            return name.size() > 5 && name.compare(name.size() - 5, 5, ".nrrd") == 0;
-        };
-        if (!write_path.empty() && !is_nrrd_name(write_path))
+        if (!write_path.empty() && !voxmesh::io::ends_with_nocase(write_path, ".nrrd"))
             throw voxmesh::Error("--write-volume writes NRRD: give a name ending in .nrrd, not '" + write_path + "'");
         drop_repeats(fields);
         drop_repeats(inputs);
@@ -268,12 +262,21 @@ int main(int argc, char** argv) {
             voxmesh::Field field{};
             voxmesh::ScalarType type{};
             std::size_t size = 0;
+            double iso = NAN;  // a file's: --iso, else its voxmesh_iso
         };
         std::vector<Recipe> recipes;
         for (auto f : field_ids)
             for (auto t : type_ids)
                 for (auto n : sizes) recipes.push_back({false, "", f, t, n});
-        for (const auto& p : inputs) recipes.push_back({true, p, {}, {}, 0});
+        // Files, and the iso each needs, checked before any run: a bad one found after hours of
+        // runs threw those results away.
+        for (const auto& p : inputs) {
+            Recipe rc{true, p, {}, {}, 0, iso};
+            if (std::isnan(iso) && !read_nrrd_iso(p, rc.iso))  // reads the header: a bad file fails here
+                throw voxmesh::Error("'" + p + "' has no voxmesh_iso: give --iso");
+            if (!std::isnan(iso)) (void)voxmesh::read_volume_info(p);
+            recipes.push_back(rc);
+        }
 
         if (!write_path.empty()) {
             if (recipes.size() != 1 || recipes[0].file)
@@ -329,16 +332,6 @@ int main(int argc, char** argv) {
 
         handle_signal_unless_ignored(SIGINT, on_sigint);
 
-        // Files, and the iso each needs, checked before any run: a bad one found after hours of
-        // runs threw those results away.
-        for (const Recipe& rc : recipes) {
-            if (!rc.file) continue;
-            (void)voxmesh::read_volume_info(rc.path);
-            double file_iso = 0;
-            if (std::isnan(iso) && !read_nrrd_iso(rc.path, file_iso))
-                throw voxmesh::Error("'" + rc.path + "' has no voxmesh_iso: give --iso");
-        }
-
         std::vector<Result> results;
         std::string failure;  // an input that could not be made or read: reported after the results
         std::size_t done = 0;
@@ -350,10 +343,7 @@ int main(int argc, char** argv) {
                 if (rc.file) {
                     in.field = rc.path;
                     in.volume = voxmesh::read_volume(rc.path);
-                    double file_iso = 0;
-                    if (!std::isnan(iso)) in.iso = iso;
-                    else if (read_nrrd_iso(rc.path, file_iso)) in.iso = file_iso;
-                    else throw voxmesh::Error("'" + rc.path + "' has no voxmesh_iso: give --iso");
+                    in.iso = rc.iso;
                 } else {
                     voxmesh::FieldVolume fv = voxmesh::make_field(rc.field, rc.size, rc.type, seed);
                     in.field = voxmesh::field_name(rc.field);
