@@ -212,26 +212,29 @@ struct GridTriangle {
     double n2 = 0;    // |n|^2
 };
 
-// The range of coordinate `out` over the points of t whose coordinate `axis` lies in
-// [lo, hi]: its vertices there and its edges' crossings of lo and hi (t is convex). False
-// where none is.
-bool range_in_slab(const GridTriangle& t, int axis, double lo, double hi, int out, double& x_lo, double& x_hi) {
+// The bounding box (min, max) of the points of t whose coordinate `axis` lies in [lo, hi]:
+// its vertices there and its edges' crossings of lo and hi (t is convex). False where none is.
+bool box_in_slab(const GridTriangle& t, int axis, double lo, double hi, Vec3& min, Vec3& max) {
     const Vec3* v[3] = {&t.a, &t.b, &t.c};
-    x_lo = std::numeric_limits<double>::infinity();
-    x_hi = -x_lo;
-    const auto take = [&](double x) {
-        x_lo = std::min(x_lo, x);
-        x_hi = std::max(x_hi, x);
+    min.fill(std::numeric_limits<double>::infinity());
+    max.fill(-std::numeric_limits<double>::infinity());
+    const auto take = [&](const Vec3& point) {
+        for (int d = 0; d < 3; ++d) {
+            min[d] = std::min(min[d], point[d]);
+            max[d] = std::max(max[d], point[d]);
+        }
     };
     for (int e = 0; e < 3; ++e) {
         const Vec3& p = *v[e];
         const Vec3& q = *v[(e + 1) % 3];
-        if (p[axis] >= lo && p[axis] <= hi) take(p[out]);
+        if (p[axis] >= lo && p[axis] <= hi) take(p);
         for (const double bound : {lo, hi})
-            if ((p[axis] - bound) * (q[axis] - bound) < 0)
-                take(p[out] + (bound - p[axis]) / (q[axis] - p[axis]) * (q[out] - p[out]));
+            if ((p[axis] - bound) * (q[axis] - bound) < 0) {
+                const double s = (bound - p[axis]) / (q[axis] - p[axis]);
+                take({p[0] + s * (q[0] - p[0]), p[1] + s * (q[1] - p[1]), p[2] + s * (q[2] - p[2])});
+            }
     }
-    return x_lo <= x_hi;
+    return min[0] <= max[0];
 }
 
 double triangle_distance2(const Vec3& p, const GridTriangle& t) {
@@ -369,17 +372,15 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
                 // rounding: a superset of the samples, so the distances do not change.
                 const double slack = band + 1e-6;
                 for (std::size_t k = k0; k < k1; ++k) {
-                    const double z_lo = double(k) - slack, z_hi = double(k) + slack;
-                    double zx_lo = 0, zx_hi = 0, zy_lo = 0, zy_hi = 0;
-                    if (!range_in_slab(t, 2, z_lo, z_hi, 0, zx_lo, zx_hi)) continue;
-                    range_in_slab(t, 2, z_lo, z_hi, 1, zy_lo, zy_hi);
+                    Vec3 z_min, z_max, y_min, y_max;
+                    if (!box_in_slab(t, 2, double(k) - slack, double(k) + slack, z_min, z_max)) continue;
                     std::size_t ja = 0, jb = 0;
-                    range(zy_lo - slack, zy_hi + slack, ny, ja, jb);
+                    range(z_min[1] - slack, z_max[1] + slack, ny, ja, jb);
                     for (std::size_t j = std::max(j0, ja); j < std::min(j1, jb); ++j) {
-                        double yx_lo = 0, yx_hi = 0;
-                        if (!range_in_slab(t, 1, double(j) - slack, double(j) + slack, 0, yx_lo, yx_hi)) continue;
+                        if (!box_in_slab(t, 1, double(j) - slack, double(j) + slack, y_min, y_max)) continue;
                         std::size_t xa = i0, xb = i1, near0 = 0, near1 = 0;
-                        range(std::max(zx_lo, yx_lo) - slack, std::min(zx_hi, yx_hi) + slack, nx, near0, near1);
+                        range(std::max(z_min[0], y_min[0]) - slack, std::min(z_max[0], y_max[0]) + slack, nx, near0,
+                              near1);
                         xa = std::max(xa, near0);
                         xb = std::min(xb, near1);
                         if (xa >= xb) continue;
