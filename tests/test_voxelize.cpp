@@ -365,6 +365,53 @@ TEST_CASE("voxelize: distances near fans of long thin triangles match a brute-fo
     CHECK(wrong == 0);
 }
 
+// A convex cone fanned into slivers: every side triangle spans every z plane, so each row
+// sees its candidates through the plane's row lists. Inside is where every face plane has
+// the sample behind it; samples on a face (within a thousandth of a voxel) may go either way.
+TEST_CASE("voxelize: inside test of a fanned convex cone matches its face planes", "[voxelize]") {
+    constexpr int kFan = 300;
+    voxmesh::Mesh cone;
+    for (int i = 0; i < kFan; ++i) {
+        const double a = 2 * std::numbers::pi * i / kFan;
+        cone.positions.insert(cone.positions.end(), {float(std::cos(a)), float(std::sin(a)), 0.f});
+    }
+    cone.positions.insert(cone.positions.end(), {0.3f, -0.2f, 1.1f, 0.f, 0.f, 0.f});  // apex, base centre
+    for (std::uint32_t i = 0; i < kFan; ++i) {
+        const std::uint32_t j = (i + 1) % kFan;
+        cone.indices.insert(cone.indices.end(), {i, j, std::uint32_t(kFan), j, i, std::uint32_t(kFan + 1)});
+    }
+    // Outward planes n . p = d of the side triangles and the base (z = 0, facing down).
+    std::vector<std::array<double, 4>> planes{{0, 0, -1, 0}};
+    const auto at = [&](std::uint32_t v) {
+        return std::array<double, 3>{cone.positions[3 * v], cone.positions[3 * v + 1], cone.positions[3 * v + 2]};
+    };
+    for (std::uint32_t i = 0; i < kFan; ++i) {
+        const auto a = at(i), b = at((i + 1) % kFan), c = at(kFan);
+        const std::array<double, 3> u{b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w{c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        std::array<double, 3> n{u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (double& x : n) x /= len;
+        planes.push_back({n[0], n[1], n[2], n[0] * a[0] + n[1] * a[1] + n[2] * a[2]});
+    }
+    for (unsigned threads : {1u, 2u}) {
+        voxmesh::VoxelizeOptions vo;
+        vo.resolution = 56;
+        vo.field = voxmesh::VoxelField::Occupancy;
+        vo.threads = threads;
+        const voxmesh::Volume v = voxmesh::voxelize(cone, vo);
+        std::size_t inside = 0, wrong = 0;
+        for_each_sample(v, [&](std::size_t idx, double x, double y, double z) {
+            double out = -1e300;  // the largest signed distance to a face plane: < 0 inside
+            for (const auto& p : planes) out = std::max(out, p[0] * x + p[1] * y + p[2] * z - p[3]);
+            if (std::abs(out) < 1e-3 * v.spacing[0]) return;
+            inside += out < 0;
+            if ((out < 0) != (static_cast<const std::uint8_t*>(v.data)[idx] == 255)) ++wrong;
+        });
+        CHECK(inside > 20000);
+        CHECK(wrong == 0);
+    }
+}
+
 TEST_CASE("voxelize: open, non-manifold and empty meshes are rejected", "[voxelize]") {
     voxmesh::VoxelizeOptions vo;
     vo.resolution = 16;

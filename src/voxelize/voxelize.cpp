@@ -22,6 +22,7 @@
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -196,6 +197,60 @@ void row_crossings(const std::vector<Lattice>& q, const std::vector<std::array<s
     }
     std::sort(hits.begin(), hits.end());
 }
+
+// One z plane's candidates sorted into its y rows. A crossing needs the row's point (py, pz)
+// in the closed yz shadow of the triangle (the perturbed point tends to it), so py lies in the
+// y range of the triangle's cut by the plane z = pz: each candidate is listed for the rows
+// whose py lies in that range, widened to whole rows so rounding cannot drop one. Without
+// this every row of a plane tested every triangle spanning the plane (a cone's side: all).
+class PlaneRows {
+public:
+    void build(const std::vector<Lattice>& q, const std::vector<std::array<std::uint32_t, 3>>& tris,
+               const std::uint32_t* cand, std::size_t ncand, std::int64_t pz, std::size_t ny) {
+        const double step = kFixedScale;
+        start_.assign(ny + 1, 0);
+        spans_.clear();
+        for (std::size_t c = 0; c < ncand; ++c) {
+            const auto& t = tris[cand[c]];
+            const Lattice &a = q[t[0]], &b = q[t[1]], &cc = q[t[2]];
+            if ((b[1] - a[1]) * (cc[2] - a[2]) - (b[2] - a[2]) * (cc[1] - a[1]) == 0) continue;  // no crossing
+            double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+            const Lattice* v[3] = {&a, &b, &cc};
+            for (int e = 0; e < 3; ++e) {
+                const Lattice &p = *v[e], &r = *v[(e + 1) % 3];
+                if (p[2] == pz) {
+                    lo = std::min(lo, double(p[1]));
+                    hi = std::max(hi, double(p[1]));
+                }
+                if ((p[2] < pz && r[2] > pz) || (p[2] > pz && r[2] < pz)) {
+                    const double y = double(p[1]) + double(pz - p[2]) * double(r[1] - p[1]) / double(r[2] - p[2]);
+                    lo = std::min(lo, y);
+                    hi = std::max(hi, y);
+                }
+            }
+            if (!(lo <= hi)) continue;  // the plane misses it
+            const double j0 = std::max(std::floor(lo / step), 0.0), j1 = std::min(std::ceil(hi / step), double(ny) - 1);
+            if (j0 > j1) continue;
+            spans_.push_back({cand[c], static_cast<std::uint32_t>(j0), static_cast<std::uint32_t>(j1)});
+            for (auto j = static_cast<std::size_t>(j0); j <= static_cast<std::size_t>(j1); ++j) ++start_[j + 1];
+        }
+        for (std::size_t j = 0; j < ny; ++j) start_[j + 1] += start_[j];
+        listed_.resize(start_[ny]);
+        fill_.assign(start_.begin(), start_.end() - 1);
+        for (const Span& s : spans_)  // in candidate order, as before
+            for (std::size_t j = s.j0; j <= s.j1; ++j) listed_[fill_[j]++] = s.tri;
+    }
+    const std::uint32_t* row(std::size_t j) const { return listed_.data() + start_[j]; }
+    std::size_t row_size(std::size_t j) const { return start_[j + 1] - start_[j]; }
+
+private:
+    struct Span {
+        std::uint32_t tri, j0, j1;
+    };
+    std::vector<Span> spans_;
+    std::vector<std::size_t> start_, fill_;
+    std::vector<std::uint32_t> listed_;
+};
 
 // Squared distance from p to the segment ab (ab may have zero length).
 double segment_distance2(const Vec3& p, const Vec3& a, const Vec3& b) {
@@ -409,13 +464,15 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
 
         // Pass 2: inside test per row, then the final sample values.
         std::vector<double> hits;
+        PlaneRows rows;
         std::size_t inside_here = 0;
         std::uint8_t* occ = distance ? nullptr : static_cast<std::uint8_t*>(volume.data);
-        for (std::size_t k = z0; k < z1; ++k)
+        for (std::size_t k = z0; k < z1; ++k) {
+            const std::int64_t pz = std::int64_t(k) << kFixedBits;
+            rows.build(q, soup.tris, row_tris.data() + row_start[k], row_start[k + 1] - row_start[k], pz, ny);
             for (std::size_t j = 0; j < ny; ++j) {
-                const std::int64_t py = std::int64_t(j) << kFixedBits, pz = std::int64_t(k) << kFixedBits;
-                row_crossings(q, soup.tris, row_tris.data() + row_start[k], row_start[k + 1] - row_start[k], py, pz,
-                              hits);
+                const std::int64_t py = std::int64_t(j) << kFixedBits;
+                row_crossings(q, soup.tris, rows.row(j), rows.row_size(j), py, pz, hits);
                 std::size_t passed = 0;
                 const std::size_t base = plane * k + nx * j;
                 for (std::size_t i = 0; i < nx; ++i) {
@@ -433,6 +490,7 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
                     }
                 }
             }
+        }
         inside_samples[w] = inside_here;
     });
     // Meshing back needs a sample inside: a flat model, or one thinner than a voxel everywhere,
