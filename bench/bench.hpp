@@ -166,9 +166,7 @@ int run_mesh_ops(const std::vector<voxmesh::Field>& fields, const std::vector<vo
                  const std::vector<std::size_t>& sizes, int repeat, std::uint32_t seed, bool json, bool quiet);
 
 // ---- volume_files.cpp ----
-// NRRD with the iso and field as key/value pairs (voxmesh_iso:=...).
+// NRRD with the iso and field as key/value pairs (voxmesh_iso:=..., read back by voxmesh::recorded_iso).
 void write_volume_nrrd(const std::string& path, const Input& input);
-// The iso stored by write_volume_nrrd, if the file has one.
-bool read_nrrd_iso(const std::string& path, double& iso);
 
 }  // namespace vmbench

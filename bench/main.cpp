@@ -21,6 +21,7 @@
 #include <csignal>
 #include <cstdio>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -272,9 +273,17 @@ int main(int argc, char** argv) {
         // runs threw those results away.
         for (const auto& p : inputs) {
             Recipe rc{true, p, {}, {}, 0, iso};
-            if (std::isnan(iso) && !read_nrrd_iso(p, rc.iso))  // reads the header: a bad file fails here
-                throw voxmesh::Error("'" + p + "' has no voxmesh_iso: give --iso");
-            if (!std::isnan(iso)) (void)voxmesh::read_volume_info(p);
+            const voxmesh::VolumeInfo info = voxmesh::read_volume_info(p);  // a bad file fails here
+            if (std::isnan(iso)) {
+                std::optional<double> recorded;
+                try {
+                    recorded = voxmesh::recorded_iso(info, p);
+                } catch (const voxmesh::Error& e) {
+                    throw voxmesh::Error(std::string(e.what()) + ": give --iso");
+                }
+                if (!recorded) throw voxmesh::Error("'" + p + "' has no " + voxmesh::kRecordedIsoKey + ": give --iso");
+                rc.iso = *recorded;
+            }
             recipes.push_back(rc);
         }
 

@@ -9,6 +9,7 @@
 #include "support/mesh_checks.hpp"
 #include "support/run_program.hpp"
 
+#include <voxmesh/io.hpp>
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
@@ -160,6 +161,19 @@ TEST_CASE("bench: a volume written for the peers reads back to the same mesh", "
     CHECK(json_value(from_file.out, "iso") == json_value(built_in.out, "iso"));  // voxmesh_iso in the file
     CHECK(json_value(from_file.out, "triangles") == json_value(built_in.out, "triangles"));
     CHECK(json_value(from_file.out, "vertices") == json_value(built_in.out, "vertices"));
+    // A recorded iso that is not one finite number is refused before any run, as mesh does
+    // (strtod took "1abc" as 1 and "inf" as an iso that meshes nothing); --iso goes on.
+    const voxmesh::Volume volume = voxmesh::read_volume(file);
+    for (const char* bad : {"1abc", "inf", "nan", ""}) {
+        INFO("'" << bad << "'");
+        voxmesh::write_nrrd(file, volume.view(), {{"voxmesh_iso", bad}});
+        const auto refused = bench(s, "--input " + shell_quote(file) + common);
+        CHECK(refused.code == 1);
+        CHECK_THAT(refused.err, Catch::Contains("its voxmesh_iso ('" + std::string(bad) +
+                                                "') is not a finite number: give --iso"));
+        CHECK(refused.out.empty());
+    }
+    CHECK(bench(s, "--input " + shell_quote(file) + " --iso 0" + common).code == 0);
 }
 
 TEST_CASE("bench: --save writes the JSON lines printed, and a bad path fails before any run", "[bench]") {

@@ -241,6 +241,22 @@ TEST_CASE("nrrd: key/values read back exactly, or write_nrrd refuses them", "[io
     CHECK_FALSE(std::filesystem::exists(s.dir + "/bad.nrrd"));
 }
 
+TEST_CASE("nrrd: recorded_iso reads voxmesh_iso as one finite number, or refuses it naming the file", "[io][nrrd]") {
+    VolumeInfo info;
+    CHECK_FALSE(recorded_iso(info, "a.nrrd").has_value());  // no key: none recorded
+    for (const auto& [text, value] : std::vector<std::pair<std::string, double>>{
+             {"0", 0.0}, {"127.5", 127.5}, {"-2.5e-3", -2.5e-3}, {"1e300", 1e300}}) {
+        info.key_values[kRecordedIsoKey] = text;
+        CHECK(recorded_iso(info, "a.nrrd") == value);
+    }
+    for (const char* bad : {"", " 1", "1 ", "1abc", "nan", "inf", "-inf", "1e400", "0x10", "zero"}) {
+        INFO("'" << bad << "'");
+        info.key_values[kRecordedIsoKey] = bad;
+        CHECK_THROWS_WITH(recorded_iso(info, "a.nrrd"), "'a.nrrd': its voxmesh_iso ('" + std::string(bad) +
+                                                            "') is not a finite number");
+    }
+}
+
 TEST_CASE("nrrd: spacings far from 1 read back exactly, tiny and huge", "[io][nrrd]") {
     // Their squares underflow to 0: the length of a direction vector
     // (1e-300, 0, 0) was read as 0 and refused (found by fuzz_nrrd_roundtrip).

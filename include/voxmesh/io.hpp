@@ -46,6 +46,7 @@
 #include <cstddef>
 #include <iosfwd>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -90,6 +91,13 @@ struct VolumeInfo {
     // NRRD "key:=value" lines (e.g. what write_nrrd was given); empty for other formats.
     std::map<std::string, std::string> key_values;
 };
+
+// The iso voxmesh recorded for meshing a volume it wrote: the NRRD line "voxmesh_iso:=value"
+// (`voxmesh voxelize` writes 0 for a distance field and 127.5 for occupancy, voxmesh-bench
+// --write-volume its field's iso). nullopt where the file has no such line; an Error naming
+// `name` where the value is not one finite number ("", "1abc", "nan", "inf").
+inline constexpr const char* kRecordedIsoKey = "voxmesh_iso";
+std::optional<double> recorded_iso(const VolumeInfo& info, const std::string& name);
 
 // NRRD (.nrrd, .nhdr), MetaImage (.mhd, .mha), NIfTI-1 (.nii, .nii.gz), legacy VTK (.vtk),
 // NumPy (.npy), chosen by extension (case-insensitive). A .nii that is gzip-compressed is detected by content.

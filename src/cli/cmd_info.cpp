@@ -120,8 +120,15 @@ int run_info(const InfoArgs& a) {
     if (info.value_scale != 1 || info.value_offset != 0)
         std::cout << "scaling:   physical = stored * " << format_double(info.value_scale) << " + "
                   << format_double(info.value_offset) << " (not applied; values below are stored values)\n";
-    if (const auto iso = info.key_values.find(kIsoKey); iso != info.key_values.end())
-        std::cout << "iso:       " << io::shown(iso->second) << " (" << kIsoKey << ", as voxelize records it: mesh's default)\n";
+    if (const auto iso = info.key_values.find(kRecordedIsoKey); iso != info.key_values.end()) {
+        std::cout << "iso:       " << io::shown(iso->second) << " (" << kRecordedIsoKey;
+        try {
+            (void)recorded_iso(info, path);
+            std::cout << ", as voxelize records it: mesh's default)\n";
+        } catch (const Error&) {
+            std::cout << ", not a finite number: mesh refuses it without --iso)\n";
+        }
+    }
     std::cout.flush();
 
     // The value range needs the samples (memory-mapped where the reader can).

@@ -3,11 +3,10 @@
 #include "common.hpp"
 #include "stdin_input.hpp"
 
-#include <charconv>
 #include <cmath>
 #include <iostream>
-#include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 namespace voxmesh::cli {
@@ -26,15 +25,13 @@ struct MeshArgs {
     CLI::Option* iso_option = nullptr;
 };
 
-// The iso a file records under kIsoKey: a finite number, or the file is refused.
-double recorded_iso(const std::string& name, const std::string& text) {
-    double value = 0;
-    const char* end = text.data() + text.size();
-    const auto [ptr, ec] = std::from_chars(text.data(), end, value);
-    if (text.empty() || ec != std::errc() || ptr != end || !std::isfinite(value))
-        throw BadInput("'" + name + "': its " + kIsoKey + " ('" + text +
-                       "') is not a finite number; give --iso to mesh it at another value");
-    return value;
+// The iso the file records for meshing (recorded_iso); a bad one is refused with the way on.
+std::optional<double> file_iso(const VolumeInfo& info, const std::string& name) {
+    try {
+        return recorded_iso(info, name);
+    } catch (const Error& e) {
+        throw BadInput(std::string(e.what()) + "; give --iso to mesh it at another value");
+    }
 }
 
 // "2 threads", or "16 threads asked for, run on 2 CPUs" where the process may use fewer.
@@ -92,8 +89,8 @@ int run_mesh(const MeshArgs& a) {
     }
     if (a.iso_option->count() && !std::isfinite(a.iso))
         throw BadInput("--iso is " + format_double(a.iso) + "; give a finite value");
-    std::map<std::string, std::string> key_values;
-    const Volume volume = load_volume(a.input, a.raw, a.threads, &key_values);
+    VolumeInfo info;
+    const Volume volume = load_volume(a.input, a.raw, a.threads, &info);
     // Named here: extract() would say the same without the file.
     for (int d = 0; d < 3; ++d)
         if (volume.dims[d] < 2)
@@ -102,10 +99,11 @@ int run_mesh(const MeshArgs& a) {
 
     double iso = a.iso;
     std::string iso_source = "given";
-    const auto recorded = key_values.find(kIsoKey);
-    if (a.iso_option->count() == 0 && recorded != key_values.end()) {
-        iso = recorded_iso(input_name(a.input), recorded->second);
-        iso_source = std::string("default: the file's ") + kIsoKey;
+    std::optional<double> recorded;
+    if (a.iso_option->count() == 0) recorded = file_iso(info, input_name(a.input));
+    if (recorded) {
+        iso = *recorded;
+        iso_source = std::string("default: the file's ") + kRecordedIsoKey;
     } else if (a.iso_option->count() == 0) {
         const ValueRange r = value_range(volume.view(), std::nullopt, a.threads);
         iso = 0.5 * (r.min + r.max);

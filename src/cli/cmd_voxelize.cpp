@@ -31,7 +31,7 @@ int run_voxelize(const VoxelizeArgs& a) {
     const Volume volume = about_file(input_name(a.input), [&] { return voxelize(model, options); });
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     const bool distance = options.field == VoxelField::Distance;
-    write_volume_output(a.output, volume.view(), {{kIsoKey, distance ? "0" : "127.5"}});
+    write_volume_output(a.output, volume.view(), {{kRecordedIsoKey, distance ? "0" : "127.5"}});
 
     report_stream(a.output) << input_name(a.input) << " -> " << output_name(a.output) << ": " << model.triangle_count() << " triangles, "
               << dims_text(volume.dims) << " " << scalar_name(volume.type) << " "

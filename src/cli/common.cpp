@@ -178,8 +178,7 @@ Volume finite_samples(Volume v, const std::string& name, unsigned threads) {
 
 }  // namespace
 
-Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads,
-                   std::map<std::string, std::string>* key_values) {
+Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads, VolumeInfo* info_out) {
     if (arg == "-" && raw.any_given()) {  // raw samples piped in: the flags say what they are
         return finite_samples(about_file(kStdinName, [&] { return read_raw(std::cin, kStdinName, raw_layout(kStdinName, raw)); }),
                               kStdinName, threads);
@@ -197,7 +196,7 @@ Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads
         std::cerr << "voxmesh: warning: '" << input.display()
                   << "': the direction matrix is not axis-aligned; its rotation is dropped and the mesh is in the "
                      "volume's index axes (spacing and origin as written)\n";
-    if (key_values) *key_values = info.key_values;
+    if (info_out) *info_out = std::move(info);
     return finite_samples(std::move(v), input.display(), threads);
 }
 

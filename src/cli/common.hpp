@@ -116,16 +116,11 @@ void write_mesh_output(const std::string& output, const std::string& format, con
 // as its "key:=value" lines; BadInput naming it.
 void write_volume_output(const std::string& output, const VolumeView& volume,
                          const std::map<std::string, std::string>& key_values = {});
-// The NRRD key under which `voxelize` records the iso its field is meshed at, and which
-// `mesh` takes when no --iso is given (a distance field of a thin model is not symmetric about
-// 0, so the value range's midpoint would move the surface).
-inline constexpr const char* kIsoKey = "voxmesh_iso";
 
 // Reads a volume file (raw with the flags, else by extension) and rejects NaN/inf samples,
 // scanning for them on `threads` threads (0: every CPU this process may use).
-// key_values (may be null): the file's NRRD "key:=value" lines (none for other formats).
-Volume load_volume(const std::string& path, const RawFlags& raw, unsigned threads = 0,
-                   std::map<std::string, std::string>* key_values = nullptr);
+// info (may be null): the file's header as read_volume gives it (a default VolumeInfo for raw samples).
+Volume load_volume(const std::string& path, const RawFlags& raw, unsigned threads = 0, VolumeInfo* info = nullptr);
 RawLayout raw_layout(const std::string& path, const RawFlags& raw);
 
 
