@@ -7,7 +7,7 @@
 //   voxmesh-bench --sculpt                    # stroke latency p50/p95/p99 at 256^3 and 512^3
 #include "bench.hpp"
 
-#include "cli/empty_values.hpp"
+#include "cli/option_checks.hpp"
 #include "core/exit_signals.hpp"
 #include "io/input_file.hpp"
 
@@ -135,24 +135,17 @@ int main(int argc, char** argv) {
         });
     app.add_option("--type", types, "scalar types of built-in fields: f32, u8, u16, i16, i8, u32, i32, f64")
         ->delimiter(',');
-    // Ranges checked on the text: a negative number given for an unsigned type wraps around.
-    // An empty value is left to refuse_empty_values' message.
-    const auto at_most_65536 = [](long long lo) {
-        return [lo](const std::string& text) {
-            return text.empty() ? std::string() : CLI::Range(lo, 65536LL)(text);
-        };
-    };
     auto* sizes_opt = app.add_option("--sizes", sizes, "cube sizes of built-in fields (default 64,128,256)")
                           ->delimiter(',')
-                          ->check(at_most_65536(1));
+                          ->check(voxmesh::cli::whole_number_in(1, 65536));
     auto* threads_opt =
         app.add_option("--threads", threads, "CPU thread counts (default 1 and all cores; 0 = all cores)")
             ->delimiter(',')
-            ->check(at_most_65536(0));
+            ->check(voxmesh::cli::whole_number_in(0, 65536));
     app.add_option("--backends", backends, "cpu, opencl, hybrid, auto (comma list)")->delimiter(',');
     app.add_option("--devices", devices, "OpenCL devices: all (together), I,J (each alone) or I+J (together)");
-    app.add_option("--repeat", settings.repeat, "timed runs per combination (median/min/max)")->check(CLI::Range(1, 1000));
-    app.add_option("--warmup", settings.warmup, "untimed runs first")->check(CLI::Range(0, 100));
+    app.add_option("--repeat", settings.repeat, "timed runs per combination (median/min/max)")->check(voxmesh::cli::whole_number_in(1, 1000));
+    app.add_option("--warmup", settings.warmup, "untimed runs first")->check(voxmesh::cli::whole_number_in(0, 100));
     app.add_option("--seed", seed, "seed of the blobs and ct fields");
     app.add_flag("--no-normals", no_normals, "mesh without normals (default: normals on)");
     app.add_flag("--reuse-mesh", settings.reuse_mesh,
@@ -180,7 +173,7 @@ int main(int argc, char** argv) {
                  "time analyze_topology (1 worker, all), keep_largest_components, write_mesh (stl, ply, obj), "
                  "vertex_edges, triangle_cells and edge_cell_ranges beside the extract of each "
                  "--field/--type/--sizes volume (default sizes 256,512)");
-    app.add_option("--dabs", dabs, "brush dabs of the --sculpt stroke path")->check(CLI::Range(1, 100000));
+    app.add_option("--dabs", dabs, "brush dabs of the --sculpt stroke path")->check(voxmesh::cli::whole_number_in(1, 100000));
     app.add_flag("--csv", csv, "CSV output");
     app.add_flag("--json", json, "one JSON object per line");
     std::string save_path;

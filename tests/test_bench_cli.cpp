@@ -309,8 +309,11 @@ TEST_CASE("bench: bad arguments fail with a message", "[bench][errors]") {
         {"--threads ''", "--threads: empty value"},  // CLI11 alone read '' as 0 (every CPU)
         {"--iso ''", "--iso: empty value"},
         // Found by a review: each was accepted, then crashed, ran something else or was ignored.
-        {"--threads 100000", "--threads: Value 100000 not in range"},  // aborted (a thread each)
-        {"--sizes -5", "--sizes: Value -5 not in range"},                // wrapped to 2^64 - 5
+        {"--threads 100000", "--threads: 100000 is out of range (0..65536)"},  // aborted (a thread each)
+        {"--sizes -5", "--sizes: -5 is out of range (1..65536)"},                // wrapped to 2^64 - 5
+        // CLI::Range said "Value 1.5 not in range 1 to 1000" of a number in the range.
+        {"--repeat 1.5", "--repeat: '1.5' is not a whole number"},
+        {"--threads 1,two", "--threads: 'two' is not a whole number"},
         {"--pause nan", "--pause must be a number"},
         {"--backends opencl --devices 0,,1", "an empty entry"},
         {"--backends opencl --devices 0+0", "each device once"},

@@ -108,6 +108,16 @@ TEST_CASE("cli: help and usage", "[cli]") {
     CHECK(run(s, "mesh").code == 2);                   // missing INPUT and -o
     CHECK(run(s, "mesh x.nrrd -o y.stl --backend warp").code == 2);
     CHECK(run(s, "voxelize m.stl -o v.nrrd").code == 2);  // --resolution is required
+    // Whole-number options say what is wrong (CLI::Range said "not in range 2 to 4096" of both).
+    for (const auto& [value, message] : std::vector<std::pair<std::string, std::string>>{
+             {"100.5", "--resolution: '100.5' is not a whole number"},
+             {"abc", "--resolution: 'abc' is not a whole number"},
+             {"5000", "--resolution: 5000 is out of range (2..4096)"},
+             {"-3", "--resolution: -3 is out of range (2..4096)"}}) {
+        const Result r = run(s, "voxelize m.stl -o v.nrrd --resolution " + value);
+        CHECK(r.code == 2);
+        CHECK(r.err.find(message) != std::string::npos);
+    }
 }
 
 TEST_CASE("cli: mesh a real CT volume", "[cli]") {

@@ -103,11 +103,11 @@ Command add_sculpt(CLI::App& app) {
     add_mesh_format_option(sub, a->format);
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (8..2048)")
         ->required()
-        ->check(CLI::Range(std::size_t(8), std::size_t(2048)));
+        ->check(whole_number_in(8, 2048));
     sub->add_option("--padding", a->padding,
                     "samples of room around the model (0..256, default 2): a surface built up past it is cut open at "
                     "the volume's border")
-        ->check(CLI::Range(std::size_t(0), std::size_t(256)));
+        ->check(whole_number_in(0, 256));
     sub->add_option("--backend", a->backend,
                     "where each update re-meshes: cpu (threads), opencl (a device; the CPU with a warning when there "
                     "is none) or auto (a GPU when there is one); default cpu")

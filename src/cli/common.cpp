@@ -42,7 +42,7 @@ const CLI::Validator kNonNegative(
 
 void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& why) {
     sub->add_option("--largest", largest, "write only the N connected pieces with the most triangles (" + why + ")")
-        ->check(CLI::Range(std::size_t(1), std::size_t(1) << 32));
+        ->check(whole_number_in(1, 1LL << 32));
 }
 
 void add_raw_flags(CLI::App* sub, RawFlags& raw) {

@@ -7,7 +7,7 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include "core/dims_text.hpp"
-#include "empty_values.hpp"
+#include "option_checks.hpp"
 
 #include <CLI/CLI.hpp>
 

@@ -1,0 +1,42 @@
+// Shared by the voxmesh tool and voxmesh-bench: checks of option values.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <charconv>
+#include <string>
+
+namespace voxmesh::cli {
+
+// CLI11 reads '' as 0 for a number, so an unset shell variable (--iso "$ISO") would run with
+// 0 without a word. Applies to the app's options and to every subcommand's, recursively; call
+// it once every option is declared.
+inline void refuse_empty_values(CLI::App& app) {
+    const CLI::Validator non_empty([](std::string& text) { return text.empty() ? std::string("empty value") : std::string(); },
+                                   "", "NONEMPTY");
+    for (CLI::Option* option : app.get_options())
+        if (option->get_expected_min() > 0 && option->get_type_size_max() > 0) option->check(non_empty);
+    for (CLI::App* sub : app.get_subcommands({})) refuse_empty_values(*sub);
+}
+
+// A whole number from lo to hi. CLI::Range said "Value abc not in range 2 to 4096" of text
+// that is no number, and of 100.5, which is in the range; checked on the text, as a negative
+// number given for an unsigned type wraps around. An empty value is left to
+// refuse_empty_values' message.
+inline CLI::Validator whole_number_in(long long lo, long long hi) {
+    return CLI::Validator(
+        [lo, hi](std::string& text) {
+            if (text.empty()) return std::string();
+            long long value = 0;
+            const char* end = text.data() + text.size();
+            const auto [ptr, ec] = std::from_chars(text.data(), end, value);
+            if (ptr != end || (ec != std::errc() && ec != std::errc::result_out_of_range))
+                return "'" + text + "' is not a whole number";
+            if (ec != std::errc() || value < lo || value > hi)
+                return text + " is out of range (" + std::to_string(lo) + ".." + std::to_string(hi) + ")";
+            return std::string();
+        },
+        "INT in [" + std::to_string(lo) + " - " + std::to_string(hi) + "]");
+}
+
+}  // namespace voxmesh::cli
