@@ -174,6 +174,14 @@ TEST_CASE("bench: a volume written for the peers reads back to the same mesh", "
         CHECK(refused.out.empty());
     }
     CHECK(bench(s, "--input " + shell_quote(file) + " --iso 0" + common).code == 0);
+    // A name is taken whole: "--input" was a comma list, so a file named with a comma was
+    // looked for as two files.
+    const std::string comma = s.dir + "/gyroid,24.nrrd";
+    voxmesh::write_nrrd(comma, volume.view(), {{"voxmesh_iso", "0"}});
+    const auto named = bench(s, "--input " + shell_quote(comma) + common);
+    INFO(named.err);
+    CHECK(named.code == 0);
+    CHECK(json_value(named.out, "triangles") == json_value(built_in.out, "triangles"));
 }
 
 TEST_CASE("bench: --save writes the JSON lines printed, and a bad path fails before any run", "[bench]") {
