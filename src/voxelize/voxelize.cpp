@@ -252,10 +252,9 @@ private:
     std::vector<std::uint32_t> listed_;
 };
 
-// Squared distance from p to the segment ab (ab may have zero length).
-double segment_distance2(const Vec3& p, const Vec3& a, const Vec3& b) {
-    const Vec3 ab = sub(b, a), ap = sub(p, a);
-    const double len2 = dot(ab, ab);
+// Squared distance from p to the segment from a to a + ab, given ap = p - a and len2 = |ab|^2
+// (ab may have zero length).
+double segment_distance2(const Vec3& ap, const Vec3& ab, double len2) {
     double t = len2 > 0 ? dot(ap, ab) / len2 : 0.0;
     t = std::clamp(t, 0.0, 1.0);
     const Vec3 d{ap[0] - t * ab[0], ap[1] - t * ab[1], ap[2] - t * ab[2]};
@@ -265,7 +264,19 @@ double segment_distance2(const Vec3& p, const Vec3& a, const Vec3& b) {
 struct GridTriangle {
     Vec3 a, b, c, n;  // grid coordinates; n = (b - a) x (c - a)
     double n2 = 0;    // |n|^2
+    // Its edges b - a, c - b, a - c and their squared lengths: every sample near the triangle
+    // uses them, so they are computed once.
+    std::array<Vec3, 3> edge{};
+    std::array<double, 3> len2{};
 };
+
+GridTriangle grid_triangle(const Vec3& a, const Vec3& b, const Vec3& c) {
+    GridTriangle t{a, b, c, cross(sub(b, a), sub(c, a)), 0};
+    t.n2 = dot(t.n, t.n);
+    t.edge = {sub(b, a), sub(c, b), sub(a, c)};
+    for (int e = 0; e < 3; ++e) t.len2[e] = dot(t.edge[e], t.edge[e]);
+    return t;
+}
 
 // The bounding box (min, max) of the points of t whose coordinate `axis` lies in [lo, hi]:
 // its vertices there and its edges' crossings of lo and hi (t is convex). False where none is.
@@ -293,17 +304,21 @@ bool box_in_slab(const GridTriangle& t, int axis, double lo, double hi, Vec3& mi
 }
 
 double triangle_distance2(const Vec3& p, const GridTriangle& t) {
+    const Vec3 from[3] = {sub(p, t.a), sub(p, t.b), sub(p, t.c)};  // p from each edge's start
+    bool beyond[3] = {true, true, true};  // p lies outside the edge's side of the triangle
     if (t.n2 > 0) {
-        const Vec3 ap = sub(p, t.a);
-        const bool inside = dot(cross(sub(t.b, t.a), ap), t.n) >= 0 &&
-                            dot(cross(sub(t.c, t.b), sub(p, t.b)), t.n) >= 0 &&
-                            dot(cross(sub(t.a, t.c), sub(p, t.c)), t.n) >= 0;
-        if (inside) {
-            const double d = dot(ap, t.n);
+        for (int e = 0; e < 3; ++e) beyond[e] = dot(cross(t.edge[e], from[e]), t.n) < 0;
+        if (!beyond[0] && !beyond[1] && !beyond[2]) {  // over the triangle: the plane's distance
+            const double d = dot(from[0], t.n);
             return d * d / t.n2;
         }
     }
-    return std::min({segment_distance2(p, t.a, t.b), segment_distance2(p, t.b, t.c), segment_distance2(p, t.c, t.a)});
+    // Else the nearest point is on an edge p lies beyond (in the plane, a convex polygon's
+    // nearest boundary point from outside is on an edge facing the point): only those.
+    double best = std::numeric_limits<double>::infinity();
+    for (int e = 0; e < 3; ++e)
+        if (beyond[e]) best = std::min(best, segment_distance2(from[e], t.edge[e], t.len2[e]));
+    return best;
 }
 
 Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
@@ -385,12 +400,7 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
     std::vector<GridTriangle> gtris;
     if (distance) {
         gtris.reserve(soup.tris.size());
-        for (const auto& t : soup.tris) {
-            GridTriangle g{gp[t[0]], gp[t[1]], gp[t[2]], {}, 0};
-            g.n = cross(sub(g.b, g.a), sub(g.c, g.a));
-            g.n2 = dot(g.n, g.n);
-            gtris.push_back(g);
-        }
+        for (const auto& t : soup.tris) gtris.push_back(grid_triangle(gp[t[0]], gp[t[1]], gp[t[2]]));
     }
 
     const double band = options.band, band2 = band * band;
