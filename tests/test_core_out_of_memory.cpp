@@ -22,6 +22,7 @@
 #include <malloc.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdlib>
 #include <filesystem>
@@ -246,6 +247,38 @@ TEST_CASE("out of memory is an Error from Sculpt::update, which can be retried, 
                     const voxmesh::Mesh mesh = sculpt.mesh();
                     if (mesh.indices != expected.indices || mesh.positions != expected.positions)
                         throw voxmesh::Error("a different mesh after the retried update");
+                    throw;
+                }
+            },
+            "sculpt: out of memory re-meshing " + std::to_string(sculpt.block_count()) + " blocks");
+    }
+    SECTION("a retried update lists the blocks the failed one emptied") {
+        // Blocks are re-meshed in index order on one worker: the z < 64 blocks (some on the
+        // sphere) are emptied first, with no allocation, then the z >= 224 blocks, filled with a
+        // checkerboard, need far more than the cap. A renderer redrawing `changed` must hear of
+        // the emptied blocks from the retry, though their stores were emptied by the failure.
+        sculpt.update();
+        std::vector<std::size_t> emptied;
+        for (std::size_t b = 0; b < sculpt.block_count(); ++b)
+            if (sculpt.block(b).coord[2] < 2 && !sculpt.block(b).indices.empty()) emptied.push_back(b);
+        REQUIRE_FALSE(emptied.empty());
+        check_out_of_memory_is_error(
+            [&] {
+                auto* samples = static_cast<float*>(sculpt.data());
+                const std::size_t plane = 256 * 256;
+                std::fill(samples, samples + 66 * plane, -100.0f);  // block z 1 reads samples up to z 65
+                for (std::size_t i = 224 * plane; i < 256 * plane; ++i) samples[i] = (i + i / 256 + i / plane) % 2 ? 1.f : -1.f;
+                sculpt.invalidate_all();
+                try {
+                    sculpt.update();
+                } catch (const voxmesh::Error&) {
+                    lift_cap();
+                    const voxmesh::UpdateResult retried = sculpt.update();
+                    for (std::size_t b : emptied) {
+                        if (!sculpt.block(b).indices.empty()) throw voxmesh::Error("an emptied block has triangles");
+                        if (!std::binary_search(retried.changed.begin(), retried.changed.end(), b))
+                            throw voxmesh::Error("block " + std::to_string(b) + " was emptied and is not in changed");
+                    }
                     throw;
                 }
             },

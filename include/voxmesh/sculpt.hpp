@@ -45,7 +45,7 @@ struct VoxelizeOptions;  // voxelize.hpp
 
 struct SculptOptions {
     double iso = 0;               // inside where value >= iso
-    unsigned threads = 0;         // update() workers; 0 = all cores
+    unsigned threads = 0;         // update() workers; 0 = all cores (never more than this process may use)
     std::size_t block_size = 32;  // cells per block side, 2..256 (why 32: src/sculpt/sculpt.cpp)
     bool normals = true;
     bool inside_below = false;    // as Options::inside_below: flips winding and normals only
@@ -102,7 +102,10 @@ struct UpdateResult {
 struct SculptMemory {           // bytes
     std::size_t block_meshes = 0;   // capacity of every block's positions, normals, indices
     std::size_t block_table = 0;    // per-block bookkeeping (vectors, dirty flags)
-    std::size_t scratch = 0;        // per-worker scratch (bounded by threads * (B+1)^3 * 6)
+    // Per-worker meshing scratch (about (B+1)^3 * 6 bytes a worker, plus its largest block's
+    // triangle list, at most 60 bytes a cell) and the smooth brush's two plane buffers (16
+    // bytes a sample of the largest x-y extent smoothed).
+    std::size_t scratch = 0;
     std::size_t volume = 0;         // the editable samples
 };
 

@@ -156,7 +156,10 @@ struct Sculpt::Impl {
     std::vector<BlockStore> blocks;
     std::vector<std::uint8_t> dirty_flag;
     std::vector<std::uint32_t> dirty_list;
-    std::vector<std::uint8_t> was_nonempty;  // per dirty-list entry, during update()
+    // Per block: non-empty after the last update() that completed, which is what a caller
+    // redrawing each UpdateResult::changed shows. Not read from the block's store: an update
+    // that fails (out of memory) may leave dirty blocks' stores half re-meshed.
+    std::vector<std::uint8_t> shown_nonempty;
     std::vector<Scratch> scratch;            // per worker
     std::vector<double> plane_prev, plane_cur;  // smoothing: old values of planes z-1 and z
     std::unique_ptr<DeviceBlockMesher> device;  // set: update() re-meshes on this OpenCL device
@@ -441,14 +444,14 @@ struct Sculpt::Impl {
         UpdateResult result;
         const std::size_t jobs = dirty_list.size();
         if (jobs > 0) {
-            was_nonempty.resize(jobs);
-            for (std::size_t i = 0; i < jobs; ++i) was_nonempty[i] = !blocks[dirty_list[i]].indices.empty();
             drop_device_left_in_parent();
             if (!device || no_surface || !remesh_on_device()) remesh_on_cpu();
             for (std::size_t i = 0; i < jobs; ++i) {
                 const std::uint32_t b = dirty_list[i];
                 dirty_flag[b] = 0;
-                if (was_nonempty[i] || !blocks[b].indices.empty()) result.changed.push_back(b);
+                const bool nonempty = !blocks[b].indices.empty();
+                if (shown_nonempty[b] || nonempty) result.changed.push_back(b);
+                shown_nonempty[b] = nonempty;
             }
             std::sort(result.changed.begin(), result.changed.end());
             result.remeshed = jobs;
@@ -750,7 +753,9 @@ std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarT
             Sculpt::Impl& im = *made;
             im.options = options;
             if (im.options.strength_scale == 0) im.options.strength_scale = 1;
-            im.threads = detail::resolve_threads(options.threads);
+            // More workers than the process can run only take turns (each with its own scratch):
+            // capped as extract() caps them; no block mesh depends on the count.
+            im.threads = std::min(detail::resolve_threads(options.threads), detail::resolve_threads(0));
             im.bs = options.block_size;
             im.volume = adopt ? std::move(*adopt) : Volume::allocate(type, dims);
             im.volume.spacing = spacing;
@@ -759,6 +764,7 @@ std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarT
             im.nb = nb;
             im.blocks.resize(count);
             im.dirty_flag.assign(count, 0);
+            im.shown_nonempty.assign(count, 0);
             im.dirty_list.reserve(count);
             dispatch_sculpt_type(type, [&](auto tag) {
                 using T = decltype(tag);
@@ -856,7 +862,7 @@ SculptMemory Sculpt::memory() const {
     for (const BlockStore& b : im.blocks)
         m.block_meshes += 4 * (b.positions.capacity() + b.normals.capacity() + b.indices.capacity());
     m.block_table = im.blocks.capacity() * sizeof(BlockStore) + im.dirty_flag.capacity() +
-                    4 * im.dirty_list.capacity() + im.was_nonempty.capacity();
+                    4 * im.dirty_list.capacity() + im.shown_nonempty.capacity();
     for (const Scratch& s : im.scratch) m.scratch += s.capacity_bytes();
     m.scratch += 8 * (im.plane_prev.capacity() + im.plane_cur.capacity());
     m.volume = im.volume.byte_size();
