@@ -10,6 +10,7 @@
 #include "support/sanitizers.hpp"
 
 #include <voxmesh/io.hpp>
+#include <voxmesh/voxmesh.hpp>
 
 #include <cmath>
 #include <csignal>
@@ -874,6 +875,25 @@ TEST_CASE("cli: sculpt --padding leaves a surface room to be built up", "[cli]")
     CHECK(roomy.out.find("44x44x44 volume") != std::string::npos);
     CHECK(roomy.out.find("closed (euler 2)") != std::string::npos);
     expect_rejected(s, common + quote(s.path("never.ply")) + " --padding 300", "padding", s.path("never.ply"));
+}
+
+// Found by a review: a device that does not exist was found after the model was voxelized,
+// and named as the model file's fault.
+TEST_CASE("cli: sculpt names a device that does not exist before reading the model", "[cli]") {
+    Scratch s;
+    const std::string model = data_file("unit_sphere.stl"), out = s.path("o.ply");
+    const Result r = run(s, "sculpt " + quote(model) + " --resolution 16 --backend opencl --device 99 -o " + quote(out));
+    INFO(r.out << r.err);
+    const std::size_t count = voxmesh::list_devices().size();
+    if (count == 0) {  // no OpenCL here: the CPU re-meshes, with the library's warning
+        CHECK(r.code == 0);
+        CHECK(r.err.find("sculpt re-meshes on the CPU") != std::string::npos);
+        return;
+    }
+    CHECK(r.code == 2);
+    CHECK(r.err == "voxmesh: error: OpenCL device index 99 does not exist (voxmesh devices lists " + std::to_string(count) +
+                       (count == 1 ? " device)\n" : " devices)\n"));
+    CHECK_FALSE(std::filesystem::exists(out));
 }
 
 // Without strokes, sculpt is the paper's pipeline in one step: the file it writes is the one

@@ -67,6 +67,18 @@ TEST_CASE("sculpt strokes: errors name the line", "[sculpt]") {
     REQUIRE_THROWS_WITH(parse("add 1 2 3 4 1e999\n"), Catch::Contains("s.txt:1:"));
     REQUIRE_THROWS_WITH(parse("units parsecs\n"), Catch::Contains("s.txt:1:") && Catch::Contains("units"));
     REQUIRE_THROWS_WITH(voxmesh::read_stroke_script("/nonexistent/strokes.txt"), Catch::Contains("/nonexistent/strokes.txt"));
+    // Found by a review: "+-3" was read as -3, an out-of-range number was "not a number", a
+    // byte order mark made the first op unknown, a directory was a "read error".
+    REQUIRE_THROWS_WITH(parse("add +-3 1 1 1 1\n"), Catch::Equals("s.txt:1: coordinate '+-3' is not a number"));
+    REQUIRE_THROWS_WITH(parse("add ++3 1 1 1 1\n"), Catch::Equals("s.txt:1: coordinate '++3' is not a number"));
+    REQUIRE_THROWS_WITH(parse("add 1e400 1 1 1 1\n"),
+                        Catch::Equals("s.txt:1: coordinate '1e400' is out of range (too large or too small for a double)"));
+    REQUIRE_THROWS_WITH(parse("add 1 1 1 1e-400 1\n"), Catch::Contains("radius '1e-400' is out of range"));
+    const auto bom = parse("\xEF\xBB\xBF" "add 1 2 3 4 1\n");
+    REQUIRE(bom.size() == 1);
+    CHECK(bom[0].dab.op == voxmesh::BrushOp::Add);
+    REQUIRE_THROWS_WITH(parse("add 1 2 3 4 1\n\xEF\xBB\xBF" "add 1 2 3 4 1\n"), Catch::Contains("s.txt:2: unknown op"));
+    REQUIRE_THROWS_WITH(voxmesh::read_stroke_script("/tmp"), Catch::Equals("'/tmp': is a directory, not a stroke script"));
 }
 
 TEST_CASE("sculpt strokes: run_stroke_script applies every dab and reports frames", "[sculpt]") {

@@ -49,6 +49,15 @@ int run_sculpt(const SculptArgs& a) {
     options.backend = parse_backend(a.backend);
     options.device = a.device;
     options.log = [](const std::string& message) { std::cerr << "voxmesh: warning: " << message << "\n"; };
+    // A device that does not exist is named before the model is read and voxelized (minutes at
+    // a high resolution), and not as the model file's fault. With no device at all the CPU
+    // re-meshes, with the library's warning.
+    if (options.backend != Backend::Cpu && a.device >= 0) {
+        const std::size_t count = list_devices().size();
+        if (count > 0 && static_cast<std::size_t>(a.device) >= count)
+            throw BadInput("OpenCL device index " + std::to_string(a.device) + " does not exist (voxmesh devices lists " +
+                           std::to_string(count) + (count == 1 ? " device)" : " devices)"));
+    }
     const auto t0 = std::chrono::steady_clock::now();
     const Mesh model = load_model(a.input, "sculpt");
     VoxelizeOptions voxelize_options = Sculpt::model_voxelization(a.resolution, options);

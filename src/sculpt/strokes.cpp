@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <locale>
@@ -39,8 +40,12 @@ double parse_number(const std::string& token, const std::string& name, std::size
     const char* begin = token.data();
     const char* end = begin + token.size();
     if (!token.empty() && *begin == '+') ++begin;
+    // from_chars takes a '-' itself: one after the '+' ("+-3") is no number.
+    const bool signed_twice = begin != token.data() && begin != end && *begin == '-';
     const auto [ptr, ec] = std::from_chars(begin, end, v);
-    if (ec != std::errc() || ptr != end)
+    if (ec == std::errc::result_out_of_range && ptr == end && !signed_twice)
+        script_error(name, line, std::string(what) + " '" + token + "' is out of range (too large or too small for a double)");
+    if (ec != std::errc() || ptr != end || signed_twice)
         script_error(name, line, std::string(what) + " '" + token + "' is not a number");
     if (!std::isfinite(v)) script_error(name, line, std::string(what) + " '" + token + "' is not finite");
     return v;
@@ -59,6 +64,9 @@ std::vector<ScriptDab> parse_script_lines(std::istream& in, const std::string& n
     std::size_t line = 0;
     while (std::getline(in, text)) {
         ++line;
+        // A UTF-8 byte order mark, as some editors write: invisible, it made the first op
+        // 'unknown' in a message that showed it as it should be.
+        if (line == 1 && text.starts_with("\xEF\xBB\xBF")) text.erase(0, 3);
         // A control byte (a NUL above all) would end or garble the error messages that quote
         // the line's words; a stroke script is text, so such a byte means the wrong file.
         for (const char c : text) {
@@ -112,6 +120,8 @@ std::vector<ScriptDab> parse_stroke_script(std::istream& in, const std::string& 
 }
 
 std::vector<ScriptDab> read_stroke_script(const std::string& path) {
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw Error("'" + path + "': is a directory, not a stroke script");
     std::ifstream in(path);
     if (!in) throw Error("'" + path + "': cannot open the stroke script");
     return parse_stroke_script(in, path);
