@@ -8,6 +8,7 @@ import subprocess
 import sys
 import tempfile
 import unittest
+import warnings
 
 try:
     import numpy as np
@@ -168,6 +169,17 @@ class ExtractTest(unittest.TestCase):
             voxmesh.extract(volume, backend="opencl", devices=[len(found) + 3])
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "unknown device type"):
             voxmesh.extract(volume, device_type="fpga")
+        # One index is one device: devices=0 meant every device (0 is falsy), devices=1 was a
+        # TypeError.
+        if found:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                one = voxmesh.extract(volume, backend="hybrid", devices=0)
+                listed = voxmesh.extract(volume, backend="hybrid", devices=[0])
+            self.assertEqual(one.stats["backend"], listed.stats["backend"])
+            self.assertEqual([d["name"] for d in one.stats["devices"]], [d["name"] for d in listed.stats["devices"]])
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "does not exist|no usable OpenCL|without OpenCL"):
+            voxmesh.extract(volume, backend="opencl", devices=len(found) + 3)
 
     def test_empty_surface(self):
         mesh = voxmesh.extract(np.zeros((8, 8, 8), dtype=np.float32), iso=1.0)
@@ -220,6 +232,23 @@ class ExtractTest(unittest.TestCase):
             voxmesh.extract(np.zeros((1, 4, 4), dtype=np.float32))  # the library's own check
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "NaN"):
             voxmesh.extract(np.full((4, 4, 4), np.nan, dtype=np.float32))
+        # Found by a review: iso went through float() (a string was parsed, None was a
+        # TypeError, 10**400 an OverflowError), a bool was a thread count or a device.
+        for iso in ("0.5", None, 1 + 2j, True):
+            with self.assertRaisesRegex(voxmesh.VoxmeshError, "iso must be a real number"):
+                voxmesh.extract(volume, iso=iso)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "iso 1000.* is beyond the range of a double"):
+            voxmesh.extract(volume, iso=10 ** 400)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "threads must be a whole number; got True"):
+            voxmesh.extract(volume, threads=True)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "devices\\[\\] must be a whole number"):
+            voxmesh.extract(volume, backend="opencl", devices=[True])
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "devices must be device indices"):
+            voxmesh.extract(volume, backend="opencl", devices="0")
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "spacing must be three numbers"):
+            voxmesh.extract(volume, spacing=1.0)
+        self.assertEqual(voxmesh.extract(volume, iso=np.float32(0.5)).triangle_count, 0)
+        self.assertEqual(voxmesh.extract(volume, iso=np.array(0.5)).triangle_count, 0)  # a 0-d array
 
 
 def cube_mesh(side):
@@ -499,6 +528,20 @@ class SculptTest(unittest.TestCase):
             s.add((4, 4), 2)
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "does not exist"):
             s.block(s.block_count)
+
+    def test_an_empty_blocks_normals_are_an_empty_array_when_normals_are_on(self):
+        # None says normals are off: an empty block's were None too (found by a review).
+        for normals in (True, False):
+            s = voxmesh.Sculpt(sphere(20, 6.0), normals=normals)
+            s.set_region((0, 0, 0), (19, 19, 19), -1)
+            s.update()
+            block = s.block(0)
+            self.assertEqual(block.positions.shape, (0, 3))
+            if normals:
+                self.assertEqual(block.normals.shape, (0, 3))
+                self.assertEqual(block.normals.dtype, np.float32)
+            else:
+                self.assertIsNone(block.normals)
 
     def test_opencl_remeshes_on_a_device_or_warns(self):
         volume = sphere(24, 8.0)

@@ -25,6 +25,7 @@ that made this package put it.
 
 import collections
 import ctypes
+import numbers
 import operator
 import os
 import warnings
@@ -525,8 +526,10 @@ _LIMITS = {"threads": _UINT_MAX}
 
 
 def _integer(name, value):
-    """value as an int (a Python or numpy integer); anything else, a float included, is a
-    VoxmeshError rather than a number cut to its whole part."""
+    """value as an int (a Python or numpy integer); anything else, a float or a bool included, is
+    a VoxmeshError rather than a number cut to its whole part."""
+    if isinstance(value, (bool, np.bool_)):
+        raise VoxmeshError(f"{name} must be a whole number; got {value!r}")
     try:
         return operator.index(value)
     except TypeError:
@@ -546,6 +549,34 @@ def _whole_number(name, value, negative_message):
 
 
 _INT_MAX = 2 ** (8 * ctypes.sizeof(ctypes.c_int) - 1) - 1
+
+
+def _real(name, value):
+    """value as a float: a Python or numpy real number, not a string, a bool or a complex (float()
+    parsed '0.5'); one beyond a double's range is a VoxmeshError, not an OverflowError."""
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+        value = value.item()  # a 0-d array, as some numpy reductions give
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise VoxmeshError(f"{name} must be a real number; got {value!r}")
+    try:
+        return float(value)
+    except OverflowError:
+        raise VoxmeshError(f"{name} {value} is beyond the range of a double") from None
+
+
+def _device_list(devices):
+    """extract's devices: None (every device of device_type), one index, or a sequence of them."""
+    if devices is None:
+        return []
+    if isinstance(devices, (numbers.Integral, np.integer)) and not isinstance(devices, (bool, np.bool_)):
+        return [_device_index("devices", devices)]
+    if isinstance(devices, (str, bytes)):
+        raise VoxmeshError(f"devices must be device indices (voxmesh.devices()); got {devices!r}")
+    try:
+        items = list(devices)
+    except TypeError:
+        raise VoxmeshError(f"devices must be device indices (voxmesh.devices()); got {devices!r}") from None
+    return [_device_index("devices[]", d) for d in items]
 
 
 def _device_index(name, value, allow_every=False):
@@ -577,7 +608,7 @@ def _voxelize_options(resolution, padding, field, band, threads):
     options.resolution = int(resolution)
     options.padding = int(padding)
     options.field = _FIELDS[field]
-    options.band = float(band)
+    options.band = _real("band", band)
     options.threads = int(threads)
     return options
 
@@ -597,10 +628,13 @@ def voxelize(mesh, resolution=128, padding=2, field="distance", band=3.0, thread
 def _triple(name, value, default):
     if value is None:
         return [default] * 3
-    values = [float(v) for v in value]
-    if len(values) != 3:
-        raise VoxmeshError(f"{name} must be three numbers (x, y, z); got {len(values)}")
-    return values
+    try:
+        items = list(value)
+    except TypeError:
+        raise VoxmeshError(f"{name} must be three numbers (x, y, z); got {value!r}") from None
+    if len(items) != 3:
+        raise VoxmeshError(f"{name} must be three numbers (x, y, z); got {len(items)}")
+    return [_real(name, v) for v in items]
 
 
 def _unwrap(volume, spacing, origin):
@@ -695,11 +729,11 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
         raise VoxmeshError(f"unknown backend '{backend}' (auto, cpu, opencl, hybrid)")
     if device_type not in _DEVICE_TYPES:
         raise VoxmeshError(f"unknown device type '{device_type}' (any, cpu, gpu, accelerator)")
-    chosen = [_device_index("devices[]", d) for d in (devices or [])]
+    chosen = _device_list(devices)
     _check_automatic(threads=threads, chunk_planes=chunk_planes, memory_budget=memory_budget)
     view, array = _as_view(volume, spacing, origin)  # `array` keeps the samples alive for the call
     options = _lib.voxmesh_default_options()
-    options.iso = float(iso)
+    options.iso = _real("iso", iso)
     options.backend = _BACKENDS[backend]
     options.threads = int(threads)
     options.normals = 1 if normals else 0
@@ -731,7 +765,7 @@ def value_range(volume, equal_to=None, threads=0):
     _check_automatic(threads=threads)
     view, array = _as_view(volume, None, None)  # `array` keeps the samples alive for the call
     result = _ValueRange()
-    target = None if equal_to is None else ctypes.byref(ctypes.c_double(float(equal_to)))
+    target = None if equal_to is None else ctypes.byref(ctypes.c_double(_real("equal_to", equal_to)))
     _check(_lib.voxmesh_compute_value_range(ctypes.byref(view), target, int(threads), ctypes.byref(result)))
     del array
     first = tuple(result.first_nonfinite)[::-1] if result.nonfinite else None
@@ -767,13 +801,13 @@ def _list_query(call, volume, iso, threads, count, per, found_what):
     view, array = _as_view(volume, None, None)  # `array` keeps the samples alive for the call
     found = ctypes.c_size_t()
     if count is None:
-        _check(call(ctypes.byref(view), float(iso), int(threads), None, 0, ctypes.byref(found)))
+        _check(call(ctypes.byref(view), _real("iso", iso), int(threads), None, 0, ctypes.byref(found)))
         count = found.value
     try:
         out = np.empty(count, dtype=np.uint64)
     except (ValueError, MemoryError):
         raise VoxmeshError(f"count {count}: no room for that many {found_what}") from None
-    _check(call(ctypes.byref(view), float(iso), int(threads), out.ctypes.data, len(out), ctypes.byref(found)))
+    _check(call(ctypes.byref(view), _real("iso", iso), int(threads), out.ctypes.data, len(out), ctypes.byref(found)))
     if found.value != len(out):
         raise VoxmeshError(f"count {len(out)} given, but the volume has {found.value} {found_what}")
     del array
@@ -805,7 +839,7 @@ def edge_cell_ranges(volume, edges, offset=0.0, cell_mask=None, threads=0):
         if mask.shape != cells:
             raise VoxmeshError(f"cell_mask must have the cells' shape {cells}; got {mask.shape}")
     ranges = np.empty(len(edges), dtype=np.float32)
-    _check(_lib.voxmesh_edge_cell_ranges(ctypes.byref(view), edges.ctypes.data, len(edges), float(offset),
+    _check(_lib.voxmesh_edge_cell_ranges(ctypes.byref(view), edges.ctypes.data, len(edges), _real("offset", offset),
                                          None if mask is None else mask.ctypes.data, int(threads), ranges.ctypes.data))
     del array, mask
     return ranges
@@ -859,22 +893,19 @@ def _sculpt_options(iso, threads, block_size, normals, inside_below, strength_sc
     for name, value in (("threads", threads), ("block_size", block_size)):
         _whole_number(name, value, f"{name} must not be negative; got {value}")
     options = _lib.voxmesh_default_sculpt_options()
-    options.iso = float(iso)
+    options.iso = _real("iso", iso)
     options.threads = int(threads)
     options.block_size = int(block_size)
     options.normals = 1 if normals else 0
     options.inside_below = 1 if inside_below else 0
-    options.strength_scale = float(strength_scale)
+    options.strength_scale = _real("strength_scale", strength_scale)
     options.backend = _BACKENDS[backend]
     options.device = _device_index("device", device, allow_every=True)
     return options
 
 
 def _point(name, value):
-    values = [float(v) for v in value]
-    if len(values) != 3:
-        raise VoxmeshError(f"{name} must be three numbers (x, y, z); got {len(values)}")
-    return (ctypes.c_double * 3)(*values)
+    return (ctypes.c_double * 3)(*_triple(name, value, None))
 
 
 class Sculpt:
@@ -906,10 +937,11 @@ class Sculpt:
         view, _samples = _as_view(volume, spacing, origin)  # alive for the call; the library copies them
         pointer = ctypes.c_void_p()
         _check(_lib.voxmesh_sculpt_new(ctypes.byref(view), ctypes.byref(options), ctypes.byref(pointer)))
-        self._adopt(pointer.value)
+        self._adopt(pointer.value, normals)
 
-    def _adopt(self, pointer):
+    def _adopt(self, pointer, normals):
         self._handle = _Handle(pointer, _lib.voxmesh_sculpt_free)
+        self._normals = bool(normals)  # an empty block's normals are then an empty array, not None
         view = _lib.voxmesh_sculpt_get_view(pointer)
         nx, ny, nz = view.dims
         # The samples [z, y, x], writable; call invalidate_all() after writing to them.
@@ -934,7 +966,7 @@ class Sculpt:
         _check(_lib.voxmesh_sculpt_from_mesh(model._handle.pointer, ctypes.byref(grid), ctypes.byref(options),
                                              ctypes.byref(pointer)))
         sculpt = cls.__new__(cls)
-        sculpt._adopt(pointer.value)
+        sculpt._adopt(pointer.value, normals)
         return sculpt
 
     def apply(self, brush, center, radius, strength=1.0, units="samples"):
@@ -945,7 +977,7 @@ class Sculpt:
         if units not in _UNITS:
             raise VoxmeshError(f"unknown units '{units}' (samples, world)")
         _check(_lib.voxmesh_sculpt_apply(self._handle.pointer, _BRUSHES[brush], _point("center", center),
-                                         float(radius), float(strength), _UNITS[units]))
+                                         _real("radius", radius), _real("strength", strength), _UNITS[units]))
 
     def add(self, center, radius, strength=1.0, units="samples"):
         self.apply("add", center, radius, strength, units)
@@ -961,7 +993,7 @@ class Sculpt:
         if units not in _UNITS:
             raise VoxmeshError(f"unknown units '{units}' (samples, world)")
         _check(_lib.voxmesh_sculpt_set_region(self._handle.pointer, _point("lo", lo), _point("hi", hi),
-                                              float(value), _UNITS[units]))
+                                              _real("value", value), _UNITS[units]))
 
     def run_strokes(self, script, name="strokes", on_frame=None):
         """A stroke script's text (str or bytes): one dab a line, "op x y z radius strength" with
@@ -1013,7 +1045,10 @@ class Sculpt:
         _check(_lib.voxmesh_sculpt_get_block(self._handle.pointer, int(index), ctypes.byref(found)))
         v, t = found.vertex_count, found.triangle_count
         positions = _view(found.positions, (v, 3), np.float32, None).copy()
+        # The C API gives no array (NULL) for an empty one: None only where normals are off.
         normals = _view(found.normals, (v, 3), np.float32, None).copy() if found.normals else None
+        if normals is None and self._normals:
+            normals = np.empty((0, 3), np.float32)
         indices = _view(found.indices, (t, 3), np.uint32, None).copy()
         return Block(found.index, tuple(found.coord), tuple(found.cell_begin), tuple(found.cell_end), positions,
                      normals, indices)
