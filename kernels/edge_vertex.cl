@@ -13,8 +13,12 @@
 #ifdef USE_FP64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
 typedef double real;
+#define REAL_MIN DBL_MIN
+#define REAL_MAX DBL_MAX
 #else
 typedef float real;
+#define REAL_MIN FLT_MIN
+#define REAL_MAX FLT_MAX
 #endif
 
 typedef VOXEL_T voxel;
@@ -26,11 +30,15 @@ typedef VOXEL_T voxel;
 #endif
 
 // iso - v0. Without fp64, integer samples subtract from iso's integer part exactly and add
-// its fraction, so that large integers keep their precision.
-#if defined(USE_FP64) || !defined(VOXEL_INTEGER)
+// its fraction, so that large integers keep their precision; float samples subtract from iso
+// rounded to float, exactly where v is near it, and add what the rounding left (iso_frac), so
+// that an iso between two floats still splits an edge between them where it lies.
+#if defined(USE_FP64)
 #define ISO_MINUS(v) (iso - (real)(v))
-#else
+#elif defined(VOXEL_INTEGER)
 #define ISO_MINUS(v) ((float)(iso_int - (long)(v)) + iso_frac)
+#else
+#define ISO_MINUS(v) ((iso - (real)(v)) + iso_frac)
 #endif
 
 // t = (iso - v0) / (v1 - v0). The difference can overflow for double samples near ±DBL_MAX,
@@ -40,10 +48,10 @@ typedef VOXEL_T voxel;
 #if defined(VOXEL_INTEGER) || (defined(USE_FP64) && !defined(VOXEL_DOUBLE))
 #define EDGE_T(v0, v1) (ISO_MINUS(v0) / DIFF(v1, v0))
 #else
-#define EDGE_T(v0, v1) edge_t(iso, v0, v1)
-inline real edge_t(const real iso, const voxel v0, const voxel v1) {
+#define EDGE_T(v0, v1) edge_t(iso, iso_frac, v0, v1)
+inline real edge_t(const real iso, const float iso_frac, const voxel v0, const voxel v1) {
     const real d = DIFF(v1, v0);
-    if (isfinite(d)) return (iso - (real)v0) / d;
+    if (isfinite(d)) return ISO_MINUS(v0) / d;
     const real h = (real)0.5;
     return (h * iso - h * (real)v0) / (h * (real)v1 - h * (real)v0);
 }
@@ -126,12 +134,28 @@ VERTEX_INLINE inline void sample_vertices(__global const voxel* data, const uint
         const real n0 = sign * (g0[0] + t * (g1[0] - g0[0]));
         const real n1 = sign * (g0[1] + t * (g1[1] - g0[1]));
         const real n2 = sign * (g0[2] + t * (g1[2] - g0[2]));
+        // As normalise_normal (src/core/edge_vertex.hpp): where |n|^2 overflows or loses its
+        // precision, n scaled by its largest component first.
         const real len2 = n0 * n0 + n1 * n1 + n2 * n2;
-        if (len2 > 0 && isfinite(len2)) {
-            const real inv = (real)1 / sqrt(len2);
-            normal[0] = (float)(n0 * inv);
-            normal[1] = (float)(n1 * inv);
-            normal[2] = (float)(n2 * inv);
+        real s0 = n0, s1 = n1, s2 = n2, inv = 0;
+        bool unit = len2 >= REAL_MIN && len2 <= REAL_MAX;
+        if (unit) {
+            inv = (real)1 / sqrt(len2);
+        } else {
+            const real m = fmax(fabs(n0), fmax(fabs(n1), fabs(n2)));
+            if (m > 0 && m <= REAL_MAX) {
+                s0 = n0 / m;
+                s1 = n1 / m;
+                s2 = n2 / m;
+                const real scaled2 = s0 * s0 + s1 * s1 + s2 * s2;
+                unit = isfinite(scaled2);
+                if (unit) inv = (real)1 / sqrt(scaled2);
+            }
+        }
+        if (unit) {
+            normal[0] = (float)(s0 * inv);
+            normal[1] = (float)(s1 * inv);
+            normal[2] = (float)(s2 * inv);
         } else {
             // Flat gradient: along the edge, from its inside end to its outside end.
             const float s = ((v0 >= thr) != (inside_below != 0)) ? 1.f : -1.f;

@@ -263,6 +263,72 @@ TEST_CASE("OpenCL gives the CPU engine's vertices for samples near the ends of t
     }
 }
 
+// Found by a review: |n|^2 overflowed or lost its precision for gradients near the ends of the
+// range (f64 samples scaled by 1e160 or 1e-162 on every engine; f32 samples scaled by 1e20 or
+// 1e-22 on a device without fp64), and the normals fell back to an edge's axis or came out of
+// unit length. Scaled first, they are the unscaled field's directions.
+TEST_CASE("normals of gradients near the ends of the range are unit, on the CPU and OpenCL", "[opencl]") {
+    Grid g{{24, 24, 24}};
+    const std::vector<float> unit_field = sample(g, [](double x, double y, double z) {
+        return float(0.35 - std::sqrt((x - 0.5) * (x - 0.5) + (y - 0.45) * (y - 0.45) + (z - 0.55) * (z - 0.55)));
+    });
+    Options o;
+    const Mesh reference = run(view_of(unit_field.data(), ScalarType::F32, g), o, Backend::Cpu);
+    REQUIRE(reference.triangle_count() > 500);
+    const auto check_normals = [&](const Mesh& m) {
+        REQUIRE(m.indices == reference.indices);
+        double off = 0;
+        for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+            const float* n = &m.normals[3 * v];
+            CHECK(std::abs(std::hypot(n[0], n[1], n[2]) - 1) < 1e-5);
+            for (int d = 0; d < 3; ++d) off = std::max(off, double(std::abs(n[d] - reference.normals[3 * v + d])));
+        }
+        CHECK(off < 1e-3);
+    };
+    const bool device = have_device();
+    for (const double scale : {1e160, 1e-162, 1e-300}) {
+        INFO("f64 samples x " << scale);
+        std::vector<double> f64(unit_field.size());
+        for (std::size_t i = 0; i < f64.size(); ++i) f64[i] = unit_field[i] * scale;
+        const VolumeView v = view_of(f64.data(), ScalarType::F64, g);
+        const Mesh cpu = run(v, o, Backend::Cpu);
+        check_normals(cpu);
+        if (!device) continue;
+        const Mesh cl = run(v, o, Backend::OpenCL);
+        check_normals(cl);
+        if (list_devices()[0].fp64) CHECK(cl.normals == cpu.normals);  // the same operations in double
+    }
+    if (!device) return;
+    const Pretend no_fp64(detail::opencl_pretend_no_fp64);
+    for (const float scale : {1e20f, 1e-22f, 1e-30f}) {
+        INFO("f32 samples x " << scale << " without fp64");
+        std::vector<float> f32(unit_field.size());
+        for (std::size_t i = 0; i < f32.size(); ++i) f32[i] = unit_field[i] * scale;
+        const VolumeView v = view_of(f32.data(), ScalarType::F32, g);
+        check_normals(run(v, o, Backend::Cpu));
+        check_normals(run(v, o, Backend::OpenCL));
+    }
+}
+
+// Found by a review: without fp64 the kernels took iso as a float, so an iso between two
+// adjacent floats (1 + 2^-24, between 1 and its next float) was rounded onto one of them and a
+// vertex moved by half a cell. What rounding left is now added back.
+TEST_CASE("OpenCL without fp64 places an iso between two adjacent floats where it lies", "[opencl]") {
+    if (!have_device()) return;
+    const Pretend no_fp64(detail::opencl_pretend_no_fp64);
+    Grid g{{4, 4, 4}};
+    std::vector<float> f(g.size());
+    for (std::size_t i = 0; i < f.size(); ++i) f[i] = i % 4 < 2 ? 1.0f : std::nextafter(1.0f, 2.0f);
+    Options o;
+    o.iso = 1 + std::ldexp(1.0, -24);
+    o.inside_below = true;
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, o, Backend::Cpu);
+    REQUIRE(cpu.vertex_count() > 0);
+    CHECK(cpu.positions[0] == 1.5f);
+    require_same(cpu, run(v, o, Backend::OpenCL), v);
+}
+
 // Copies go through two pinned blocks in turns: with the default blocks (one per copy here)
 // and with blocks of 1000 bytes, not a multiple of a sample or a vertex, so that every upload
 // and read-back runs through many of them.

@@ -465,10 +465,12 @@ cl_uint set_arg(cl::Kernel& k, cl_uint i, const ArgVertexFormula& a) {
     };
     real(a.iso);
     // iso - v without fp64: integer samples subtract from iso's integer part exactly (in
-    // range: only a threshold some sample crosses reaches the kernels).
+    // range: only a threshold some sample crosses reaches the kernels); float samples from iso
+    // rounded to float, adding back what the rounding left.
     const double whole = std::floor(a.iso);
+    const double left = a.fp64 ? 0 : a.integer_samples ? a.iso - whole : a.iso - static_cast<float>(a.iso);
     k.setArg(i++, static_cast<cl_long>(a.integer_samples ? whole : 0));
-    k.setArg(i++, static_cast<cl_float>(a.integer_samples ? a.iso - whole : 0));
+    k.setArg(i++, static_cast<cl_float>(left));
     for (const auto* values : {&a.origin, &a.spacing})
         for (double v : *values) real(v);
     for (double v : a.spacing) real(1 / v);

@@ -132,7 +132,8 @@ struct ArgBytes {
     const std::vector<unsigned char>& bytes;
 };
 // The scalar arguments of edge_vertex.cl's formula, in its order: iso (real), iso's integer
-// part (long) and fraction (float) for integer samples without fp64, then origin, spacing and
+// part (long) and fraction (float) for integer samples without fp64 (for float samples, what
+// rounding iso to float left), then origin, spacing and
 // 1 / spacing (real) per axis. real is double where the kernels interpolate in double.
 struct ArgVertexFormula {
     double iso;

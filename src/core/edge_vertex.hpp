@@ -7,6 +7,8 @@
 
 #include <voxmesh/voxmesh.hpp>
 
+#include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -27,16 +29,29 @@ inline void prefetch(const void* p) {
 // kFlatPositive where it points along +axis.
 constexpr unsigned kFlatPositive = 4;
 
-// n / |n| in float; the fallback where |n| is 0 or not finite. Batched code (normal_batch.hpp)
-// does the same operations lane by lane, so every path gives the same bits.
+// n / |n| in float; the fallback where n is 0 or not finite. Batched code (normal_batch.hpp)
+// does the same operations lane by lane, and edge_vertex.cl the same in double, so every path
+// gives the same bits.
 inline void normalise_normal(const double n[3], unsigned flat, float* out) {
     const double len2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-    if (len2 > 0 && std::isfinite(len2)) {
+    if (len2 >= DBL_MIN && len2 <= DBL_MAX) {
         const double inv = 1 / std::sqrt(len2);
         for (unsigned d = 0; d < 3; ++d) out[d] = static_cast<float>(n[d] * inv);
-    } else {
-        for (unsigned d = 0; d < 3; ++d) out[d] = d == (flat & 3) ? (flat & kFlatPositive ? 1.f : -1.f) : 0.f;
+        return;
     }
+    // |n|^2 overflowed or lost its precision (gradients of samples near the ends of double's
+    // range, 1e160 or 1e-160): n scaled by its largest component has the same direction.
+    const double m = std::max({std::abs(n[0]), std::abs(n[1]), std::abs(n[2])});
+    if (m > 0 && m <= DBL_MAX) {
+        const double s[3] = {n[0] / m, n[1] / m, n[2] / m};
+        const double scaled2 = s[0] * s[0] + s[1] * s[1] + s[2] * s[2];  // 1..3, or NaN
+        if (std::isfinite(scaled2)) {
+            const double inv = 1 / std::sqrt(scaled2);
+            for (unsigned d = 0; d < 3; ++d) out[d] = static_cast<float>(s[d] * inv);
+            return;
+        }
+    }
+    for (unsigned d = 0; d < 3; ++d) out[d] = d == (flat & 3) ? (flat & kFlatPositive ? 1.f : -1.f) : 0.f;
 }
 
 // Normals written as they come, normalised one by one.

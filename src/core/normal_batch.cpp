@@ -24,10 +24,10 @@ void normalise_one(const double* x, const double* y, const double* z, const std:
 // Four normals a step, as many whole steps as count holds; returns how many it normalised.
 // len2 = x*x + y*y + z*z in that order, 1 / sqrt(len2), products rounded to float (IEEE
 // square root and divide round exactly, no fused multiply-adds: the scalar bits). Lanes
-// whose len2 is 0 or not finite are redone by the scalar fallback.
+// whose len2 is not a normal finite number are redone by the scalar code (its scaled path).
 [[gnu::target("avx2")]] std::size_t normalise_avx(const double* x, const double* y, const double* z,
                                                   const std::uint8_t* flat, std::size_t count, float* out) {
-    const __m256d one = _mm256_set1_pd(1.0), zero = _mm256_setzero_pd(), max = _mm256_set1_pd(DBL_MAX);
+    const __m256d one = _mm256_set1_pd(1.0), min = _mm256_set1_pd(DBL_MIN), max = _mm256_set1_pd(DBL_MAX);
     std::size_t v = 0;
     for (; v + 4 <= count; v += 4) {
         const __m256d nx = _mm256_loadu_pd(x + v), ny = _mm256_loadu_pd(y + v), nz = _mm256_loadu_pd(z + v);
@@ -42,7 +42,7 @@ void normalise_one(const double* x, const double* y, const double* z, const std:
         for (unsigned l = 0; l < 4; ++l)
             for (unsigned d = 0; d < 3; ++d) o[3 * l + d] = lane[d][l];
         // Ordered compares: false for NaN, so a NaN len2 is redone as well.
-        const __m256d ok = _mm256_and_pd(_mm256_cmp_pd(len2, zero, _CMP_GT_OQ), _mm256_cmp_pd(len2, max, _CMP_LE_OQ));
+        const __m256d ok = _mm256_and_pd(_mm256_cmp_pd(len2, min, _CMP_GE_OQ), _mm256_cmp_pd(len2, max, _CMP_LE_OQ));
         const int bad = ~_mm256_movemask_pd(ok) & 15;
         if (bad)
             for (unsigned l = 0; l < 4; ++l)
