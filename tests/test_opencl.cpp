@@ -506,10 +506,18 @@ TEST_CASE("OpenCL tiny chunks and a small memory budget give the same mesh", "[o
     require_same(cpu, run(v, o, Backend::OpenCL, &stats), v);
     REQUIRE(!stats.devices.empty());
     CHECK(stats.devices[0].chunks > 2);
-    // Forced big chunks under that budget: cut smaller, with a warning.
+    // Forced big chunks under that budget: cut smaller, with a warning. Stats count the chunks
+    // asked for: the halves of a split one were each counted as a chunk.
     o.chunk_planes = 31;
     require_same(cpu, run(v, o, Backend::OpenCL, &stats), v);
     CHECK(!stats.warnings.empty());
+    std::size_t chunks = 0, voxels = 0;
+    for (const DeviceStats& d : stats.devices) {
+        chunks += d.chunks;
+        voxels += d.voxels;
+    }
+    CHECK(chunks == (v.dims[2] + 30) / 31);
+    CHECK(voxels == v.dims[0] * v.dims[1] * v.dims[2]);
     // A budget too small for a single plane: the CPU engine does those chunks.
     o.chunk_planes = 0;
     o.memory_budget = 100;

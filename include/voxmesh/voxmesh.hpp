@@ -110,7 +110,7 @@ struct PassTimes {  // seconds
 
 struct DeviceStats {
     std::string name;           // "cpu" or the OpenCL device name
-    std::size_t chunks = 0;
+    std::size_t chunks = 0;     // chunks it meshed (one split to fit the device counts once)
     std::size_t voxels = 0;     // samples in the chunks it meshed
     double kernel_s = 0;        // device execution time (profiling events)
     double transfer_s = 0;      // host<->device copies

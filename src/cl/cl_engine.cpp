@@ -255,9 +255,15 @@ private:
     // Planes and samples of a chunk (all but the last have the first's size).
     std::size_t chunk_planes() const { return chunks_.front().end - chunks_.front().begin; }
     double chunk_samples() const { return static_cast<double>(chunk_planes() * plane_); }
-    // Chunks a piece covers (a run of them, or 1 for part of one), for the stats.
+    // Chunks a piece covers (a run of them, or 1 for part of one).
     std::size_t chunks_in(ZRange r) const {
         return std::max<std::size_t>(1, (r.end - r.begin + chunk_planes() / 2) / chunk_planes());
+    }
+    // Chunks whose first plane a piece holds, for the stats: the halves of a chunk split to fit
+    // a device count it once between them (each counted as a chunk before).
+    std::size_t chunks_starting_in(ZRange r) const {
+        const std::size_t p = chunk_planes();
+        return (r.end + p - 1) / p - (r.begin + p - 1) / p;
     }
     enum class Take { Run, Later, Done };  // a run of chunks; none yet, ask again; none left
     Take take_back(std::size_t& first, std::size_t& count);
@@ -813,7 +819,7 @@ void Engine::count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Pi
             piece.worker = worker;
             count_on_device(job, piece);
             out.push_back(std::move(piece));
-            job.stats.chunks += chunks_in(range);
+            job.stats.chunks += chunks_starting_in(range);
             job.stats.voxels += planes * plane_;
             return;
         } catch (const TooBig&) {
@@ -836,7 +842,7 @@ void Engine::count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Pi
     const auto t0 = Clock::now();
     out.push_back(count_on_cpu(range, worker, 1));
     std::lock_guard<std::mutex> lock(mutex_);
-    fallback_stats_.chunks += chunks_in(range);
+    fallback_stats_.chunks += chunks_starting_in(range);
     fallback_stats_.voxels += planes * plane_;
     fallback_stats_.wall_s += seconds_since(t0);
 }
@@ -1079,7 +1085,7 @@ void Engine::cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, 
         const std::size_t voxels = (p->range.end - p->range.begin) * plane_;
         std::lock_guard<std::mutex> lock(queue_mutex_);
         cpu_taken_over_.add(seconds_since(t), static_cast<double>(voxels));
-        from->taken_over += chunks_in(p->range);
+        from->taken_over += chunks_starting_in(p->range);
         from->taken_over_voxels += voxels;
     }
     cpu_pass_seconds_[2] += seconds_since(t0);
