@@ -294,6 +294,22 @@ TEST_CASE("voxelize: rays through vertices and along edges leave no streaks", "[
 
 namespace {
 
+// A cone over the unit circle in z = 0 fanned into `segments` slivers from `apex`, its base a
+// fan from the centre: vertices 0..segments-1 on the circle, then the apex, then the centre.
+voxmesh::Mesh fanned_cone(std::uint32_t segments, std::array<float, 3> apex) {
+    voxmesh::Mesh cone;
+    for (std::uint32_t i = 0; i < segments; ++i) {
+        const double a = 2 * std::numbers::pi * i / segments;
+        cone.positions.insert(cone.positions.end(), {float(std::cos(a)), float(std::sin(a)), 0.f});
+    }
+    cone.positions.insert(cone.positions.end(), {apex[0], apex[1], apex[2], 0.f, 0.f, 0.f});
+    for (std::uint32_t i = 0; i < segments; ++i) {
+        const std::uint32_t j = (i + 1) % segments;
+        cone.indices.insert(cone.indices.end(), {i, j, segments, j, i, segments + 1});
+    }
+    return cone;
+}
+
 // The distance from p to triangle abc, the plain way: the foot of the perpendicular where it
 // falls inside, else the nearest of the three edges.
 double oracle_distance(const std::array<double, 3>& p, const std::array<std::array<double, 3>, 3>& t) {
@@ -327,17 +343,7 @@ double oracle_distance(const std::array<double, 3>& p, const std::array<std::arr
 // point): each is scanned only near itself, not over its bounding box, and every sample
 // within the band must still get its exact distance to the nearest triangle.
 TEST_CASE("voxelize: distances near fans of long thin triangles match a brute-force oracle", "[voxelize]") {
-    constexpr int kFan = 90;
-    voxmesh::Mesh cone;
-    for (int i = 0; i < kFan; ++i) {
-        const double a = 2 * std::numbers::pi * i / kFan;
-        cone.positions.insert(cone.positions.end(), {float(std::cos(a)), float(std::sin(a)), 0.f});
-    }
-    cone.positions.insert(cone.positions.end(), {0.2f, -0.1f, 1.3f, 0.f, 0.f, 0.f});  // apex, base centre
-    for (std::uint32_t i = 0; i < kFan; ++i) {
-        const std::uint32_t j = (i + 1) % kFan;
-        cone.indices.insert(cone.indices.end(), {i, j, std::uint32_t(kFan), j, i, std::uint32_t(kFan + 1)});
-    }
+    const voxmesh::Mesh cone = fanned_cone(90, {0.2f, -0.1f, 1.3f});
     std::vector<std::array<std::array<double, 3>, 3>> tris;
     for (std::size_t t = 0; t < cone.triangle_count(); ++t) {
         std::array<std::array<double, 3>, 3> tri;
@@ -369,17 +375,8 @@ TEST_CASE("voxelize: distances near fans of long thin triangles match a brute-fo
 // sees its candidates through the plane's row lists. Inside is where every face plane has
 // the sample behind it; samples on a face (within a thousandth of a voxel) may go either way.
 TEST_CASE("voxelize: inside test of a fanned convex cone matches its face planes", "[voxelize]") {
-    constexpr int kFan = 300;
-    voxmesh::Mesh cone;
-    for (int i = 0; i < kFan; ++i) {
-        const double a = 2 * std::numbers::pi * i / kFan;
-        cone.positions.insert(cone.positions.end(), {float(std::cos(a)), float(std::sin(a)), 0.f});
-    }
-    cone.positions.insert(cone.positions.end(), {0.3f, -0.2f, 1.1f, 0.f, 0.f, 0.f});  // apex, base centre
-    for (std::uint32_t i = 0; i < kFan; ++i) {
-        const std::uint32_t j = (i + 1) % kFan;
-        cone.indices.insert(cone.indices.end(), {i, j, std::uint32_t(kFan), j, i, std::uint32_t(kFan + 1)});
-    }
+    constexpr std::uint32_t kFan = 300;
+    const voxmesh::Mesh cone = fanned_cone(kFan, {0.3f, -0.2f, 1.1f});
     // Outward planes n . p = d of the side triangles and the base (z = 0, facing down).
     std::vector<std::array<double, 4>> planes{{0, 0, -1, 0}};
     const auto at = [&](std::uint32_t v) {
