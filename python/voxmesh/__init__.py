@@ -720,7 +720,7 @@ def extract(volume, iso=0.0, spacing=None, origin=None, backend="auto", threads=
     A sample is inside when value >= iso (value < iso with inside_below, for signed distance
     fields). backend: "auto", "cpu", "opencl" or "hybrid"; threads 0: every CPU this process may
     use. spacing and origin are (x, y, z); a Volume brings its own unless they are given.
-    devices: OpenCL device indices (voxmesh.devices()); device_type: "any", "cpu", "gpu" or
+    devices: OpenCL device indices (voxmesh.devices()), or one index; device_type: "any", "cpu", "gpu" or
     "accelerator". chunk_planes (z-planes per chunk) and memory_budget (bytes per device for one
     chunk) size the OpenCL chunks; 0: automatic. Every backend, thread count, device and chunk
     size gives the same mesh.
