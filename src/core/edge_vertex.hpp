@@ -29,18 +29,10 @@ inline void prefetch(const void* p) {
 // kFlatPositive where it points along +axis.
 constexpr unsigned kFlatPositive = 4;
 
-// n / |n| in float; the fallback where n is 0 or not finite. Batched code (normal_batch.hpp)
-// does the same operations lane by lane, and edge_vertex.cl the same in double, so every path
-// gives the same bits.
-inline void normalise_normal(const double n[3], unsigned flat, float* out) {
-    const double len2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-    if (len2 >= DBL_MIN && len2 <= DBL_MAX) {
-        const double inv = 1 / std::sqrt(len2);
-        for (unsigned d = 0; d < 3; ++d) out[d] = static_cast<float>(n[d] * inv);
-        return;
-    }
-    // |n|^2 overflowed or lost its precision (gradients of samples near the ends of double's
-    // range, 1e160 or 1e-160): n scaled by its largest component has the same direction.
+// n / |n| where |n|^2 overflowed or lost its precision (gradients of samples near the ends of
+// double's range, 1e160 or 1e-160): n scaled by its largest component has the same direction.
+// The fallback where n is 0 or not finite. Out of line: the usual path stays small.
+[[gnu::cold, gnu::noinline]] inline void normalise_scaled(const double n[3], unsigned flat, float* out) {
     const double m = std::max({std::abs(n[0]), std::abs(n[1]), std::abs(n[2])});
     if (m > 0 && m <= DBL_MAX) {
         const double s[3] = {n[0] / m, n[1] / m, n[2] / m};
@@ -52,6 +44,19 @@ inline void normalise_normal(const double n[3], unsigned flat, float* out) {
         }
     }
     for (unsigned d = 0; d < 3; ++d) out[d] = d == (flat & 3) ? (flat & kFlatPositive ? 1.f : -1.f) : 0.f;
+}
+
+// n / |n| in float (normalise_scaled where |n|^2 is not a normal finite number). Batched code
+// (normal_batch.hpp) does the same operations lane by lane, and edge_vertex.cl the same in
+// double, so every path gives the same bits.
+inline void normalise_normal(const double n[3], unsigned flat, float* out) {
+    const double len2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    if (len2 >= DBL_MIN && len2 <= DBL_MAX) [[likely]] {
+        const double inv = 1 / std::sqrt(len2);
+        for (unsigned d = 0; d < 3; ++d) out[d] = static_cast<float>(n[d] * inv);
+        return;
+    }
+    normalise_scaled(n, flat, out);
 }
 
 // Normals written as they come, normalised one by one.
