@@ -81,3 +81,26 @@ TEST_CASE("sculpt: a model voxelized with options of its own: padding, band, and
     vo.field = voxmesh::VoxelField::Occupancy;
     REQUIRE_THROWS_WITH(voxmesh::Sculpt::from_mesh(model, vo, o), Catch::Contains("distance field"));
 }
+
+// Found by a review: a bad option (a device index past the list, a block size) was reported
+// only after the model was voxelized, minutes at a high resolution. A model the voxelizer
+// refuses (no triangles) shows which check came first.
+TEST_CASE("sculpt: from_mesh checks its options before it voxelizes", "[sculpt]") {
+    const voxmesh::Mesh no_triangles;
+    voxmesh::SculptOptions o;
+    REQUIRE_THROWS_WITH(voxmesh::Sculpt::from_mesh(no_triangles, 24, o), Catch::Contains("no triangles"));
+    o.block_size = 1;
+    CHECK_THROWS_WITH(voxmesh::Sculpt::from_mesh(no_triangles, 24, o), Catch::Contains("block size"));
+    o.block_size = 16;
+    o.backend = voxmesh::Backend::Hybrid;
+    CHECK_THROWS_WITH(voxmesh::Sculpt::from_mesh(no_triangles, 24, o), Catch::Contains("hybrid"));
+    o.backend = voxmesh::Backend::OpenCL;
+    o.device = 99;
+    if (voxmesh::list_devices().empty()) {
+        // No device: the CPU re-meshes (with a warning), so the index is no error.
+        CHECK_THROWS_WITH(voxmesh::Sculpt::from_mesh(no_triangles, 24, o), Catch::Contains("no triangles"));
+    } else {
+        CHECK_THROWS_WITH(voxmesh::Sculpt::from_mesh(no_triangles, 24, o),
+                          Catch::Contains("device index 99 does not exist"));
+    }
+}

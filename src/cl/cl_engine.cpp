@@ -1096,7 +1096,7 @@ Mesh Engine::run(Stats& stats) {
     const auto t0 = Clock::now();
     stats.backend = hybrid_ ? Backend::Hybrid : Backend::OpenCL;
     stats.threads = hybrid_ ? threads_ : 0;
-    stats.workers = hybrid_ ? std::min(threads_, resolve_threads(0)) : 0;
+    stats.workers = hybrid_ ? running_threads(threads_) : 0;
     auto report = [&] {
         for (const std::string& w : warnings_) {
             stats.warnings.push_back(w);

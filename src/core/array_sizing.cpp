@@ -12,7 +12,7 @@ void ArraySizing::run(unsigned threads) {
     for (const ByteRange& range : fresh_) fresh_total += range.bytes;
     // Below this, waking workers costs about what they would save.
     constexpr std::size_t kWorthThreads = std::size_t{8} << 20;
-    const unsigned cores = std::min(resolve_threads(threads), resolve_threads(0));
+    const unsigned cores = running_threads(threads);
     if (fresh_total >= kWorthThreads && cores > arrays_.size()) {
         run_workers(cores, [&](unsigned w) {
             for (const ByteRange& share : worker_share(fresh_, cores, w)) populate_for_writing(share.data, share.bytes);

@@ -691,7 +691,7 @@ Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats,
     const unsigned threads = resolve_threads(options.threads);
     stats.backend = Backend::Cpu;
     stats.threads = threads;
-    stats.workers = std::min(threads, resolve_threads(0));
+    stats.workers = running_threads(threads);
 
     CpuChunkPlan plan = cpu_classify(volume, options, ZRange{0, volume.dims[2]}, threads);
     stats.times.classify = plan.classify_seconds;

@@ -46,10 +46,16 @@ void run_workers(unsigned n, F&& f) {
 // a cgroup CPU quota; cpu_count.hpp), counted when the library is loaded.
 unsigned resolve_threads(unsigned requested);
 
+// The workers that run for `requested` threads: resolve_threads(requested) capped at the CPUs
+// (resolve_threads(0)); more only take turns on the same cores, each with its own scratch.
+inline unsigned running_threads(unsigned requested) {
+    return std::min(resolve_threads(requested), resolve_threads(0));
+}
+
 // Slabs for `threads` requested threads over `planes` planes: one for a single thread, else
 // `per_thread` for each thread that actually runs (run_slabs caps them at resolve_threads(0)).
 inline unsigned slab_count(unsigned threads, std::size_t planes, unsigned per_thread) {
-    const unsigned running = std::min(std::max(threads, 1u), resolve_threads(0));
+    const unsigned running = running_threads(std::max(threads, 1u));
     const std::size_t slabs = running > 1 ? std::size_t{per_thread} * running : 1;
     return static_cast<unsigned>(std::max<std::size_t>(1, std::min(slabs, planes)));
 }

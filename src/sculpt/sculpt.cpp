@@ -15,6 +15,7 @@
 
 #include "block_mesher.hpp"
 #include "device_blocks.hpp"
+#include "sculpt_options.hpp"
 #include "core/cpu_engine.hpp"
 #include "core/dims_text.hpp"
 #include "core/out_of_memory.hpp"
@@ -697,8 +698,6 @@ namespace {
 void choose_backend(Sculpt::Impl& im) {
     const SculptOptions& o = im.options;
     if (o.backend == Backend::Cpu) return;
-    if (o.backend == Backend::Hybrid)
-        throw Error("sculpt: the hybrid backend is not supported; use cpu, opencl or auto");
     int index = o.device;
     if (o.backend == Backend::Auto && index < 0) {
         // Auto: a GPU or accelerator re-meshes faster than the CPU's threads; a CPU OpenCL
@@ -717,16 +716,32 @@ void choose_backend(Sculpt::Impl& im) {
     if (!im.device) im.warn("no usable OpenCL device (" + why + "); sculpt re-meshes on the CPU");
 }
 
-std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarType type, std::array<double, 3> spacing,
-                                        std::array<double, 3> origin, const SculptOptions& options, Volume* adopt) {
-    dispatch_sculpt_type(type, [](auto) {});  // rejects other types
+}  // namespace
+
+void detail::sculpt::check_options(const SculptOptions& options) {
     if (options.block_size < 2 || options.block_size > 256)
         throw Error("sculpt: block size must be 2..256 cells, got " + std::to_string(options.block_size));
     if (options.device < -1)  // -1 is the documented "choose one"; other negatives are mistakes
         throw Error("sculpt: device must be -1 (choose a GPU/accelerator) or a device index, got " +
                     std::to_string(options.device));
+    if (options.backend == Backend::Hybrid)
+        throw Error("sculpt: the hybrid backend is not supported; use cpu, opencl or auto");
+    if (options.backend != Backend::Cpu && options.device >= 0) {
+        const std::size_t count = list_devices().size();
+        if (count > 0 && static_cast<std::size_t>(options.device) >= count)
+            throw Error("sculpt: OpenCL device index " + std::to_string(options.device) +
+                        " does not exist; list_devices() has " + std::to_string(count) + " device(s)");
+    }
     check_finite(options.iso, "iso value");
     check_finite(options.strength_scale, "strength scale");
+}
+
+namespace {
+
+std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarType type, std::array<double, 3> spacing,
+                                        std::array<double, 3> origin, const SculptOptions& options, Volume* adopt) {
+    dispatch_sculpt_type(type, [](auto) {});  // rejects other types
+    detail::sculpt::check_options(options);
     VolumeView probe;
     probe.data = &probe;  // validate_volume only checks that data is set
     probe.type = type;
@@ -753,9 +768,8 @@ std::unique_ptr<Sculpt::Impl> make_impl(std::array<std::size_t, 3> dims, ScalarT
             Sculpt::Impl& im = *made;
             im.options = options;
             if (im.options.strength_scale == 0) im.options.strength_scale = 1;
-            // More workers than the process can run only take turns (each with its own scratch):
-            // capped as extract() caps them; no block mesh depends on the count.
-            im.threads = std::min(detail::resolve_threads(options.threads), detail::resolve_threads(0));
+            // Capped as extract() caps them; no block mesh depends on the count.
+            im.threads = detail::running_threads(options.threads);
             im.bs = options.block_size;
             im.volume = adopt ? std::move(*adopt) : Volume::allocate(type, dims);
             im.volume.spacing = spacing;

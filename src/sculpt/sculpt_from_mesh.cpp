@@ -5,6 +5,8 @@
 #include <voxmesh/sculpt.hpp>
 #include <voxmesh/voxelize.hpp>
 
+#include "sculpt_options.hpp"
+
 namespace voxmesh {
 
 VoxelizeOptions Sculpt::model_voxelization(std::size_t resolution, const SculptOptions& options) {
@@ -23,6 +25,7 @@ Sculpt Sculpt::from_mesh(const Mesh& model, const VoxelizeOptions& voxelize_opti
     // Brush strengths and the iso value 0 are in distance units; occupancy has neither.
     if (voxelize_options.field != VoxelField::Distance)
         throw Error("sculpt: a model is sculpted as a distance field; voxelize it with field Distance");
+    detail::sculpt::check_options(options);  // before the voxelizer's seconds, not after
     Volume volume = voxelize(model, voxelize_options);
     SculptOptions so = options;
     if (so.strength_scale == 0) so.strength_scale = volume.spacing[0];

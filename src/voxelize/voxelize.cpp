@@ -405,7 +405,7 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
 
     const double band = options.band, band2 = band * band;
     const unsigned workers =
-        static_cast<unsigned>(std::min<std::size_t>({detail::resolve_threads(options.threads), detail::resolve_threads(0), nz}));
+        static_cast<unsigned>(std::min<std::size_t>(detail::running_threads(options.threads), nz));
     std::vector<std::size_t> inside_samples(workers, 0);
     detail::run_workers(workers, [&](unsigned w) {
         const auto [z0, z1] = detail::share_of(nz, w, workers);
