@@ -135,6 +135,18 @@ TEST_CASE("nifti: axes in the negative direction are reversed from the minimum c
         put_sform(n, {3, 0, 0, 1, 0, -0.5, 0, 2, 0, 0, 4, 3});
         check_geometry(s.file("s.nii", n.file()), {false, true, false}, {3, 0.5, 4}, {1, 2 - 0.5 * 2, 3});
     }
+    // Found by a review: a slightly oblique axis (as most scans converted from DICOM) kept its
+    // negative direction unflipped, so the mesh came out mirrored and 8 mm off here.
+    SECTION("a slightly oblique sform still flips its negative axis; only the tilt is dropped") {
+        Nifti n(false);
+        put_sform(n, {-2, 0, 0, 10, 0.002f, 2, 0, 0, 0, 0, 2, 0});  // column 0 tilted by 0.06 degrees
+        const std::string path = s.file("o.nii", n.file());
+        const VolumeInfo info = read_volume_info(path);
+        CHECK(info.rotation_dropped);
+        CHECK(info.flipped == std::array<bool, 3>{true, false, false});
+        CHECK(info.origin[0] == Approx(10 - 2 * 3).epsilon(1e-6));  // x sample 3 of the file
+        check_flipped_samples(read_volume(path), {true, false, false});
+    }
     SECTION("a permuting sform is dropped, not flipped") {
         Nifti n(false);
         put_sform(n, {0, -2, 0, 1, -1.5, 0, 0, 2, 0, 0, 2.5, 3});

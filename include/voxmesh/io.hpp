@@ -20,15 +20,17 @@
 // and qfac = pixdim[0] as in the NIfTI-1 standard). Spacing is the NRRD vector's length
 // (or NRRD `spacings`), MetaImage ElementSpacing, the length of the NIfTI sform's column
 // (sform) or pixdim (qform, or no transform).
-// An axis whose direction is the negative of its own world axis (e.g. the common NIfTI
-// sform diag(-2, 2, 2)) is "flipped": its samples are reversed on load and the origin moved
+// An axis whose direction points mostly along the negative of its own world axis (its largest
+// component is that axis's and negative: e.g. the common NIfTI sform diag(-2, 2, 2), also
+// slightly oblique) is "flipped": its samples are reversed on load and the origin moved
 // to the grid's minimum corner (origin_a - spacing_a * (n_a - 1)), so every sample keeps
 // its position and meshes land where the file says, unmirrored. VolumeInfo::flipped says
 // which axes. A negative spacing (NRRD `spacings`, MetaImage ElementSpacing,
 // RawLayout::spacing) runs its axis the other way and is flipped alike; the sign of NIfTI's
-// pixdim[1..3] is ignored, as nifti1_io does. Any other direction (a rotation, an axis
-// permutation, an oblique axis) is dropped: that axis keeps its spacing and the origin as
-// written, and VolumeInfo::rotation_dropped says so.
+// pixdim[1..3] is ignored, as nifti1_io does. The rest of a direction (an oblique axis's
+// off-axis part, a rotation, an axis permutation, which is never flipped) is dropped: the axis
+// keeps its spacing (the direction's length) and the origin as written, apart from the flip,
+// and VolumeInfo::rotation_dropped says so.
 //
 // NIfTI scl_slope / scl_inter are NOT applied: the samples keep their stored type and
 // values (so they can be mapped, and an iso value means the same as in other tools that

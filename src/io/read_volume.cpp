@@ -53,11 +53,16 @@ AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes) {
         if (length == 0) continue;
         // Headers store directions as floats or rounded text: off-axis parts this small are noise.
         const double noise = 1e-6 * length;
-        bool off_axis = false;
-        for (std::size_t c = 0; c < v.size(); ++c)
+        bool off_axis = false, own_largest = a < v.size();
+        for (std::size_t c = 0; c < v.size(); ++c) {
             if (c != a && std::fabs(v[c]) > noise) off_axis = true;
-        if (off_axis || a >= v.size()) d.rotation_dropped = true;
-        else d.flipped[a] = v[a] < 0;
+            if (own_largest && std::fabs(v[c]) > std::fabs(v[a])) own_largest = false;
+        }
+        if (off_axis || !own_largest) d.rotation_dropped = true;
+        // An axis mostly along its own world axis takes that axis's sign even when slightly
+        // oblique (scans converted from DICOM usually are): keeping a negative axis unflipped
+        // would mirror the mesh. Only the small off-axis part is dropped.
+        if (own_largest) d.flipped[a] = v[a] < 0;
     }
     return d;
 }
