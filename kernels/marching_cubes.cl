@@ -323,6 +323,9 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
     const uint r = (uint)get_global_id(0);
     if (r >= rows || scanned_count(vbase, r, rows, vend) == 0) return;
     const uint row_first = vbase[r];
+    // A row's vertices stay in its share even where samples packed again (classify_repack)
+    // differ from those counted: the caller wrote to the volume during the call.
+    const uint row_end = row_first + scanned_count(vbase, r, rows, vend);
     uint id = row_first;
     const uint p = r / ny;
     const uint j = r - p * ny;
@@ -352,6 +355,7 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
             const uint b = lowest_bit(any);
             const uint x = 32 * q + b;
             const uint axes = (m.x >> b & 1u) | (m.y >> b & 1u) << 1 | (m.z >> b & 1u) << 2;
+            if (id + popcount(axes) > row_end) return;
             sample_vertices(data, row_sample + x, x, j, z, axes, nx, plane, nx, ny, nz, thr, iso, iso_int, iso_frac, ox,
                             oy, oz, sx, sy, sz, ix, iy, iz, inside_below, want_normals, positions + 3 * id,
                             normals + 3 * id);
@@ -393,6 +397,7 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
         row_first[k] = vertex_offset + vbase[rk];
     }
     __global uint* out = indices + 3 * t;
+    __global const uint* const out_end = out + 3 * scanned_count(tbase, r, rows, tend);  // as row_end above
     const uint group = word_group(words);
     for (ulong g = cell_groups[r]; g; g &= g - 1) {
         const uint first = lowest_bit64(g) * group;
@@ -418,6 +423,7 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
                 const uint b = lowest_bit(cells);
                 __constant uchar* corners = pair_corners + 16 * cell_pairs(w, b);
                 const uint n = corners[0];
+                if (out + 3 * n > out_end) return;
                 // The ids of the cell's 12 edges, by corner code (dx | k << 1 | axis << 3):
                 // a row's edges at sample b start after those before it in the word, its
                 // edges at b + 1 after those at b. Once per cell, not per corner. Only the

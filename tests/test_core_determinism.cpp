@@ -242,3 +242,42 @@ TEST_CASE("extract_into gives extract()'s mesh in a reused mesh's storage", "[co
     CHECK(mesh.normals.empty());
     CHECK(mesh.indices.empty());
 }
+
+// Found by a review: a Python thread writing to an 8-bit volume during extract (the call
+// releases the GIL) corrupted the heap. Generate reads 8-bit rows again, and wrote their
+// crossings where classify's counts put them, past the arrays when there were more. Now a
+// row that differs from its count is refused before it writes past its share.
+TEST_CASE("a volume changed between classify and generate is an Error, not a write past the mesh", "[core]") {
+    namespace d = voxmesh::detail;
+    const Dims dims{24, 20, 18};
+    std::vector<std::uint8_t> values(dims[0] * dims[1] * dims[2]);
+    const auto sphere = [&] {
+        for (std::size_t z = 0; z < dims[2]; ++z)
+            for (std::size_t y = 0; y < dims[1]; ++y)
+                for (std::size_t x = 0; x < dims[0]; ++x) {
+                    const double dx = double(x) - 11.5, dy = double(y) - 9.5, dz = double(z) - 8.5;
+                    values[x + dims[0] * (y + dims[1] * z)] = dx * dx + dy * dy + dz * dz < 49 ? 200 : 10;
+                }
+    };
+    const voxmesh::VolumeView view = vmtest::view_of(values, dims);
+    for (const unsigned threads : {1u, 2u}) {
+        for (const bool more : {true, false}) {
+            sphere();
+            const voxmesh::Options options = cpu_options(100, threads);
+            const d::CpuChunkPlan plan = d::cpu_classify(view, options, d::ZRange{0, dims[2]}, threads);
+            REQUIRE(plan.triangles > 0);
+            // More crossings (a checkerboard: every edge crosses) or fewer (all outside).
+            for (std::size_t i = 0; i < values.size(); ++i)
+                values[i] = more ? ((i + i / dims[0] + i / (dims[0] * dims[1])) % 2 ? 200 : 10) : 10;
+            // Sized exactly as classify counted, so a write past them is an ASan error.
+            std::vector<float> positions(3 * plan.vertices), normals(3 * plan.vertices);
+            std::vector<std::uint32_t> indices(3 * plan.triangles);
+            CHECK_THROWS_WITH(d::cpu_generate(plan, view, options, threads,
+                                              d::MeshOut{positions.data(), normals.data(), indices.data(), 0}),
+                              Catch::Contains("changed while it was being meshed"));
+        }
+    }
+    // Unchanged, the same call meshes as extract() does.
+    sphere();
+    CHECK(voxmesh::extract(view, cpu_options(100, 2)).triangle_count() > 0);
+}

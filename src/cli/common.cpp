@@ -195,7 +195,7 @@ Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads
     if (info.rotation_dropped)
         std::cerr << "voxmesh: warning: '" << input.display()
                   << "': the direction matrix is not axis-aligned; its rotation is dropped and the mesh is in the "
-                     "volume's index axes (spacing and origin as written)\n";
+                     "volume's index axes, each running the way it mostly points\n";
     if (info_out) *info_out = std::move(info);
     return finite_samples(std::move(v), input.display(), threads);
 }

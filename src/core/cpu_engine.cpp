@@ -429,6 +429,7 @@ private:
             const std::uint32_t base = row_first;
             row_first += rows[j].vertices;
             if (rows[j].empty()) continue;
+            const std::uint32_t row_end = row_first;
             const Word* row = plane.row(j);
             const Word* next_y = plane.row(j + 1 < ny_ ? j + 1 : j);  // the row itself: no edge
             const Word* next_z = (up ? *up : plane).row(j);
@@ -442,6 +443,8 @@ private:
                     const unsigned r = static_cast<unsigned>(std::countr_zero(any));
                     const std::size_t i = 64 * q + r;
                     const unsigned c = static_cast<unsigned>((m.x >> r & 1) | (m.y >> r & 1) << 1 | (m.z >> r & 1) << 2);
+                    if (next_id + static_cast<unsigned>(std::popcount(c)) > row_end) [[unlikely]]
+                        throw_volume_changed(z);
                     if (write_vertices) {
                         const std::size_t at = 3 * static_cast<std::size_t>(next_id);
                         vertex_.sample(vertex_row, i, c, out_.positions + at, normals);
@@ -453,6 +456,7 @@ private:
                     }
                 }
             }
+            if (next_id != row_end) [[unlikely]] throw_volume_changed(z);
         }
         if (normals) normals->flush();
     }
@@ -496,8 +500,10 @@ private:
                     cases[n++] = static_cast<std::uint64_t>(i) << 8 | cell.cell_case(r);
                 }
             }
+            const std::uint32_t* row_out_end = out + 3 * static_cast<std::size_t>(rows[j].triangles);
             for (std::size_t m = 0; m < n; ++m) {
                 const CaseEntry& entry = kCaseTable[cases[m] & 255];
+                if (out + 3 * entry.count > row_out_end) [[unlikely]] throw_volume_changed(k);
                 const Id* cell_ids = row_ids + EdgeIds<Id>::kSampleSlots * static_cast<std::size_t>(cases[m] >> 8);
                 for (unsigned t = 0; t < entry.count; ++t) {
                     std::uint32_t v[3];
@@ -511,6 +517,7 @@ private:
                     out += 3;
                 }
             }
+            if (out != row_out_end) [[unlikely]] throw_volume_changed(k);
         }
     }
 
@@ -562,6 +569,11 @@ NonFiniteSamples::NonFiniteSamples(std::size_t plane)
       plane(plane) {}
 
 void throw_non_finite(std::size_t plane) { throw NonFiniteSamples(plane); }
+
+void throw_volume_changed(std::size_t plane) {
+    throw Error("the volume's samples changed while it was being meshed (z-plane " + std::to_string(plane) +
+                " read twice gave other crossings); keep the volume unchanged until extract returns");
+}
 
 std::size_t first_non_finite_plane(const VolumeView& volume) {
     return dispatch_scalar(volume.type,
