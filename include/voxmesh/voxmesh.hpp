@@ -141,6 +141,9 @@ struct Stats {
 // Callable from several threads at once, with any backends: the calls share the CPU thread
 // pool and the OpenCL devices (a device meshes for one call at a time, the others wait for
 // it), and each still returns the canonical mesh.
+// The samples are read more than once: keep them unchanged until the call returns. Written to
+// meanwhile (a data race), a call may throw Error ("the volume's samples changed while it was
+// being meshed") or mesh a mix of old and new samples; it never writes past the mesh.
 // In a child forked after the parent used OpenCL, the parent's devices are not listed (their
 // runtime's threads stayed in the parent): Auto meshes on the CPU, OpenCL throws an Error.
 // The child may fork while other threads are inside calls; its own calls still work.
