@@ -47,9 +47,10 @@ namespace {
 
 thread_local std::string g_last_error;
 
-voxmesh_status fail(voxmesh_status status, std::string message) noexcept {
+// const char*, not std::string: a string made in guarded()'s catch handler could throw there.
+voxmesh_status fail(voxmesh_status status, const char* message) noexcept {
     try {
-        g_last_error = std::move(message);
+        g_last_error = message;
     } catch (...) {
         g_last_error.clear();  // no memory even for the message: the status still tells
     }
@@ -577,8 +578,9 @@ voxmesh_status voxmesh_mesh_from_arrays(const float* positions, size_t vertex_co
         require(mesh, "voxmesh_mesh_from_arrays", "the mesh pointer");
         if (vertex_count) require(positions, "voxmesh_mesh_from_arrays", "positions");
         if (triangle_count) require(indices, "voxmesh_mesh_from_arrays", "indices");
-        constexpr size_t kMax = ~size_t{0} / 3 / sizeof(float);
-        if (vertex_count > kMax || triangle_count > kMax)
+        // What the vectors can hold (beyond that assign throws std::length_error, not an Error).
+        const size_t most = std::min(std::vector<float>().max_size(), std::vector<uint32_t>().max_size()) / 3;
+        if (vertex_count > most || triangle_count > most)
             throw voxmesh::Error("voxmesh_mesh_from_arrays: " + std::to_string(std::max(vertex_count, triangle_count)) +
                                  " elements cannot be addressed");
         voxmesh::Mesh copy;
