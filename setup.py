@@ -45,7 +45,8 @@ class BuildWithLibrary(build_py):
         package = os.path.join(self.build_lib, "voxmesh")
         shutil.copyfile(built[0], os.path.join(package, LIBRARY))
         with open(os.path.join(package, "_library.py"), "w") as f:
-            f.write(f'# Written by setup.py: the library pip installed with this package.\nPATH = "{LIBRARY}"\n')
+            f.write(f'# Written by setup.py: the library pip installed with this package.\nPATH = "{LIBRARY}"\n'
+                    f'VERSION = "{project_version()}"\n')
 
 
 class BinaryDistribution(Distribution):

@@ -80,7 +80,10 @@ int main(int argc, char** argv) {
         fprintf(stderr, "usage: c_api_program <scratch-dir> <volume-file>\n");
         return 2;
     }
-    CHECK(strcmp(voxmesh_version(), "0.1.0") >= 0);
+    /* Found by a review: the version macros were only in voxmesh.hpp, not in the C header. */
+    snprintf(path, sizeof path, "%d.%d.%d", VOXMESH_VERSION_MAJOR, VOXMESH_VERSION_MINOR, VOXMESH_VERSION_PATCH);
+    CHECK(strcmp(voxmesh_version(), path) == 0);
+    CHECK(strcmp(voxmesh_version(), VOXMESH_VERSION_STRING) == 0);
     CHECK(options.normals == 1 && options.threads == 0 && options.iso == 0 && options.backend == VOXMESH_BACKEND_AUTO);
 
     for (z = 0; z < N; ++z)

@@ -850,6 +850,20 @@ class FilesTest(unittest.TestCase):
     def test_version(self):
         self.assertRegex(voxmesh.version(), r"^\d+\.\d+\.\d+$")
 
+    def test_a_library_of_another_version_is_refused(self):
+        # Found by a review: the package loaded any libvoxmesh_c, whose structs may differ.
+        import shutil
+        package = os.path.dirname(voxmesh.__file__)
+        scratch = tempfile.mkdtemp(dir=os.environ.get("VOXMESH_TEST_SCRATCH"))
+        shutil.copytree(package, os.path.join(scratch, "voxmesh"), ignore=shutil.ignore_patterns("__pycache__"))
+        with open(os.path.join(scratch, "voxmesh", "_library.py"), "w") as f:
+            f.write(f"PATH = {voxmesh._library_path()!r}\nVERSION = '9.9.9'\n")
+        environment = dict(os.environ, PYTHONPATH=scratch)
+        environment.pop("VOXMESH_LIBRARY", None)
+        run = subprocess.run([sys.executable, "-c", "import voxmesh"], env=environment, capture_output=True, text=True)
+        self.assertNotEqual(run.returncode, 0)
+        self.assertIn(f"is version {voxmesh.version()}, but this Python package is 9.9.9", run.stderr)
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)

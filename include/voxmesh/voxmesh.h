@@ -16,6 +16,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "version.h" /* VOXMESH_VERSION_MAJOR, _MINOR, _PATCH, _STRING: what voxmesh_version() says */
+
 #ifdef __cplusplus
 extern "C" {
 #endif

@@ -13,10 +13,7 @@
 #include <string>
 #include <vector>
 
-#define VOXMESH_VERSION_MAJOR 0
-#define VOXMESH_VERSION_MINOR 1
-#define VOXMESH_VERSION_PATCH 0
-#define VOXMESH_VERSION_STRING "0.1.0"
+#include "version.h"  // VOXMESH_VERSION_MAJOR, _MINOR, _PATCH, _STRING
 
 namespace voxmesh {
 

@@ -146,8 +146,26 @@ def _library_path():
     return os.path.join(os.path.dirname(os.path.abspath(__file__)), _library.PATH)
 
 
+def _expected_version():
+    """The library version this package was built with (_library.VERSION, written by CMake or
+    setup.py); None where the package does not know it."""
+    try:
+        from . import _library
+    except ImportError:
+        return None
+    return getattr(_library, "VERSION", None)
+
+
 def _load():
-    lib = ctypes.CDLL(_library_path())
+    path = _library_path()
+    lib = ctypes.CDLL(path)
+    lib.voxmesh_version.restype = ctypes.c_char_p
+    lib.voxmesh_version.argtypes = []
+    # Structs and calls are declared below for one version: another's may differ in layout.
+    expected, found = _expected_version(), lib.voxmesh_version().decode()
+    if expected is not None and found != expected:
+        raise ImportError(f"voxmesh: the library {path} is version {found}, but this Python package is "
+                          f"{expected}; install matching versions or point VOXMESH_LIBRARY at the right one")
     handle = ctypes.c_void_p
     lib.voxmesh_default_options.restype = _Options
     lib.voxmesh_default_options.argtypes = []
@@ -194,8 +212,6 @@ def _load():
     _declare_io(lib, handle)
     lib.voxmesh_last_error.restype = ctypes.c_char_p
     lib.voxmesh_last_error.argtypes = []
-    lib.voxmesh_version.restype = ctypes.c_char_p
-    lib.voxmesh_version.argtypes = []
     return lib
 
 
