@@ -7,6 +7,7 @@ import pathlib
 import subprocess
 import sys
 import tempfile
+import threading
 import unittest
 import warnings
 
@@ -365,6 +366,49 @@ class SculptTest(unittest.TestCase):
         else:
             self.assertTrue(np.array_equal(got.normals, want.normals))
 
+    def test_threads_take_turns_on_one_sculpt(self):
+        # Found by a review: every C call releases the GIL, so threads ran the C++ Sculpt at
+        # once (heap corruption, "out of date" errors). Now they take turns: the result is
+        # the edits replayed on one thread.
+        volume = sphere(32, 9.0)
+        dabs = [tuple(c) for c in np.random.default_rng(1).uniform(12, 20, (400, 3))]
+        sculpt = voxmesh.Sculpt(volume, block_size=4, threads=1)
+        errors = []
+
+        def run(work):
+            try:
+                work()
+            except Exception as error:  # noqa: B902 - reported below
+                errors.append(error)
+
+        def edit():
+            for center in dabs:
+                sculpt.add(center, 2.5, strength=0.05)
+
+        def remesh():
+            for _ in range(30):
+                for index in sculpt.update().changed[:4]:
+                    sculpt.block(index)
+                sculpt.mesh()
+
+        threads = [threading.Thread(target=run, args=(work,)) for work in (edit, remesh, remesh)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        self.assertEqual(errors, [])
+        replay = voxmesh.Sculpt(volume, block_size=4, threads=1)
+        for center in dabs:
+            replay.add(center, 2.5, strength=0.05)
+        self.assertTrue(np.array_equal(sculpt.array, replay.array))
+        mesh = sculpt.mesh()
+        self.assertTrue(mesh.topology().closed)
+        self.assert_same_mesh(mesh, replay.mesh())
+        # on_frame runs inside the strokes' call, on the same thread: it may use the sculpt.
+        seen = []
+        sculpt.run_strokes("add 16 16 16 2 0.1\n", on_frame=lambda frame: seen.append(sculpt.block(0).index))
+        self.assertEqual(seen, [0])
+
     def test_edits_remesh_some_blocks_and_weld_to_extract(self):
         s = self.make()
         self.assertEqual(s.block_grid, (5, 5, 5))
@@ -646,6 +690,76 @@ class BytesAndFilesTest(unittest.TestCase):
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "spacing"):
             voxmesh.write_nrrd(out, samples, spacing=(0.0, 1.0, 1.0))
         self.assertTrue(np.array_equal(voxmesh.read_volume(out).array, samples))  # nothing lost
+
+    def test_raw_byte_order_from_the_dtype(self):
+        # Found by a review: the dtype's byte order was ignored ('>f4' was read little-endian).
+        scratch = tempfile.mkdtemp(dir=os.environ.get("VOXMESH_TEST_SCRATCH"))
+        samples = np.linspace(-2.0, 3.0, 24, dtype=np.float32).reshape(2, 3, 4)
+        big, little = os.path.join(scratch, "big.raw"), os.path.join(scratch, "little.raw")
+        samples.astype(">f4").tofile(big)
+        samples.astype("<f4").tofile(little)
+        for path, dtype, big_endian in ((big, ">f4", None), (big, np.dtype(">f4"), None), (big, ">f4", True),
+                                        (big, np.float32, True), (little, "<f4", None), (little, "<f4", False),
+                                        (little, np.float32, None), (little, "f4", False)):
+            with self.subTest(path=path, dtype=dtype, big_endian=big_endian):
+                read = voxmesh.read_raw(path, (2, 3, 4), dtype, big_endian=big_endian)
+                self.assertTrue(np.array_equal(read.array, samples))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "dtype '>f4' is big-endian but big_endian=False"):
+            voxmesh.read_raw(big, (2, 3, 4), ">f4", big_endian=False)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "dtype '<f4' is little-endian but big_endian=True"):
+            voxmesh.read_raw(big, (2, 3, 4), "<f4", big_endian=True)
+
+    def test_sizes_the_c_fields_cannot_hold_are_refused(self):
+        # Found by a review: ctypes kept the low bits (2**64 + 2 was 2, 2**64 was 0) and int()
+        # the whole part (2.7 was 2) of read_raw's shape and offset, largest_components' count
+        # and Sculpt.block's index, which then read or returned something else.
+        scratch = tempfile.mkdtemp(dir=os.environ.get("VOXMESH_TEST_SCRATCH"))
+        raw = os.path.join(scratch, "eight.raw")
+        np.arange(8, dtype=np.uint8).tofile(raw)
+        for shape, message in (((2 ** 64 + 2, 2, 2), "shape must be at most"), ((2.7, 2, 2), "shape must be a whole"),
+                               ((-2, 2, 2), "shape must be three sizes"), (8, "shape must be three sizes")):
+            with self.subTest(shape=shape), self.assertRaisesRegex(voxmesh.VoxmeshError, message):
+                voxmesh.read_raw(raw, shape, np.uint8)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "offset must be at most"):
+            voxmesh.read_raw(raw, (2, 2, 2), np.uint8, offset=2 ** 64)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "offset must be a whole"):
+            voxmesh.read_raw(raw, (2, 2, 2), np.uint8, offset=0.5)
+        self.assertEqual(voxmesh.read_raw(raw, (2, 2, 2), np.uint8, offset=np.int64(0)).array.size, 8)
+        mesh = voxmesh.extract(sphere(12, 4.0))
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "count must be at most"):
+            mesh.largest_components(2 ** 64 + 1)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "count must be a whole"):
+            mesh.largest_components(1.5)
+        sculpt = voxmesh.Sculpt(sphere(12, 4.0), block_size=4)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "index must be a whole"):
+            sculpt.block(1.5)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "does not exist"):
+            sculpt.block(2 ** 64 + 1)
+
+    def test_odd_arguments_fail_cleanly(self):
+        # Found by a review: a deep copy's unfinished handle printed "Exception ignored in
+        # _Handle.__del__"; to_bytes(b"stl") named "mesh.b'stl'"; a non-contiguous memoryview
+        # raised BufferError.
+        import copy
+        mesh = voxmesh.extract(sphere(12, 4.0))
+        unraisable = []
+        default_hook, sys.unraisablehook = sys.unraisablehook, unraisable.append
+        try:
+            try:
+                copy.deepcopy(mesh)
+            except Exception:  # noqa: B902 - refusing is fine; a noisy half-made copy is not
+                pass
+            import gc
+            gc.collect()
+        finally:
+            sys.unraisablehook = default_hook
+        self.assertEqual([str(u.exc_value) for u in unraisable], [])
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "format must be a str"):
+            mesh.to_bytes(b"stl")
+        with open(os.path.join(DATA, "headsq.nrrd"), "rb") as f:
+            data = f.read()
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "contiguous"):
+            voxmesh.read_volume(memoryview(data)[::2], name="headsq.nrrd")
 
     def test_largest_components_drops_the_small_ball(self):
         z, y, x = np.mgrid[:24, :24, :40]

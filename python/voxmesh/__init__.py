@@ -28,6 +28,7 @@ import ctypes
 import numbers
 import operator
 import os
+import threading
 import warnings
 
 import numpy as np
@@ -342,6 +343,8 @@ def _check(status):
 class _Handle:
     """Owns one C object; frees it when the last array or wrapper using it is gone."""
 
+    pointer = None  # for an instance __init__ never ran on (copy.deepcopy makes those)
+
     def __init__(self, pointer, free):
         self.pointer, self._free = pointer, free
 
@@ -425,16 +428,17 @@ class Mesh:
 
     def to_bytes(self, format="stl"):
         """The bytes write() would write for a file of that format ("stl", "ply" or "obj")."""
+        if not isinstance(format, str):
+            raise VoxmeshError(f"format must be a str (\"stl\", \"ply\" or \"obj\"); got {format!r}")
         return _take_bytes(lambda out: _lib.voxmesh_write_mesh_to_memory(self._handle.pointer,
                                                                           f"mesh.{format}".encode(), out))
 
     def largest_components(self, count=1):
         """The `count` connected pieces with the most triangles, in their order (a CT's surface
         without the specks of noise around it); normals kept."""
-        if int(count) < 0:
-            raise VoxmeshError(f"count must be at least 1; got {count}")
+        count = _whole_number("count", count, f"count must be at least 1; got {count}")
         pointer = ctypes.c_void_p()
-        _check(_lib.voxmesh_keep_largest_components(self._handle.pointer, int(count), ctypes.byref(pointer)))
+        _check(_lib.voxmesh_keep_largest_components(self._handle.pointer, count, ctypes.byref(pointer)))
         return Mesh(pointer.value)
 
     @property
@@ -518,6 +522,8 @@ def _bytes_call(source, name, call):
     """call(address, size, name, &object) over the bytes of `source`; `name` says the format."""
     if not name:
         raise VoxmeshError("reading bytes needs name=, whose extension says the format (e.g. 'scan.nrrd')")
+    if isinstance(source, memoryview) and not source.c_contiguous:
+        raise VoxmeshError("the bytes must be contiguous; got a non-contiguous memoryview (pass bytes(view))")
     data = np.frombuffer(source, dtype=np.uint8)  # no copy; the library copies what it keeps
     pointer = ctypes.c_void_p()
     _check(call(data.ctypes.data if data.size else None, data.size, _path(name), ctypes.byref(pointer)))
@@ -694,24 +700,37 @@ def read_volume(source, name=None):
     return Volume(pointer.value)
 
 
-def read_raw(path, shape, dtype, big_endian=False, offset=0, spacing=None, origin=None):
+def read_raw(path, shape, dtype, big_endian=None, offset=0, spacing=None, origin=None):
     """Headerless samples: `shape` is the array's (nz, ny, nx), `dtype` one of the eight sample
-    types; the file holds exactly offset + nx * ny * nz samples' bytes. spacing and origin are
-    (x, y, z); a negative spacing runs its axis the other way (reversed on load)."""
-    shape = [int(n) for n in shape]
-    if len(shape) != 3 or min(shape) < 0:
-        raise VoxmeshError(f"shape must be three sizes (nz, ny, nx); got {shape}")
-    native = np.dtype(dtype).newbyteorder("=")
+    types; the file holds exactly offset + nx * ny * nz samples' bytes. The byte order is the
+    dtype's where it names one ('>f4', '<i2'), else big_endian's (default little-endian); the
+    two disagreeing is an error. spacing and origin are (x, y, z); a negative spacing runs its
+    axis the other way (reversed on load)."""
+    try:
+        sizes = list(shape)
+    except TypeError:
+        raise VoxmeshError(f"shape must be three sizes (nz, ny, nx); got {shape!r}") from None
+    if len(sizes) != 3:
+        raise VoxmeshError(f"shape must be three sizes (nz, ny, nx); got {sizes}")
+    sizes = [_whole_number("shape", n, f"shape must be three sizes (nz, ny, nx); got {sizes}") for n in sizes]
+    given = np.dtype(dtype)
+    native = given.newbyteorder("=")
     if native.type not in _DTYPES:
-        raise VoxmeshError(f"unsupported sample type {np.dtype(dtype)} (uint8, int8, uint16, int16, uint32, "
+        raise VoxmeshError(f"unsupported sample type {given} (uint8, int8, uint16, int16, uint32, "
                            "int32, float32, float64)")
-    if int(offset) < 0:
-        raise VoxmeshError(f"offset must not be negative; got {offset}")
+    # numpy writes the machine's own order as '=', so '<f4' is told from 'f4' by the string.
+    order = dtype[0] if isinstance(dtype, str) and dtype[:1] in "<>" else given.byteorder
+    if order in "<>" and given.itemsize > 1:
+        if big_endian is not None and bool(big_endian) != (order == ">"):
+            raise VoxmeshError(f"dtype '{given.str}' is {'big' if order == '>' else 'little'}-endian but "
+                               f"big_endian={big_endian!r}")
+        big_endian = order == ">"
+    offset = _whole_number("offset", offset, f"offset must not be negative; got {offset}")
     layout = _lib.voxmesh_default_raw_layout()
-    layout.dims[:] = shape[::-1]
+    layout.dims[:] = sizes[::-1]
     layout.type = _DTYPES.index(native.type)
     layout.big_endian = 1 if big_endian else 0
-    layout.offset = int(offset)
+    layout.offset = offset
     layout.spacing[:] = _triple("spacing", spacing, 1.0)
     layout.origin[:] = _triple("origin", origin, 0.0)
     pointer = ctypes.c_void_p()
@@ -939,8 +958,9 @@ class Sculpt:
     Brushes: add / subtract change the field by strength * strength_scale with a smooth falloff
     inside the radius; smooth moves samples toward their neighbours' mean (strength 0..1); set_region
     sets a box. `array` is the samples themselves, writable: write to it, then invalidate_all().
-    backend "opencl" (or "auto": a GPU when there is one) re-meshes on an OpenCL device. A
-    Sculpt is used from one thread at a time.
+    backend "opencl" (or "auto": a GPU when there is one) re-meshes on an OpenCL device.
+    Calls from several threads take turns (a lock; on_frame may call back into the sculpt);
+    writes to `array` are not covered by it.
     """
 
     def __init__(self, volume, iso=0.0, spacing=None, origin=None, threads=0, block_size=32, normals=True,
@@ -957,6 +977,9 @@ class Sculpt:
 
     def _adopt(self, pointer, normals):
         self._handle = _Handle(pointer, _lib.voxmesh_sculpt_free)
+        # Every C call releases the GIL and the C++ Sculpt is not thread-safe: one call at a
+        # time. Re-entrant, since run_strokes' on_frame runs inside a call on the same thread.
+        self._lock = threading.RLock()
         self._normals = bool(normals)  # an empty block's normals are then an empty array, not None
         view = _lib.voxmesh_sculpt_get_view(pointer)
         nx, ny, nz = view.dims
@@ -992,8 +1015,10 @@ class Sculpt:
             raise VoxmeshError(f"unknown brush '{brush}' (add, subtract, smooth, set)")
         if units not in _UNITS:
             raise VoxmeshError(f"unknown units '{units}' (samples, world)")
-        _check(_lib.voxmesh_sculpt_apply(self._handle.pointer, _BRUSHES[brush], _point("center", center),
-                                         _real("radius", radius), _real("strength", strength), _UNITS[units]))
+        center, radius, strength = _point("center", center), _real("radius", radius), _real("strength", strength)
+        with self._lock:
+            _check(_lib.voxmesh_sculpt_apply(self._handle.pointer, _BRUSHES[brush], center, radius, strength,
+                                             _UNITS[units]))
 
     def add(self, center, radius, strength=1.0, units="samples"):
         self.apply("add", center, radius, strength, units)
@@ -1008,8 +1033,9 @@ class Sculpt:
         """Every sample with lo <= coordinate <= hi on each axis := value (clamped to the type)."""
         if units not in _UNITS:
             raise VoxmeshError(f"unknown units '{units}' (samples, world)")
-        _check(_lib.voxmesh_sculpt_set_region(self._handle.pointer, _point("lo", lo), _point("hi", hi),
-                                              _real("value", value), _UNITS[units]))
+        lo, hi, value = _point("lo", lo), _point("hi", hi), _real("value", value)
+        with self._lock:
+            _check(_lib.voxmesh_sculpt_set_region(self._handle.pointer, lo, hi, value, _UNITS[units]))
 
     def run_strokes(self, script, name="strokes", on_frame=None):
         """A stroke script's text (str or bytes): one dab a line, "op x y z radius strength" with
@@ -1018,77 +1044,92 @@ class Sculpt:
         with nothing applied. Then each dab is applied and meshed, and on_frame(StrokeFrame)
         called; an exception from on_frame stops the strokes there and is raised."""
         text = script.encode() if isinstance(script, str) else bytes(script)
-        _run_strokes(lambda callback: _lib.voxmesh_sculpt_run_strokes(self._handle.pointer, text, len(text),
-                                                                      _path(str(name)), callback, None), on_frame)
+        name = _path(str(name))
+        with self._lock:
+            _run_strokes(lambda callback: _lib.voxmesh_sculpt_run_strokes(self._handle.pointer, text, len(text),
+                                                                          name, callback, None), on_frame)
 
     def run_stroke_script(self, path, on_frame=None):
         """run_strokes with the script read from the file at `path` (errors name the file)."""
-        _run_strokes(lambda callback: _lib.voxmesh_sculpt_run_stroke_script(self._handle.pointer, _path(path),
-                                                                            callback, None), on_frame)
+        path = _path(path)
+        with self._lock:
+            _run_strokes(lambda callback: _lib.voxmesh_sculpt_run_stroke_script(self._handle.pointer, path,
+                                                                                callback, None), on_frame)
 
     def invalidate_all(self):
         """Marks every block dirty after writes to `array`; refuses NaN or infinite samples."""
-        _check(_lib.voxmesh_sculpt_invalidate_all(self._handle.pointer))
+        with self._lock:
+            _check(_lib.voxmesh_sculpt_invalidate_all(self._handle.pointer))
 
     def update(self):
         """Re-meshes the dirty blocks; an UpdateResult."""
         result = _UpdateResult()
-        _check(_lib.voxmesh_sculpt_update(self._handle.pointer, ctypes.byref(result)))
-        changed = [result.changed[i] for i in range(result.changed_count)]
+        with self._lock:  # result.changed lives until the next update
+            _check(_lib.voxmesh_sculpt_update(self._handle.pointer, ctypes.byref(result)))
+            changed = [result.changed[i] for i in range(result.changed_count)]
         return UpdateResult(changed, result.remeshed, result.seconds)
 
     @property
     def dirty(self):
         """Edits not yet meshed."""
-        return bool(_lib.voxmesh_sculpt_dirty(self._handle.pointer))
+        with self._lock:
+            return bool(_lib.voxmesh_sculpt_dirty(self._handle.pointer))
 
     @property
     def block_count(self):
-        return _lib.voxmesh_sculpt_block_count(self._handle.pointer)
+        with self._lock:
+            return _lib.voxmesh_sculpt_block_count(self._handle.pointer)
 
     @property
     def block_grid(self):
         """Blocks per axis (x, y, z)."""
         grid = (ctypes.c_size_t * 3)()
-        _lib.voxmesh_sculpt_block_grid(self._handle.pointer, grid)
+        with self._lock:
+            _lib.voxmesh_sculpt_block_grid(self._handle.pointer, grid)
         return tuple(grid)
 
     def block(self, index):
         """Block `index`'s mesh as of the last update (a Block of copies)."""
-        if not 0 <= int(index) < self.block_count:
-            raise VoxmeshError(f"block {index} does not exist ({self.block_count} blocks)")
-        found = _Block()
-        _check(_lib.voxmesh_sculpt_get_block(self._handle.pointer, int(index), ctypes.byref(found)))
-        v, t = found.vertex_count, found.triangle_count
-        positions = _view(found.positions, (v, 3), np.float32, None).copy()
-        # The C API gives no array (NULL) for an empty one: None only where normals are off.
-        normals = _view(found.normals, (v, 3), np.float32, None).copy() if found.normals else None
+        index = _integer("index", index)
+        with self._lock:  # the block's arrays change at the next update: copied under the lock
+            if not 0 <= index < self.block_count:
+                raise VoxmeshError(f"block {index} does not exist ({self.block_count} blocks)")
+            found = _Block()
+            _check(_lib.voxmesh_sculpt_get_block(self._handle.pointer, index, ctypes.byref(found)))
+            v, t = found.vertex_count, found.triangle_count
+            positions = _view(found.positions, (v, 3), np.float32, None).copy()
+            # The C API gives no array (NULL) for an empty one: None only where normals are off.
+            normals = _view(found.normals, (v, 3), np.float32, None).copy() if found.normals else None
+            indices = _view(found.indices, (t, 3), np.uint32, None).copy()
         if normals is None and self._normals:
             normals = np.empty((0, 3), np.float32)
-        indices = _view(found.indices, (t, 3), np.uint32, None).copy()
         return Block(found.index, tuple(found.coord), tuple(found.cell_begin), tuple(found.cell_end), positions,
                      normals, indices)
 
     def mesh(self):
         """The whole welded mesh, exactly extract()'s of the samples (updates first)."""
         pointer = ctypes.c_void_p()
-        _check(_lib.voxmesh_sculpt_mesh(self._handle.pointer, ctypes.byref(pointer)))
+        with self._lock:
+            _check(_lib.voxmesh_sculpt_mesh(self._handle.pointer, ctypes.byref(pointer)))
         return Mesh(pointer.value)
 
     @property
     def backend(self):
         """Where update() re-meshes: "cpu" or "opencl"."""
-        return _BACKEND_NAMES[_lib.voxmesh_sculpt_backend(self._handle.pointer)]
+        with self._lock:
+            return _BACKEND_NAMES[_lib.voxmesh_sculpt_backend(self._handle.pointer)]
 
     @property
     def device_name(self):
         """"cpu" or the OpenCL device's name."""
-        return _lib.voxmesh_sculpt_device_name(self._handle.pointer).decode(errors="replace")
+        with self._lock:  # the text lives in the sculpt until the next call
+            return _lib.voxmesh_sculpt_device_name(self._handle.pointer).decode(errors="replace")
 
     @property
     def warnings(self):
         """The library's warnings so far (a fallback to the CPU), also issued as RuntimeWarning."""
-        return _lib.voxmesh_sculpt_warnings(self._handle.pointer).decode(errors="replace").splitlines()
+        with self._lock:
+            return _lib.voxmesh_sculpt_warnings(self._handle.pointer).decode(errors="replace").splitlines()
 
 
 from ._skimage import marching_cubes  # noqa: E402  (uses extract, defined above)
