@@ -223,23 +223,27 @@ class OwnTest(unittest.TestCase):
                     np.testing.assert_array_equal(got, expected)
 
     def test_bad_arguments_raise_value_error_naming_the_problem(self):
+        # Found by a review: the README said the errors were scikit-image's; the messages were
+        # our own. Now they are skimage's (0.26) word for word where it has one.
         cases = [
-            (dict(level=100.0), "range"),
-            (dict(volume=SPHERE[0]), "3-D"),
-            (dict(volume=SPHERE[:1]), "2x2x2"),
-            (dict(gradient_direction="up"), "gradient_direction"),
-            (dict(method="_lorensen"), "method"),
-            (dict(method="marching"), "method"),
-            (dict(step_size=0), "step_size"),
-            (dict(spacing=(1.0, 2.0)), "spacing"),
-            (dict(mask=np.ones((3, 3, 3), dtype=bool)), "mask"),
-            (dict(backend="gpu"), "backend"),
-            (dict(level=float("nan")), "range"),
+            (dict(level=100.0), "Surface level must be within volume data range."),
+            (dict(volume=SPHERE[0]), "Input volume should be a 3D numpy array."),
+            (dict(volume=SPHERE[:1]), "Input array must be at least 2x2x2."),
+            (dict(gradient_direction="up"), "Incorrect input up in `gradient_direction`, see docstring."),
+            (dict(method="_lorensen"), "method should be either 'lewiner' or 'lorensen'"),
+            (dict(method="marching"), "method should be either 'lewiner' or 'lorensen'"),
+            (dict(step_size=0), "step_size must be at least one."),
+            (dict(spacing=(1.0, 2.0)), "`spacing` must consist of three floats."),
+            (dict(mask=np.ones((3, 3, 3), dtype=bool)), "volume and mask must have the same shape."),
+            (dict(backend="gpu"), "unknown backend 'gpu'"),
+            (dict(level=float("nan")), "Surface level must be within volume data range."),
         ]
-        for change, word in cases:
+        for change, message in cases:
             arguments = dict(volume=SPHERE, level=0.0) | change
-            with self.subTest(change=word), self.assertRaisesRegex(ValueError, word):
-                voxmesh.marching_cubes(arguments.pop("volume"), arguments.pop("level"), **arguments)
+            with self.subTest(change=change):
+                with self.assertRaises(ValueError) as raised:
+                    voxmesh.marching_cubes(arguments.pop("volume"), arguments.pop("level"), **arguments)
+                self.assertTrue(str(raised.exception).startswith(message), str(raised.exception))
         holed = SPHERE.copy()
         holed[3, 4, 5] = np.nan
         with self.assertRaisesRegex(ValueError, "NaN"):
@@ -309,6 +313,26 @@ class ScikitImageTest(unittest.TestCase):
         self.compare(volume, 127.5)
         self.compare(volume, None)  # the middle of 0..255, as skimage computes it
         self.compare(volume, 128, method="lorensen", normals_at_least=0.95)  # samples at the level
+
+    def test_the_same_errors(self):
+        # Found by a review: the README said the errors were scikit-image's; the messages differed.
+        # (An unknown method's message is 0.26's: older versions also offered "_lorensen".)
+        cases = [dict(level=100.0), dict(level=-100.0), dict(volume=SPHERE[0]), dict(volume=SPHERE[:1]),
+                 dict(step_size=0), dict(spacing=(1.0, 2.0)),
+                 dict(mask=np.ones((3, 3, 3), dtype=bool)), dict(level=float(SPHERE.max())),
+                 dict(gradient_direction="up")]
+        for change in cases:
+            arguments = dict(volume=SPHERE, level=0.0) | change
+            found = []
+            for call in (measure.marching_cubes, voxmesh.marching_cubes):
+                try:
+                    call(arguments["volume"], arguments["level"],
+                         **{k: v for k, v in arguments.items() if k not in ("volume", "level")})
+                    found.append(None)
+                except (ValueError, RuntimeError) as error:
+                    found.append((type(error), str(error)))
+            with self.subTest(change=change):
+                self.assertEqual(found[0], found[1])
 
     def test_allow_degenerate_false(self):
         volume = np.clip(SPHERE * 20 + 128, 0, 255).astype(np.uint8)

@@ -50,20 +50,22 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
     - A NaN or infinite sample is refused (ValueError) rather than meshed into garbage, and
       method="_lorensen" (skimage's deprecated older implementation) is not offered.
 
-    Bad arguments raise ValueError naming the problem; no surface (level at the data's
-    maximum, or everything masked out) raises RuntimeError, as skimage does.
+    Bad arguments raise ValueError with skimage's message (level outside the data range,
+    not 3-D, under 2x2x2, spacing, step_size, mask shape, method, gradient_direction); no
+    surface (level at the data's maximum, or everything masked out) raises RuntimeError, as
+    skimage does. A NaN level is a ValueError here (skimage: RuntimeError, no surface).
     """
     if method not in _METHODS:
-        raise ValueError(f"method should be 'lewiner' or 'lorensen'; got {method!r}")
+        raise ValueError("method should be either 'lewiner' or 'lorensen'")
     if gradient_direction not in ("descent", "ascent"):
-        raise ValueError(f"gradient_direction should be 'descent' or 'ascent'; got {gradient_direction!r}")
+        raise ValueError(f"Incorrect input {gradient_direction} in `gradient_direction`, see docstring.")
     if backend not in _BACKENDS:
         raise ValueError(f"unknown backend {backend!r} (auto, cpu, opencl, hybrid)")
     volume = np.asarray(volume)
     if volume.ndim != 3:
-        raise ValueError(f"volume should be a 3-D array; got {volume.ndim} dimension(s)")
+        raise ValueError("Input volume should be a 3D numpy array.")
     if min(volume.shape) < 2:
-        raise ValueError(f"volume must be at least 2x2x2; got {'x'.join(map(str, volume.shape))}")
+        raise ValueError("Input array must be at least 2x2x2.")
     if volume.dtype == np.bool_:
         volume = volume.view(np.uint8)
     if volume.dtype.type not in _EXACT_IN_FLOAT32 or not volume.dtype.isnative:
@@ -81,16 +83,16 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
         level = 0.5 * (low + high)
     level = float(level)
     if not low <= level <= high:  # NaN fails too
-        raise ValueError(f"level {level} is outside the volume's data range [{low}, {high}]")
+        raise ValueError("Surface level must be within volume data range.")
     if len(spacing) != 3:
-        raise ValueError(f"spacing must be three numbers, one per array axis; got {len(spacing)}")
+        raise ValueError("`spacing` must consist of three floats.")
     step = int(step_size)
     if step < 1:
-        raise ValueError(f"step_size must be at least one; got {step_size}")
+        raise ValueError("step_size must be at least one.")
     if mask is not None:
         mask = np.asarray(mask)
         if mask.shape != volume.shape:
-            raise ValueError(f"mask must have the volume's shape {volume.shape}; got {mask.shape}")
+            raise ValueError("volume and mask must have the same shape.")
         # skimage tests the mask at each cell's far corner (see the docstring).
         mask = np.asarray(mask[step::step, step::step, step::step], dtype=bool)  # no copy of a bool mask
 
@@ -121,18 +123,18 @@ def marching_cubes(volume, level=None, *, spacing=(1.0, 1.0, 1.0), gradient_dire
     del mesh
 
     # The canonical order ties vertex i to the i-th crossed edge of what extract meshed.
-    edges = vertex_edges(meshed, level, threads=threads, count=len(positions))
+    edges = _as_skimage_errors(vertex_edges, meshed, level, threads=threads, count=len(positions))
     if at_level is not None:
         owner, axis = np.divmod(edges.astype(np.int64), 3)
         _snap_to_samples(positions, data, level, owner, axis, step, corner)
     if mask is not None:  # the triangles of the kept cells (np.compress: a boolean index is slower)
-        kept = mask.ravel()[triangle_cells(meshed, level, threads=threads, count=len(faces))]
+        kept = mask.ravel()[_as_skimage_errors(triangle_cells, meshed, level, threads=threads, count=len(faces))]
         faces = np.compress(kept, faces, axis=0)
     if len(faces) == 0:
         raise RuntimeError(_NO_SURFACE)
     # skimage's values: per vertex, the largest (max - level) - (min - level) over the
     # (masked-in) cells around its edge, every one of which uses the vertex.
-    values = edge_cell_ranges(data, edges, offset=level, cell_mask=mask, threads=threads)
+    values = _as_skimage_errors(edge_cell_ranges, data, edges, offset=level, cell_mask=mask, threads=threads)
     if mask is not None:
         # Vertices of the dropped cells only go, keeping the others' order. A vertex is used
         # when a kept cell is around its edge (a cell's triangles use every crossed edge it
