@@ -371,6 +371,15 @@ TEST_CASE("nrrd: bad headers and data are errors naming the file", "[io][nrrd][e
     std::filesystem::create_directory(s.dir + "/sub");
     fails(s.file("bad.nhdr", kHeader343 + "encoding: raw\ndata file: sub\n"), "directory");
     fails(s.file("bad.nhdr", kHeader343 + "encoding: raw\ndata file: LIST\nx.raw\n"), "LIST");
+    // Found by a review: 'line skip' past the end of the data file, or with none, was an error that
+    // did not name the header, and counted the lines left instead of those asked for.
+    s.file("short.raw", "one line\n");
+    const std::string of_header = "(data file of '" + s.dir + "/bad.nhdr')";
+    const std::string skip3 = kHeader343 + "encoding: raw\nline skip: 3\n";
+    CHECK_THROWS_WITH(read_volume(s.file("bad.nhdr", skip3 + "data file: short.raw\n")),
+                      Contains("short.raw") && Contains(of_header) && Contains("before the 3 lines"));
+    CHECK_THROWS_WITH(read_volume(s.file("bad.nhdr", skip3 + "data file: none.raw\n")),
+                      Contains("none.raw") && Contains("does not exist") && Contains(of_header));
 
     // gzip: corrupt, truncated, longer or shorter than the sizes say.
     const std::string gz = iotest::deflate_bytes(data, true);

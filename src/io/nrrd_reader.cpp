@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <vector>
 
 namespace voxmesh::io {
@@ -79,15 +80,19 @@ std::size_t space_dimension_of(const std::string& path, const std::string& space
     return it->second;
 }
 
-// Offset just past `lines` newlines at the start of the file.
-std::size_t skip_lines(const InputFile& file, std::size_t lines) {
-    std::size_t offset = 0;
-    while (lines > 0) {
-        const std::string chunk = file.read(offset, 1 << 16);
-        if (chunk.empty()) fail(file.path(), "file ends before the " + std::to_string(lines) + " lines to skip");
+// Offset just past `lines` newlines at the start of the data file; errors name the header too.
+std::size_t skip_lines(const InputFile& header, const SampleLayout& layout, std::size_t lines) {
+    std::optional<InputFile> detached;
+    const InputFile& data = open_data(header, layout, detached);
+    std::size_t offset = 0, left = lines;
+    while (left > 0) {
+        const std::string chunk = data.read(offset, 1 << 16);
+        if (chunk.empty())
+            fail(data.path(), "file ends before the " + std::to_string(lines) + " lines 'line skip' asks to skip" +
+                                  data_file_note(header.path(), layout));
         std::size_t i = 0;
-        for (; i < chunk.size() && lines > 0; ++i)
-            if (chunk[i] == '\n') --lines;
+        for (; i < chunk.size() && left > 0; ++i)
+            if (chunk[i] == '\n') --left;
         offset += i;
     }
     return offset;
@@ -254,9 +259,8 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
         fail(path, "no blank line after the header and no 'data file': the samples are missing");
     }
     if (line_skip > 0) {
-        const InputFile data(layout.data_path);
         if (layout.data_path == path) fail(path, "'line skip' is only supported with a detached data file");
-        offset = skip_lines(data, line_skip);
+        offset = skip_lines(file, layout, line_skip);
     }
     if (byte_skip == -1) {
         layout.at_end = true;

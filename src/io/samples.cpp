@@ -26,11 +26,6 @@ namespace {
 // that from the stream at hand is lying, and we say so before allocating anything.
 constexpr std::size_t kMaxDeflateRatio = 1032;
 
-std::string where(const std::string& header_path, const SampleLayout& layout) {
-    if (layout.data_path == header_path) return "";
-    return " (data file of '" + header_path + "')";
-}
-
 using detail::dims_text;
 
 // Volume::allocate, its Error (out of memory) naming the file.
@@ -51,7 +46,7 @@ struct Located {
 Located locate(const InputFile& file, const std::string& header_path, const SampleLayout& layout,
                std::size_t bytes) {
     const std::string& path = file.path();
-    const std::string ctx = where(header_path, layout);
+    const std::string ctx = data_file_note(header_path, layout);
     Located at;
     at.file_size = file.size();
     if (at.file_size == 0) fail(path, "file is empty" + ctx);
@@ -114,16 +109,23 @@ Located locate(const InputFile& file, const std::string& header_path, const Samp
     return at;
 }
 
-// The file holding the samples: `header` itself, or the detached data file opened into
-// `detached`, with the header named in errors.
+}  // namespace
+
+std::string data_file_note(const std::string& header_path, const SampleLayout& layout) {
+    if (layout.data_path == header_path) return "";
+    return " (data file of '" + header_path + "')";
+}
+
 const InputFile& open_data(const InputFile& header, const SampleLayout& layout, std::optional<InputFile>& detached) {
     if (layout.data_path == header.path()) return header;
     try {
         return detached.emplace(layout.data_path);
     } catch (const Error& e) {
-        detail::rethrow_with_message(e, e.what() + where(header.path(), layout));
+        detail::rethrow_with_message(e, e.what() + data_file_note(header.path(), layout));
     }
 }
+
+namespace {
 
 bool any_flipped(const SampleLayout& layout) {
     return layout.flipped[0] || layout.flipped[1] || layout.flipped[2];
@@ -246,7 +248,7 @@ Volume load_samples(const InputFile& header, const SampleLayout& layout) {
     const InputFile& file = open_data(header, layout, detached);
     const Located at = locate(file, header.path(), layout, bytes);
     const std::size_t value_size = scalar_size(layout.type);
-    const std::string ctx = where(header.path(), layout);
+    const std::string ctx = data_file_note(header.path(), layout);
 
     if (layout.text) {
         check_memory(file.path(), bytes);

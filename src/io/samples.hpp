@@ -9,6 +9,7 @@
 #include <array>
 #include <cstddef>
 #include <iosfwd>
+#include <optional>
 #include <string>
 
 namespace voxmesh::io {
@@ -31,6 +32,14 @@ struct SampleLayout {
 
 // Overflow-checked byte size of the samples; errors name `path`. Zero dims are an error.
 std::size_t sample_bytes(const std::string& path, std::array<std::size_t, 3> dims, ScalarType type);
+
+// " (data file of 'header_path')" where the samples are in a detached file, else "": the
+// note every error about the data file ends with.
+std::string data_file_note(const std::string& header_path, const SampleLayout& layout);
+
+// The file holding the samples: `header` itself, or the detached data file opened into
+// `detached`, its errors naming the header too.
+const InputFile& open_data(const InputFile& header, const SampleLayout& layout, std::optional<InputFile>& detached);
 
 // Both read the samples from `header` itself where layout.data_path is its path (attached
 // data, a raw file), else from the detached data file, naming the header in its errors.
