@@ -205,3 +205,27 @@ TEST_CASE("vtk: the header may vary as VTK's reader allows", "[io][vtk]") {
     CHECK(v.origin == std::array<double, 3>{1, 2, 3});
     for (int i = 0; i < 8; ++i) CHECK(static_cast<const std::int32_t*>(v.data)[i] == i + 1);
 }
+
+// Found by a review: a leading '+' was accepted only for float samples; VTK's reader takes it
+// for every type.
+TEST_CASE("vtk: ASCII samples may start with '+' whatever their type", "[io][vtk]") {
+    Scratch s;
+    auto sample = [](const Volume& v, std::size_t i) -> double {
+        switch (v.type) {
+            case ScalarType::F32: return static_cast<const float*>(v.data)[i];
+            case ScalarType::F64: return static_cast<const double*>(v.data)[i];
+            case ScalarType::I16: return static_cast<const std::int16_t*>(v.data)[i];
+            case ScalarType::U8: return static_cast<const std::uint8_t*>(v.data)[i];
+            case ScalarType::I32: return static_cast<const std::int32_t*>(v.data)[i];
+            default: FAIL("unexpected type"); return 0;
+        }
+    };
+    for (const char* type : {"float", "double", "short", "unsigned_char", "int"}) {
+        INFO(type);
+        const Volume v = read_volume(s.file("plus.vtk", kHeader + "SCALARS v " + type + "\n+1 2 +3 4 5 6 7 +8\n"));
+        for (std::size_t i = 0; i < 8; ++i) CHECK(sample(v, i) == static_cast<double>(i + 1));
+    }
+    // A '+' before a '-' is still not a number.
+    CHECK_THROWS_WITH(read_volume(s.file("plusminus.vtk", kHeader + "SCALARS v double\n1 2 3 4 5 6 7 +-8\n")),
+                      Contains("plusminus.vtk") && Contains("sample 7: '+-8' is not a number"));
+}

@@ -146,13 +146,15 @@ void to_host_layout(Volume& v, const SampleLayout& layout) {
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f'; }
 
 // One number of text samples as T: an integer whole and in T's range, a float as float_word
-// reads it, a double as from_chars does; what is wrong with it otherwise.
+// reads it, a double as from_chars does (each may start with '+'); what is wrong with it otherwise.
 template <class T>
 const char* parse_sample(std::string_view word, T& out) {
     if constexpr (std::is_same_v<T, float>) {
         return float_word(word, out);
     } else {
         using Wide = std::conditional_t<std::is_integral_v<T>, long long, double>;
+        // from_chars rejects a leading '+', which VTK's reader (operator>>) takes.
+        if (word.size() > 1 && word[0] == '+' && word[1] != '-') word.remove_prefix(1);
         Wide value{};
         const auto [end, error] = std::from_chars(word.data(), word.data() + word.size(), value);
         if (error == std::errc::result_out_of_range) return "is out of range";
