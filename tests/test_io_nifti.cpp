@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <string>
 
 #include "support/io_scratch.hpp"
@@ -135,6 +136,15 @@ TEST_CASE("nifti: axes in the negative direction are reversed from the minimum c
         put_sform(n, {3, 0, 0, 1, 0, -0.5, 0, 2, 0, 0, 4, 3});
         check_geometry(s.file("s.nii", n.file()), {false, true, false}, {3, 0.5, 4}, {1, 2 - 0.5 * 2, 3});
     }
+    // Found by a review: pixdim[1..3] of 0 or NaN was refused even where the sform gives the spacing.
+    SECTION("pixdim 0 or NaN is ignored where the sform gives the spacing") {
+        for (const float bad : {0.0f, std::numeric_limits<float>::quiet_NaN()}) {
+            Nifti n(false);
+            for (std::size_t a = 1; a <= 3; ++a) n.put<float>(76 + 4 * a, bad);
+            put_sform(n, {3, 0, 0, 1, 0, 0.5, 0, 2, 0, 0, 4, 3});
+            check_geometry(s.file("s.nii", n.file()), {false, false, false}, {3, 0.5, 4}, {1, 2, 3});
+        }
+    }
     // Found by a review: a slightly oblique axis (as most scans converted from DICOM) kept its
     // negative direction unflipped, so the mesh came out mirrored and 8 mm off here.
     SECTION("a slightly oblique sform still flips its negative axis; only the tilt is dropped") {
@@ -260,6 +270,12 @@ TEST_CASE("nifti: bad headers are errors naming the file", "[io][nifti][errors]"
         Nifti n(false);
         n.put<float>(80, 0);
         fails("a.nii", n.file(), "spacing");
+    }
+    {  // A zero sform column leaves its axis's spacing to pixdim, which must then be valid.
+        Nifti n(false);
+        n.put<float>(80, 0);
+        put_sform(n, {0, 0, 0, 1, 0, 2, 0, 2, 0, 0, 2, 3});
+        fails("a.nii", n.file(), "'pixdim' gives spacing 0");
     }
     {
         Nifti n(false);

@@ -149,8 +149,6 @@ VolumeHeader read_nifti_header(const InputFile& file) {
         fail(path, "bitpix " + std::to_string(bitpix) + " contradicts datatype " + std::to_string(datatype) + " (" +
                        scalar_name(info.type) + ")");
 
-    for (std::size_t a = 0; a < 3; ++a) info.spacing[a] = checked_spacing(path, "pixdim", hdr.f32(80 + 4 * a));
-
     const float vox_offset = hdr.f32(108);
     if (!std::isfinite(vox_offset) || vox_offset < 348 || vox_offset > 1e12f || vox_offset != std::floor(vox_offset))
         fail(path, "vox_offset " + std::to_string(vox_offset) + " is not a whole byte offset past the header");
@@ -168,14 +166,17 @@ VolumeHeader read_nifti_header(const InputFile& file) {
     if (sform_code > 0) {
         for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "srow", hdr.f32(280 + 16 * a + 12));
         axes = sform_axes(hdr);
-        // Samples lie where the sform puts them, so its column lengths are the spacing even
-        // where pixdim says otherwise (as in nibabel's affine); a zero column says nothing.
-        for (std::size_t a = 0; a < 3; ++a)
-            if (const double length = vector_length(axes[a]); length > 0)
-                info.spacing[a] = checked_spacing(path, "srow", length);
     } else if (qform_code > 0) {
         for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "qoffset", hdr.f32(268 + 4 * a));
         axes = qform_axes(hdr);
+    }
+    // Samples lie where the sform puts them, so its column lengths are the spacing even where
+    // pixdim says otherwise (as in nibabel's affine); pixdim is read, and checked, only where
+    // used: without an sform, or for a zero sform column, which says nothing.
+    for (std::size_t a = 0; a < 3; ++a) {
+        const double column = sform_code > 0 ? vector_length(axes[a]) : 0;
+        info.spacing[a] = column > 0 ? checked_spacing(path, "srow", column)
+                                     : checked_spacing(path, "pixdim", hdr.f32(80 + 4 * a));
     }
     apply_directions(h, axis_directions(axes));
 
