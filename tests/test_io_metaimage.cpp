@@ -144,6 +144,23 @@ TEST_CASE("metaimage: .mha LOCAL, .mhd detached, compressed, big endian", "[io][
         check_u16(read_volume(path), kCount);
         CHECK(read_volume_info(path).data_file == data);
     }
+    // Found by a review: 'Local' and 'local' were taken as a data file's name; MetaIO reads
+    // them as LOCAL.
+    SECTION("ElementDataFile = Local or local is LOCAL") {
+        for (const std::string local : {"Local", "local"})
+            check_u16(read_volume(s.file("v.mha", kHead + "ElementDataFile = " + local + "\n" +
+                                                      u16_samples(kCount, false))),
+                      kCount);
+    }
+    // Found by a review: HeaderSize in a LOCAL file was counted from the end of the header;
+    // MetaIO seeks to it from the start of the file.
+    SECTION("HeaderSize in a .mha counts from the start of the file, as in MetaIO") {
+        const std::string head = kHead + "HeaderSize = 200\nElementDataFile = LOCAL\n";
+        REQUIRE(head.size() < 200);
+        check_u16(read_volume(s.file("v.mha", head + std::string(200 - head.size(), '#') +
+                                                  u16_samples(kCount, false))),
+                  kCount);
+    }
     SECTION("4-D with a size-1 axis") {
         const std::string path = s.file("v.mha", "NDims = 4\nDimSize = 4 3 2 1\nElementType = MET_USHORT\n"
                                                  "ElementDataFile = LOCAL\n" + u16_samples(kCount, false));
@@ -172,6 +189,8 @@ TEST_CASE("metaimage: bad headers are errors naming the file", "[io][metaimage][
     fails("a.mha", kHead + "BinaryData = False\nElementDataFile = LOCAL\n" + data, "ASCII");
     fails("a.mha", kHead + "CompressedData = True\nElementDataFile = LOCAL\nnot zlib at all, no", "corrupt");
     fails("a.mha", kHead + "CompressedData = True\nCompressedDataSize = 99999\nElementDataFile = LOCAL\nxx", "truncated");
+    fails("a.mha", kHead + "HeaderSize = 10\nElementDataFile = LOCAL\n" + data,
+          "HeaderSize 10 points inside the header");
     fails("a.mha", "this is not a header\n", "not 'Key = Value'");
     fails("a.mha", "", "empty");
     fails("a.mhd", kHead + "ElementDataFile = missing.raw\n", "missing.raw");

@@ -108,6 +108,9 @@ std::optional<double> recorded_iso(const VolumeInfo& info, const std::string& na
 // COLOR_SCALARS (unsigned char; ASCII writes byte b as b/255) of one component, or a FIELD's
 // first array; BINARY (big-endian, copied) or ASCII (numbers that must fit the type); arrays
 // after it are ignored. read_volume_info checks ASCII data only for length.
+// MetaImage: ElementDataFile LOCAL (also Local, local, as MetaIO) or one data file; HeaderSize
+// bytes are skipped from the start of the file holding the samples, a LOCAL .mha too (as
+// MetaIO seeks), or -1 for samples at its end.
 // NumPy: numpy.save's format 1.0 to 3.0 of a 3-D array (axes of size 1 beyond those allowed):
 // [z, y, x] in C order, [x, y, z] in Fortran order, so that x varies fastest either way; bool
 // (read as u8 0 and 1), 8/16/32-bit integers, float32 or float64 in either byte order; spacing

@@ -1,10 +1,12 @@
 // MetaImage (ITK's MetaIO): "Key = Value" lines ending with ElementDataFile, which names
-// the data file or says LOCAL (samples follow that line: .mha). CompressedData is a zlib
+// the data file or says LOCAL (samples follow that line: .mha; HeaderSize > 0 puts them that
+// many bytes from the start of the file, as in MetaIO, either file). CompressedData is a zlib
 // stream. TransformMatrix gives flipped axes (see io.hpp); AnatomicalOrientation is ignored.
 #include "header_text.hpp"
 #include "input_file.hpp"
 #include "readers.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <map>
@@ -166,9 +168,13 @@ VolumeHeader read_metaimage_header(const InputFile& file) {
     layout.dims = info.dims;
     layout.big_endian = info.big_endian;
     const std::string& data_file = fields["elementdatafile"];
-    if (data_file == "LOCAL") {
+    if (data_file == "LOCAL" || data_file == "Local" || data_file == "local") {  // MetaIO's spellings
         layout.data_path = path;
-        layout.offset = data_start;
+        // MetaIO seeks to HeaderSize from the start of the file, even in a LOCAL one.
+        if (header_size > 0 && static_cast<std::size_t>(header_size) < data_start)
+            fail(path, "HeaderSize " + std::to_string(header_size) + " points inside the header, which ends at byte " +
+                           std::to_string(data_start));
+        layout.offset = header_size > 0 ? static_cast<std::size_t>(header_size) : data_start;
     } else {
         if (data_file.empty()) fail(path, "ElementDataFile is empty");
         // MetaIO takes LIST and names holding '%' (printf patterns, "img%03d.raw 1 10 1") as
@@ -176,10 +182,9 @@ VolumeHeader read_metaimage_header(const InputFile& file) {
         if (data_file == "LIST" || data_file.find('%') != std::string::npos)
             fail(path, "ElementDataFile '" + data_file + "': lists and file patterns are not supported");
         layout.data_path = detached_data_path(file, data_file);
-        layout.offset = 0;
+        layout.offset = static_cast<std::size_t>(std::max(header_size, 0LL));
     }
-    if (header_size == -1) layout.at_end = true;
-    else layout.offset += static_cast<std::size_t>(header_size);
+    layout.at_end = header_size == -1;
     info.data_file = layout.data_path;
     return h;
 }
