@@ -99,6 +99,22 @@ TEST_CASE("npy: numpy's own files read with every sample in place", "[io][npy]")
     check_samples<std::uint16_t>(read_volume_from_memory(bytes.data(), bytes.size(), "sent.npy"));
 }
 
+// Found by a review: an array (z, y, x, 1), as image stacks with one channel are, was refused,
+// though its samples lie as those of (z, y, x) do.
+TEST_CASE("npy: axes of size 1 anywhere leave the 3-D volume", "[io][npy]") {
+    const std::string f4 = iotest::read_file(corpus("f4_c.npy"));  // shape (3, 4, 5), version 1.0
+    const std::size_t header_length = static_cast<unsigned char>(f4[8]) | static_cast<unsigned char>(f4[9]) << 8;
+    const std::string data = f4.substr(10 + header_length);
+    Scratch s;
+    for (const std::string shape : {"(3, 4, 5, 1)", "(1, 3, 1, 4, 5, 1)"}) {
+        INFO(shape);
+        const std::string dict = "{'descr': '<f4', 'fortran_order': False, 'shape': " + shape + ", }";
+        check_samples<float>(read_volume(s.file("c.npy", npy(dict, data))));
+    }
+    const std::string fortran = "{'descr': '<f4', 'fortran_order': True, 'shape': (1, 5, 4, 3), }";
+    check_samples<float>(read_volume(s.file("f.npy", npy(fortran, data))));
+}
+
 TEST_CASE("npy: a volume numpy saved meshes as the samples it holds", "[io][npy]") {
     // A ball, 12³ floats, written here in numpy's layout.
     constexpr std::size_t n = 12;
@@ -150,7 +166,7 @@ TEST_CASE("npy: broken files are errors naming the file and the problem", "[io][
         {"cut_data.npy", npy(good, samples.substr(1)), "holds 367 bytes"},
         {"extra_data.npy", npy(good, samples + "x"), "holds 369 bytes"},
         {"fortran_4d.npy", npy("{'descr': '<f4', 'fortran_order': True, 'shape': (5, 4, 3, 2), }", samples + samples),
-         "numpy axis 3 has size 2"},
+         "'shape' (5, 4, 3, 2) has 4 axes longer than 1"},
         {"int64.npy", npy("{'descr': '<i8', 'fortran_order': False, 'shape': (3, 4, 5), }", samples + samples),
          "unsupported .npy dtype '<i8'"},
         {"complex.npy", npy("{'descr': '<c8', 'fortran_order': False, 'shape': (3, 4, 5), }", samples + samples),
@@ -160,7 +176,7 @@ TEST_CASE("npy: broken files are errors naming the file and the problem", "[io][
         {"two_d.npy", npy("{'descr': '<f4', 'fortran_order': False, 'shape': (12, 5), }", samples),
          "has 2 dimension(s)"},
         {"four_d.npy", npy("{'descr': '<f4', 'fortran_order': False, 'shape': (2, 3, 4, 5), }", samples + samples),
-         "numpy axis 0 has size 2"},
+         "'shape' (2, 3, 4, 5) has 4 axes longer than 1"},
         {"no_shape.npy", npy("{'descr': '<f4', 'fortran_order': False, }", samples), "lacks 'shape'"},
         {"no_order.npy", npy("{'descr': '<f4', 'shape': (3, 4, 5), }", samples), "lacks 'fortran_order'"},
         {"key.npy", npy("{'descr': '<f4', 'fortran_order': False, 'shape': (3, 4, 5), 'x': 1}", samples),

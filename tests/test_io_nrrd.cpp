@@ -10,6 +10,7 @@
 #include <fstream>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "support/io_scratch.hpp"
@@ -325,6 +326,50 @@ TEST_CASE("nrrd: encodings, byte orders, detached headers", "[io][nrrd]") {
             "NRRD0004\ntype: short\ndimension: 4\nsizes: 3 4 5 1\nendian: little\nencoding: raw\n\n";
         check_i16(read_volume(s.file("a.nrrd", header + i16_samples(n, false))), n);
     }
+    // Found by a review: a size-1 axis before x was refused, the error blaming axis 3.
+    SECTION("4-D with a leading size-1 axis is 3-D, that axis's fields skipped") {
+        const std::string header = "NRRD0004\ntype: short\ndimension: 4\nsizes: 1 3 4 5\nendian: little\n"
+                                   "encoding: raw\nspace dimension: 3\n";
+        check_i16(read_volume(s.file("a.nrrd", header + "\n" + i16_samples(n, false))), n);
+        const Volume v = read_volume(s.file("a.nrrd", header + "space directions: none (2,0,0) (0,3,0) (0,0,4)\n\n" +
+                                                          i16_samples(n, false)));
+        check_i16(v, n);
+        CHECK(v.dims == std::array<std::size_t, 3>{3, 4, 5});
+        CHECK(v.spacing == std::array<double, 3>{2, 3, 4});
+    }
+}
+
+// Found by a review: 'kinds' was not read, so an RGB image or a vector field would be meshed as
+// if its components were a spatial axis.
+TEST_CASE("nrrd: axes of a kind that is not spatial are refused, or dropped where of size 1", "[io][nrrd]") {
+    Scratch s;
+    const std::size_t n = 3 * 4 * 5;
+    const std::string data = i16_samples(n, false);
+    auto header = [](const std::string& sizes, const std::string& kinds) {
+        return "NRRD0004\ntype: short\ndimension: " + std::to_string(std::count(sizes.begin(), sizes.end(), ' ') + 1) +
+               "\nsizes: " + sizes + "\nendian: little\nencoding: raw\nkinds: " + kinds + "\n\n";
+    };
+    const std::pair<std::string, std::string> accepted[] = {{"3 4 5", "domain SPACE Domain"},
+                                                            {"3 4 5", "??? none space"},
+                                                            {"3 4 5 1", "domain domain domain RGB-color"},
+                                                            {"1 3 4 5", "stub space space space"},
+                                                            {"3 4 1 5", "domain domain list domain"}};
+    for (const auto& [sizes, kinds] : accepted) {
+        INFO(sizes << " / " << kinds);
+        const Volume v = read_volume(s.file("a.nrrd", header(sizes, kinds) + data));
+        check_i16(v, n);
+        CHECK(v.dims == std::array<std::size_t, 3>{3, 4, 5});
+    }
+    auto fails = [&](const std::string& text, const std::string& what) {
+        const std::string path = s.file("bad.nrrd", text + data);
+        CHECK_THROWS_WITH(read_volume(path), Contains(path) && Contains(what));
+    };
+    fails(header("3 4 5", "RGB-color domain domain"), "axis 0 (size 3) has kind 'RGB-color'");
+    fails(header("3 4 5", "domain domain time"), "axis 2 (size 5) has kind 'time'");
+    fails(header("3 4 5 2", "domain domain domain 2-vector"), "axis 3 (size 2) has kind '2-vector'");
+    fails(header("3 3 4 5", "3-color domain domain domain"), "axis 0 (size 3) has kind '3-color'");
+    fails(header("1 4 15", "stub domain domain"), "axis 0 (size 1) has kind 'stub'");
+    fails(header("3 4 5", "domain domain"), "'kinds' lists 2 values");
 }
 
 TEST_CASE("nrrd: bad headers and data are errors naming the file", "[io][nrrd][errors]") {
@@ -356,7 +401,7 @@ TEST_CASE("nrrd: bad headers and data are errors naming the file", "[io][nrrd][e
     fails(attached(kHeader343 + "encoding: raw\n\n", data + "xx"), "do not match");
     fails(attached(kHeader343 + "encoding: raw\nencoding: raw\n\n", data), "twice");
     fails(attached("NRRD0004\ntype: short\ndimension: 4\nsizes: 3 4 5 2\nendian: little\nencoding: raw\n\n", data),
-          "only 3-D");
+          "sizes 3 4 5 2 have 4 axes longer than 1; only 3-D");
     fails(attached("NRRD0004\ntype: short\ndimension: 3\nsizes: 3 0 5\nendian: little\nencoding: raw\n\n", data),
           "empty");
     fails(attached("NRRD0004\ntype: short\ndimension: 3\nsizes: 3 4 5x\nendian: little\nencoding: raw\n\n", data),

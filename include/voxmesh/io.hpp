@@ -39,7 +39,11 @@
 // (physical - value_offset) / value_scale.
 //
 // Dimensions: volumes are 3-D. A 4-D (or higher) NRRD/MetaImage/NIfTI whose extra axes all
-// have size 1 is accepted as 3-D; anything else is an error.
+// have size 1 is accepted as 3-D; anything else is an error. MetaImage's and NIfTI's extra
+// axes follow the three spatial ones; a NRRD's or NumPy array's may lie anywhere (NRRD
+// `sizes: 1 4 3 2`, NumPy (z, y, x, 1)), as dropping them leaves the samples' order. NRRD
+// `kinds`: the three axes kept must be domain, space or unknown (??? / none); a colour,
+// vector, tensor, list or time axis is an error, unless of size 1 and so dropped.
 #pragma once
 
 #include <voxmesh/voxmesh.hpp>

@@ -9,6 +9,7 @@
 #include "readers.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cstring>
 #include <string>
@@ -178,17 +179,23 @@ VolumeHeader read_npy_header(const InputFile& file) {
     info.type = npy_type(path, descr, info.big_endian);
     if (shape.size() < 3)
         fail(path, "has " + std::to_string(shape.size()) + " dimension(s); a volume needs 3 (an array [z, y, x])");
-    // Axes beyond three (numpy's numbering): the first ones in C order, the last in Fortran order.
-    const std::size_t extra = shape.size() - 3, first_kept = fortran_order ? 0 : extra;
-    for (std::size_t a = 0; a < shape.size(); ++a)
-        if ((a < first_kept || a >= first_kept + 3) && shape[a] != 1)
-            fail(path, "numpy axis " + std::to_string(a) + " has size " + std::to_string(shape[a]) +
-                           "; a volume is a 3-D array (more axes only of size 1)");
-    // x is the fastest axis: the last in C order, the first in Fortran order.
-    const auto kept = shape.begin() + static_cast<std::ptrdiff_t>(first_kept);
-    std::vector<std::size_t> xyz(kept, kept + 3);
-    if (!fortran_order) std::reverse(xyz.begin(), xyz.end());
-    info.dims = volume_dims(path, xyz);
+    const auto longer =
+        static_cast<std::size_t>(std::count_if(shape.begin(), shape.end(), [](std::size_t n) { return n != 1; }));
+    if (longer > 3) {
+        std::string listed;
+        for (const std::size_t n : shape) {
+            if (!listed.empty()) listed += ", ";
+            listed += std::to_string(n);
+        }
+        fail(path, "'shape' (" + listed + ") has " + std::to_string(longer) +
+                       " axes longer than 1; a volume is a 3-D array (more axes only of size 1)");
+    }
+    // Fastest axis first: x is the last in C order, the first in Fortran order. Axes of size 1
+    // beyond three, anywhere ((z, y, x, 1) too), leave the samples' order unchanged.
+    std::vector<std::size_t> sizes = shape;
+    if (!fortran_order) std::reverse(sizes.begin(), sizes.end());
+    const std::array<std::size_t, 3> xyz = volume_axes(path, sizes);
+    info.dims = {sizes[xyz[0]], sizes[xyz[1]], sizes[xyz[2]]};
     info.data_file = path;
     SampleLayout& layout = h.layout;
     layout.type = info.type;

@@ -1,6 +1,7 @@
 // NRRD (teem's format, http://teem.sourceforge.net/nrrd/format.html): a text header of
 // "field: value" lines ended by a blank line (attached data) or by the end of a .nhdr
-// (detached, "data file"). Raw and gzip encodings, 3-D scalar volumes.
+// (detached, "data file"). Raw and gzip encodings, 3-D scalar volumes: axes beyond three must
+// have size 1, and the three kept must be of kind domain, space or unknown.
 #include "header_text.hpp"
 #include "input_file.hpp"
 #include "readers.hpp"
@@ -162,7 +163,43 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
     if (dimension != sizes.size())
         fail(path, "'dimension' is " + std::to_string(dimension) + " but 'sizes' lists " +
                        std::to_string(sizes.size()) + " values");
-    info.dims = volume_dims(path, sizes);
+    std::vector<std::string> kinds;  // per axis; empty without 'kinds'
+    if (const std::string* k = optional("kinds")) {
+        for (std::string_view word : split_words(*k)) kinds.emplace_back(word);
+        if (kinds.size() != dimension)
+            fail(path, "'dimension' is " + std::to_string(dimension) + " but 'kinds' lists " +
+                           std::to_string(kinds.size()) + " values");
+    }
+    const std::string* directions = optional("space directions");
+    std::vector<std::vector<double>> vectors;  // per axis; "none" is empty
+    if (directions) {
+        vectors = parse_vectors(path, "space directions", *directions);
+        if (vectors.size() != dimension)
+            fail(path, "'dimension' is " + std::to_string(dimension) + " but 'space directions' lists " +
+                           std::to_string(vectors.size()) + " entries");
+    }
+    // Kinds (teem's, case-insensitive) that can be a volume's axis; vectors, colours, tensors,
+    // lists, time and the rest cannot.
+    auto spatial_kind = [&](std::size_t a) {
+        const std::string kind = kinds.empty() ? "???" : lower(kinds[a]);
+        return kind == "domain" || kind == "space" || kind == "???" || kind == "none";
+    };
+    auto check_kind = [&](std::size_t a) {
+        if (!spatial_kind(a))
+            fail(path, "axis " + std::to_string(a) + " (size " + std::to_string(sizes[a]) + ") has kind '" +
+                           kinds[a] + "'; only scalar volumes, whose axes are domain or space, are supported");
+    };
+    // x, y, z: extra axes must have size 1; those not spatial (by kind or a 'none' direction) go first.
+    std::vector<bool> not_spatial(dimension);
+    for (std::size_t a = 0; a < dimension; ++a) {
+        not_spatial[a] = !spatial_kind(a) || (directions && vectors[a].empty());
+        if (sizes[a] != 1) check_kind(a);
+    }
+    const std::array<std::size_t, 3> spatial = volume_axes(path, sizes, not_spatial);
+    for (std::size_t k = 0; k < 3; ++k) {
+        check_kind(spatial[k]);
+        info.dims[k] = sizes[spatial[k]];
+    }
     info.type = parse_type(path, required("type"));
 
     const std::string encoding = lower(required("encoding"));
@@ -182,7 +219,6 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
     }
 
     const std::string* spacings = optional("spacings");
-    const std::string* directions = optional("space directions");
     if (spacings && directions) fail(path, "header has both 'spacings' and 'space directions' (contradictory)");
     std::array<std::vector<double>, 3> axes;  // spatial axes' directions; empty without them
     if (spacings) {
@@ -192,9 +228,10 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
         if (values.size() != dimension)
             fail(path, "'dimension' is " + std::to_string(dimension) + " but 'spacings' lists " +
                            std::to_string(values.size()) + " values");
-        for (std::size_t a = 0; a < 3; ++a) {
-            info.spacing[a] = std::isnan(values[a]) ? 1.0 : checked_spacing(path, "spacings", values[a]);
-            if (values[a] < 0) reverse_direction(axes, a);  // samples run toward lower positions
+        for (std::size_t k = 0; k < 3; ++k) {
+            const double value = values[spatial[k]];
+            info.spacing[k] = std::isnan(value) ? 1.0 : checked_spacing(path, "spacings", value);
+            if (value < 0) reverse_direction(axes, k);  // samples run toward lower positions
         }
     }
 
@@ -208,23 +245,16 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
         space_dim = given;
     }
     if (directions) {
-        const auto vectors = parse_vectors(path, "space directions", *directions);
-        if (vectors.size() != dimension)
-            fail(path, "'dimension' is " + std::to_string(dimension) + " but 'space directions' lists " +
-                           std::to_string(vectors.size()) + " entries");
         if (space_dim == 0) fail(path, "'space directions' given without 'space' or 'space dimension'");
-        for (std::size_t a = 0; a < vectors.size(); ++a) {
-            if (vectors[a].empty()) {
-                if (a < 3) fail(path, "'space directions' is 'none' for spatial axis " + std::to_string(a));
-                continue;
-            }
-            if (vectors[a].size() != space_dim)
-                fail(path, "a 'space directions' vector has " + std::to_string(vectors[a].size()) +
+        for (const std::vector<double>& v : vectors)
+            if (!v.empty() && v.size() != space_dim)
+                fail(path, "a 'space directions' vector has " + std::to_string(v.size()) +
                                " components but the space has " + std::to_string(space_dim));
-            if (a < 3) {
-                info.spacing[a] = checked_spacing(path, "space directions", vector_length(vectors[a]));
-                axes[a] = vectors[a];
-            }
+        for (std::size_t k = 0; k < 3; ++k) {
+            const std::vector<double>& v = vectors[spatial[k]];
+            if (v.empty()) fail(path, "'space directions' is 'none' for spatial axis " + std::to_string(spatial[k]));
+            info.spacing[k] = checked_spacing(path, "space directions", vector_length(v));
+            axes[k] = v;
         }
     }
     if (const std::string* origin = optional("space origin")) {

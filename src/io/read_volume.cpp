@@ -19,6 +19,34 @@ std::array<std::size_t, 3> volume_dims(const std::string& path, const std::vecto
     return {sizes[0], sizes[1], sizes[2]};
 }
 
+std::array<std::size_t, 3> volume_axes(const std::string& path, const std::vector<std::size_t>& sizes,
+                                       const std::vector<bool>& drop_first) {
+    if (sizes.size() < 3)
+        fail(path, "has " + std::to_string(sizes.size()) + " dimensions; a volume needs 3");
+    // Only size-1 axes go: without them the samples' order is the same.
+    std::vector<bool> dropped(sizes.size(), false);
+    std::size_t extra = sizes.size() - 3;
+    for (const bool marked_only : {true, false})
+        for (std::size_t a = sizes.size(); a-- > 0 && extra > 0;)
+            if (sizes[a] == 1 && !dropped[a] && (!marked_only || (a < drop_first.size() && drop_first[a]))) {
+                dropped[a] = true;
+                --extra;
+            }
+    if (extra > 0) {
+        std::string listed;
+        for (const std::size_t n : sizes) {
+            if (!listed.empty()) listed += " ";
+            listed += std::to_string(n);
+        }
+        fail(path, "sizes " + listed + " have " + std::to_string(3 + extra) +
+                       " axes longer than 1; only 3-D volumes (extra axes of size 1) are supported");
+    }
+    std::array<std::size_t, 3> axes{};
+    for (std::size_t a = 0, k = 0; a < sizes.size(); ++a)
+        if (!dropped[a]) axes[k++] = a;
+    return axes;
+}
+
 double checked_spacing(const std::string& path, const char* field, double value) {
     if (!std::isfinite(value) || value == 0)
         fail(path, std::string("'") + field + "' gives spacing " + shortest_text(value) +

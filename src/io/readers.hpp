@@ -27,6 +27,11 @@ VolumeHeader read_npy_header(const InputFile& file);
 
 // N-D sizes as 3-D dims: N must be at least 3, and axes past the third must have size 1.
 std::array<std::size_t, 3> volume_dims(const std::string& path, const std::vector<std::size_t>& sizes);
+// The three axes of N-D `sizes` (fastest first) that hold a volume, for formats whose extra
+// axes may lie anywhere (NumPy (z, y, x, 1)): axes beyond three must have size 1 and are
+// dropped, those marked in `drop_first` (known not spatial) first, then the slowest.
+std::array<std::size_t, 3> volume_axes(const std::string& path, const std::vector<std::size_t>& sizes,
+                                       const std::vector<bool>& drop_first = {});
 
 // Spacing must be finite and non-zero; the magnitude is returned (a caller whose format
 // gives a negative spacing a direction passes that on with reverse_direction).
