@@ -1203,12 +1203,13 @@ Mesh Engine::run(Stats& stats) {
     check_vertex_count(vertices);
     Mesh mesh = std::move(storage_);
     // Every worker waits for the mesh: in Hybrid the cores the CPU worker leaves help fill it.
-    allocate_output(mesh, vertices, triangles, options_.normals, hybrid_ ? threads_ + copy_threads() : threads_);
+    allocate_output(mesh, vertices, triangles, options_.normals, hybrid_ ? threads_ + copy_threads() : threads_, nx_);
     for (auto& chunk : results_)
         for (Piece& p : chunk)
             if (p.worker < jobs.size() && !p.on_cpu) jobs[p.worker].to_generate.push_back(&p);
     for (DeviceJob& job : jobs) job.generate_back = job.to_generate.size();
     each_worker([&](unsigned w) { generate_pieces(jobs, w, mesh); });
+    trim_output(mesh, vertices, triangles);
     remember_rates(jobs);
 
     for (DeviceJob& job : jobs) {

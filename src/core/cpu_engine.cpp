@@ -429,7 +429,6 @@ private:
             const std::uint32_t base = row_first;
             row_first += rows[j].vertices;
             if (rows[j].empty()) continue;
-            const std::uint32_t row_end = row_first;
             const Word* row = plane.row(j);
             const Word* next_y = plane.row(j + 1 < ny_ ? j + 1 : j);  // the row itself: no edge
             const Word* next_z = (up ? *up : plane).row(j);
@@ -443,8 +442,6 @@ private:
                     const unsigned r = static_cast<unsigned>(std::countr_zero(any));
                     const std::size_t i = 64 * q + r;
                     const unsigned c = static_cast<unsigned>((m.x >> r & 1) | (m.y >> r & 1) << 1 | (m.z >> r & 1) << 2);
-                    if (next_id + static_cast<unsigned>(std::popcount(c)) > row_end) [[unlikely]]
-                        throw_volume_changed(z);
                     if (write_vertices) {
                         const std::size_t at = 3 * static_cast<std::size_t>(next_id);
                         vertex_.sample(vertex_row, i, c, out_.positions + at, normals);
@@ -456,7 +453,7 @@ private:
                     }
                 }
             }
-            if (next_id != row_end) [[unlikely]] throw_volume_changed(z);
+            if (kRepacked && next_id != row_first) [[unlikely]] throw_volume_changed(z);
         }
         if (normals) normals->flush();
     }
@@ -500,10 +497,9 @@ private:
                     cases[n++] = static_cast<std::uint64_t>(i) << 8 | cell.cell_case(r);
                 }
             }
-            const std::uint32_t* row_out_end = out + 3 * static_cast<std::size_t>(rows[j].triangles);
+            [[maybe_unused]] const std::uint32_t* row_start = out;
             for (std::size_t m = 0; m < n; ++m) {
                 const CaseEntry& entry = kCaseTable[cases[m] & 255];
-                if (out + 3 * entry.count > row_out_end) [[unlikely]] throw_volume_changed(k);
                 const Id* cell_ids = row_ids + EdgeIds<Id>::kSampleSlots * static_cast<std::size_t>(cases[m] >> 8);
                 for (unsigned t = 0; t < entry.count; ++t) {
                     std::uint32_t v[3];
@@ -517,9 +513,17 @@ private:
                     out += 3;
                 }
             }
-            if (out != row_out_end) [[unlikely]] throw_volume_changed(k);
+            if (kRepacked && static_cast<std::size_t>(out - row_start) != 3 * std::size_t{rows[j].triangles}) [[unlikely]]
+                throw_volume_changed(k);
         }
     }
+
+    // 8-bit rows with crossings are packed again from the volume (classify keeps no bits for
+    // them): each row's vertices and cell row's triangles are checked against classify's counts
+    // once written, in case the volume changed in between (throw_volume_changed). A row that
+    // has more writes into the next rows' room, or into the arrays' slack (kGenerateSlack...).
+    // Checks per vertex or per word cost 3-6 % of generate (gyroid u8 256³, in-process A/B).
+    static constexpr bool kRepacked = sizeof(T) == 1;
 
     // One x-edge of each row of id lines a cell reads (j and j + 1).
     static constexpr unsigned kIdRowEdges[2] = {0, 2};
@@ -553,13 +557,22 @@ constexpr unsigned kClassifySlabsPerThread = 4, kGenerateSlabsPerThread = 4;
 // The mesh's arrays sized for the counts, in parallel (array_sizing.hpp: a new Mesh's fresh
 // pages are most of what that costs; a 10 M-triangle mesh, 230 MB, took 70 ms into a new
 // Mesh and 27 ms into a reused one on the H200 machine's 16 cores, with one thread per array).
-void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads) {
+void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads,
+                     std::size_t row_samples) {
+    vertices += 3 * std::uint64_t{row_samples};
+    triangles += 5 * std::uint64_t{row_samples};
     ArraySizing sizing;
     sizing.add(mesh.indices, static_cast<std::size_t>(3 * triangles));
     sizing.add(mesh.positions, static_cast<std::size_t>(3 * vertices));
     if (normals) sizing.add(mesh.normals, static_cast<std::size_t>(3 * vertices));
     else mesh.normals.clear();  // a reused mesh may have had normals
     sizing.run(std::max(threads, 1u));
+}
+
+void trim_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles) {
+    mesh.indices.resize(static_cast<std::size_t>(3 * triangles));
+    mesh.positions.resize(static_cast<std::size_t>(3 * vertices));
+    if (!mesh.normals.empty()) mesh.normals.resize(static_cast<std::size_t>(3 * vertices));
 }
 
 // Infinite samples are refused with NaN: t = (iso - v0) / (v1 - v0) is undefined for them.
@@ -712,10 +725,11 @@ Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats,
     // Output allocation counts toward generate: it is the first write of the output.
     const auto t = Clock::now();
     Mesh mesh = std::move(storage);
-    allocate_output(mesh, plan.vertices, plan.triangles, options.normals, threads);
+    allocate_output(mesh, plan.vertices, plan.triangles, options.normals, threads, volume.dims[0]);
 
     cpu_generate(plan, volume, options, threads,
                  MeshOut{mesh.positions.data(), options.normals ? mesh.normals.data() : nullptr, mesh.indices.data(), 0});
+    trim_output(mesh, plan.vertices, plan.triangles);
     stats.times.generate = seconds_since(t);
     stats.times.total = seconds_since(t0);
 

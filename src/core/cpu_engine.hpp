@@ -84,7 +84,13 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
 // Sizes the mesh's arrays (normals only when asked for). std::vector zero-fills on resize,
 // and for a large mesh that first touch of every page is a pass of its own: the arrays are
 // filled on up to `threads` workers at once.
-void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads);
+// Each array gets the room of one row past the counts (`row_samples`: the volume's nx; 0: none):
+// generate checks a re-read 8-bit row against classify's counts only once it is written, so
+// a volume changed during the call may write one row's vertices (3 a sample) and one cell
+// row's triangles (5 a cell) more before it throws. trim_output cuts the arrays to the counts.
+void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads,
+                     std::size_t row_samples);
+void trim_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles);
 
 // Whole-volume extraction written straight into the mesh (no merge copy).
 // `storage`: a mesh whose arrays' capacity the result reuses (extract_into).
