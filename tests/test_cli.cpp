@@ -318,6 +318,13 @@ TEST_CASE("cli: every input format from standard input", "[cli]") {
     const Result ascii = piped(cat(ascii_stl), "info -");
     CHECK(ascii.code == 0);
     CHECK(ascii.out.find("triangles: 1\n") != std::string::npos);
+    // Found by a review: the VTK reader takes its version line in any case, standard input did not.
+    const Result lower_vtk = piped("printf '# vtk datafile version 3.0\\nx\\nASCII\\nDATASET STRUCTURED_POINTS\\n"
+                                   "DIMENSIONS 2 2 2\\nPOINT_DATA 8\\nSCALARS s float\\nLOOKUP_TABLE default\\n"
+                                   "0 1 2 3 4 5 6 7\\n'",
+                                   "info -");
+    CHECK(lower_vtk.code == 0);
+    CHECK(lower_vtk.out.find("2x2x2") != std::string::npos);
     const Result raw = piped("head -c 24 /dev/zero", "info - --dims 2 3 4 --type u8");
     CHECK(raw.code == 0);
     CHECK(raw.out.find("2x3x4") != std::string::npos);

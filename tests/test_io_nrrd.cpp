@@ -435,6 +435,10 @@ TEST_CASE("nrrd: bad headers and data are errors naming the file", "[io][nrrd][e
     fails(attached(kHeader343 + "encoding: gzip\n\n", iotest::deflate_bytes(data + "more", true)), "longer");
     fails(attached(kHeader343 + "encoding: gzip\n\n", iotest::deflate_bytes(data.substr(4), true)), "truncated data");
     fails(attached(kHeader343 + "encoding: gzip\n\n", gz + "trailing"), "unexpected data");
+    fails(attached(kHeader343 + "encoding: gzip\n\n", gz + std::string(8, '\0') + "x"), "9 bytes of unexpected data");
+    // Found by a review: zero bytes after the stream (padding, which gzip -d and nibabel skip)
+    // were refused as unexpected data.
+    CHECK(read_volume(attached(kHeader343 + "encoding: gzip\n\n", gz + std::string(8, '\0'))).sample_count() == 60);
     fails(attached(kHeader343 + "encoding: gzip\n\n", ""), "no compressed data");
 
     // Sizes that overflow, or that no memory or compressed stream could hold: refused up front.

@@ -5,6 +5,7 @@
 #include "io/readers.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstdint>
 #include <cstdlib>
@@ -123,7 +124,10 @@ std::string sniff_format(const std::string& head, std::size_t size, InputKind ki
     const bool volume = kind != InputKind::Model, model = kind != InputKind::Volume;
     if (volume) {
         if (starts_with(head, "NRRD000")) return ".nrrd";
-        if (starts_with(head, "# vtk DataFile")) return ".vtk";
+        // Any case, as the VTK reader takes its version line.
+        std::string first(head.substr(0, 14));
+        std::transform(first.begin(), first.end(), first.begin(), [](unsigned char c) { return std::tolower(c); });
+        if (first == "# vtk datafile") return ".vtk";
         if (starts_with(head, std::string("\x93NUMPY", 6))) return ".npy";
         if (head.size() >= 2 && static_cast<unsigned char>(head[0]) == 0x1f && static_cast<unsigned char>(head[1]) == 0x8b)
             return ".nii.gz";

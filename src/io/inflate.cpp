@@ -90,9 +90,13 @@ std::size_t Inflater::skip(std::size_t bytes) {
 bool Inflater::at_end() {
     unsigned char extra = 0;
     if (read(&extra, 1) != 0) return false;
-    // The stream ended; anything after it is not ours to ignore silently.
-    const std::size_t trailing = state_->remaining_input();
-    if (trailing != 0) fail(path_, std::to_string(trailing) + " bytes of unexpected data follow the compressed stream");
+    // The stream ended; anything after it is not ours to ignore silently, except zero bytes:
+    // padding to a block size, which gzip -d, zlib's gzread and Python's gzip (so nibabel) skip.
+    const State& s = *state_;
+    const std::size_t trailing = s.remaining_input();
+    const unsigned char* rest = s.data + (s.size - trailing);
+    if (std::any_of(rest, rest + trailing, [](unsigned char b) { return b != 0; }))
+        fail(path_, std::to_string(trailing) + " bytes of unexpected data follow the compressed stream");
     return true;
 }
 
