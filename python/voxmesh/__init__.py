@@ -647,16 +647,21 @@ def voxelize(mesh, resolution=128, padding=2, field="distance", band=3.0, thread
     return Volume(pointer.value, readonly=False)
 
 
-def _triple(name, value, default):
-    if value is None:
-        return [default] * 3
+def _three(value, what):
+    """`value`'s three items as a list; else VoxmeshError("{what}; got ...")."""
     try:
         items = list(value)
     except TypeError:
-        raise VoxmeshError(f"{name} must be three numbers (x, y, z); got {value!r}") from None
+        raise VoxmeshError(f"{what}; got {value!r}") from None
     if len(items) != 3:
-        raise VoxmeshError(f"{name} must be three numbers (x, y, z); got {len(items)}")
-    return [_real(name, v) for v in items]
+        raise VoxmeshError(f"{what}; got {len(items)} values")
+    return items
+
+
+def _triple(name, value, default):
+    if value is None:
+        return [default] * 3
+    return [_real(name, v) for v in _three(value, f"{name} must be three numbers (x, y, z)")]
 
 
 def _unwrap(volume, spacing, origin):
@@ -706,12 +711,7 @@ def read_raw(path, shape, dtype, big_endian=None, offset=0, spacing=None, origin
     dtype's where it names one ('>f4', '<i2'), else big_endian's (default little-endian); the
     two disagreeing is an error. spacing and origin are (x, y, z); a negative spacing runs its
     axis the other way (reversed on load)."""
-    try:
-        sizes = list(shape)
-    except TypeError:
-        raise VoxmeshError(f"shape must be three sizes (nz, ny, nx); got {shape!r}") from None
-    if len(sizes) != 3:
-        raise VoxmeshError(f"shape must be three sizes (nz, ny, nx); got {sizes}")
+    sizes = _three(shape, "shape must be three sizes (nz, ny, nx)")
     sizes = [_whole_number("shape", n, f"shape must be three sizes (nz, ny, nx); got {sizes}") for n in sizes]
     given = np.dtype(dtype)
     native = given.newbyteorder("=")
