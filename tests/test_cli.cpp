@@ -439,7 +439,7 @@ TEST_CASE("cli: outputs to standard output", "[cli]") {
         s.dir.string());
     INFO(chain.err);
     CHECK(chain.code == 0);
-    CHECK(chain.out.find("closed 2-manifold, euler 0") != std::string::npos);
+    CHECK(chain.out.find("closed (every edge in two triangles), euler 0") != std::string::npos);
 
     // --format only with -o -, and -o - only with it.
     const Result no_format = run(s, "mesh " + head + " -o -");
@@ -735,7 +735,7 @@ TEST_CASE("cli: info on a model gives its size, topology, area and volume", "[cl
     INFO(t.err);
     REQUIRE(t.code == 0);
     CHECK(t.out.find("triangles: 8700") != std::string::npos);
-    CHECK(t.out.find("closed 2-manifold, euler 0, 1 piece") != std::string::npos);  // genus 1
+    CHECK(t.out.find("closed (every edge in two triangles), euler 0, 1 piece") != std::string::npos);  // genus 1
     // A torus of radii 1 and 0.5: area 4 pi^2 R r = 19.74, volume 2 pi^2 R r^2 = 4.93, less
     // for the inscribed polygons.
     const auto value_after = [](const std::string& out, const std::string& label) {
@@ -752,7 +752,7 @@ TEST_CASE("cli: info on a model gives its size, topology, area and volume", "[cl
     voxmesh::write_mesh(inward, sphere);
     const Result in = run(s, "info " + quote(inward));
     REQUIRE(in.code == 0);
-    CHECK(in.out.find("closed 2-manifold, euler 2") != std::string::npos);
+    CHECK(in.out.find("closed (every edge in two triangles), euler 2") != std::string::npos);
     CHECK(value_after(in.out, "volume:") == Approx(-4.15).epsilon(0.01));
     CHECK(in.out.find("face inward") != std::string::npos);
     sphere.indices.resize(sphere.indices.size() - 3);
@@ -769,7 +769,7 @@ TEST_CASE("cli: info on a model gives its size, topology, area and volume", "[cl
     REQUIRE(c.code == 0);
     CHECK(c.out.find("vertices:  2") != std::string::npos);
     CHECK(c.out.find("no triangles") != std::string::npos);
-    CHECK(c.out.find("closed 2-manifold") == std::string::npos);
+    CHECK(c.out.find("closed (every edge in two triangles)") == std::string::npos);
     CHECK(c.out.find("bounds:    0 0 0 .. 1 2 3") != std::string::npos);  // a cloud's bounds: every point
 
     // A vertex no face uses, far off: counted, and left out of the bounds, as voxelize leaves
@@ -780,7 +780,7 @@ TEST_CASE("cli: info on a model gives its size, topology, area and volume", "[cl
     REQUIRE(st.code == 0);
     CHECK(st.out.find("vertices:  5, 1 not used by any triangle") != std::string::npos);
     CHECK(st.out.find("bounds:    0 0 0 .. 1 1 1") != std::string::npos);
-    CHECK(st.out.find("closed 2-manifold, euler 2") != std::string::npos);
+    CHECK(st.out.find("closed (every edge in two triangles), euler 2") != std::string::npos);
     CHECK(value_after(st.out, "volume:") == Approx(1.0 / 6));
 
     expect_rejected(s, "info " + quote(open) + " --dims 2 2 2", "open.ply", "", "apply only to .raw");

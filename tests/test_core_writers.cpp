@@ -448,6 +448,21 @@ TEST_CASE("write_mesh: overwriting an existing file replaces it", "[core]") {
     CHECK(dir.entries() == std::vector<std::string>{"m.ply"});
 }
 
+// Found by a review: the temporary beside a target named with 233 to 255 bytes had a name
+// past NAME_MAX, so such a file could not be written, new or existing.
+TEST_CASE("write_mesh: a file name near NAME_MAX is written, new and replaced", "[core]") {
+    vmtest::TempDir dir;
+    const std::string name = std::string(251, 'a') + ".ply";  // 255 bytes
+    const std::string path = dir.file(name);
+    const voxmesh::Mesh mesh = test_mesh(true);
+    for (int round = 0; round < 2; ++round) {
+        voxmesh::write_mesh(path, mesh);
+        bool has_normals = false;
+        CHECK(parse_ply(read_all(path), has_normals).indices == mesh.indices);
+        CHECK(dir.entries() == std::vector<std::string>{name});
+    }
+}
+
 TEST_CASE("write_mesh: unknown extension throws and writes nothing", "[core]") {
     vmtest::TempDir dir;
     const voxmesh::Mesh mesh = test_mesh(false);

@@ -78,7 +78,9 @@ int run_model_info(const InputPath& input) {
     if (m.triangle_count() == 0)
         std::cout << "topology:  no triangles (a point cloud; voxelize needs a closed model)\n";
     else if (t.closed())
-        std::cout << "topology:  closed 2-manifold, euler " << t.euler << ", " << pieces_text(t.components) << "\n"
+        // "closed": each edge in exactly two triangles. Not "2-manifold": analyze_topology
+        // checks neither the vertices' fans (two pieces sharing a vertex) nor the winding.
+        std::cout << "topology:  closed (every edge in two triangles), euler " << t.euler << ", " << pieces_text(t.components) << "\n"
                   << "area:      " << format_double(area) << "\n"
                   << "volume:    " << format_double(volume)
                   << (volume < 0 ? " (negative: the triangles face inward)" : "") << "\n";

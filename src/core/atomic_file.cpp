@@ -74,12 +74,14 @@ namespace {
 // mkstemp makes it 0600, and a fixed chmod afterwards would ignore the umask. pid and a
 // counter make the name unique; one left by a crashed process of the same pid is skipped
 // (a signal while its name is listed would remove it: it is a leftover temporary too).
+// Only the first 200 bytes of a long name are used, so that the temporary's name stays within
+// NAME_MAX (255) where the target's does.
 int create_temp(const std::filesystem::path& dir, const std::string& filename, std::string& temp, ListedTemporary& listed) {
     static std::atomic<unsigned> counter{0};
     for (int attempt = 0; attempt < 1000; ++attempt) {
         // Built with append: gcc 12 gives a false -Wrestrict on operator+ chains here.
         std::string name = ".";
-        name.append(filename).append(".tmp").append(std::to_string(::getpid())).append("-");
+        name.append(filename, 0, 200).append(".tmp").append(std::to_string(::getpid())).append("-");
         name.append(std::to_string(counter++));
         temp = (dir / name).string();
         listed.list(temp);
@@ -143,6 +145,15 @@ void write_into_special_file(const std::string& path, const std::string& destina
 }  // namespace
 
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
+    // The kernel follows a link first, so that its own refusals hold as for `>`: with
+    // fs.protected_symlinks, a link in a sticky world-writable directory (/tmp) owned by another
+    // user is not followed, and resolving it here would have replaced the file it names.
+    if (std::error_code ec; std::filesystem::is_symlink(path, ec)) {
+        const int fd = ::open(path.c_str(), O_PATH | O_CLOEXEC);
+        if (fd >= 0) ::close(fd);
+        else if (errno == EACCES) throw Error("cannot write '" + path + "': " + std::strerror(errno) +
+                                              " (the system refuses to follow this symbolic link)");
+    }
     const std::string destination = followed_path(path);
     const std::filesystem::path target(destination);
     const std::filesystem::path dir = target_directory(destination);

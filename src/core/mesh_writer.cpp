@@ -33,7 +33,6 @@ std::string lower_extension(const std::string& path) {
 // Binary STL: 80-byte header, uint32 count, then per triangle a facet normal, 3 vertices and
 // a 16-bit attribute, all little-endian (x86 and ARM hosts are little-endian).
 void write_stl(std::FILE* f, const Mesh& mesh) {
-    if (mesh.triangle_count() > 0xffffffffull) throw Error("too many triangles for STL");
     char header[80] = {};
     std::snprintf(header, sizeof header, "binary STL written by voxmesh %s", VOXMESH_VERSION_STRING);
     write_bytes(f, header, 80);
@@ -219,6 +218,10 @@ Writer checked_writer(const std::string& ext, const Mesh& mesh, const std::strin
     else if (ext == ".obj") writer = {write_obj, nullptr};
     else throw Error("cannot write '" + name + "': unknown mesh format '" + ext + "' (use .stl, .ply or .obj)");
     detail::check_mesh_arrays(mesh);
+    // Before anything is sized or created (write_mesh_to_memory reserves 50 bytes a triangle).
+    if (ext == ".stl" && mesh.triangle_count() > 0xffffffffull)
+        throw Error("cannot write '" + name + "': " + std::to_string(mesh.triangle_count()) +
+                    " triangles are more than binary STL's 32-bit count can hold (use .ply or .obj)");
     // "nan" and "inf" in a mesh file: most readers (ours included) refuse them.
     detail::check_finite_vertices(mesh.positions, "cannot write '" + name + "': ", "coordinate");
     detail::check_finite_vertices(mesh.normals, "cannot write '" + name + "': ", "normal");
