@@ -49,6 +49,23 @@ TEST_CASE("read_mesh reads back what write_mesh wrote, in each format, by extens
     }
 }
 
+// Found by a review: write_mesh wrote an empty mesh as valid STL and OBJ (VTK reads them), but
+// only PLY read it back; the STL and OBJ readers refused a file without triangles.
+TEST_CASE("read_mesh reads an empty mesh back in each format, and OBJ without faces", "[io][mesh]") {
+    iotest::Scratch s;
+    for (const char* name : {"e.stl", "e.ply", "e.obj"}) {
+        INFO(name);
+        write_mesh(s.dir + "/" + name, Mesh{});
+        const Mesh back = read_mesh(s.dir + "/" + name);
+        CHECK(back.triangle_count() == 0);
+        CHECK(back.vertex_count() == 0);
+    }
+    CHECK(read_mesh(s.file("a.stl", "solid x\nendsolid x\n")).triangle_count() == 0);
+    const Mesh cloud = read_mesh(s.file("c.obj", "# points\nv 0 0 0\nv 1 2 3\no cloud\np 1 2\n"));
+    CHECK(cloud.vertex_count() == 2);
+    CHECK(cloud.triangle_count() == 0);
+}
+
 TEST_CASE("read_mesh refuses an extension it has no reader for, naming it", "[io][mesh][errors]") {
     iotest::Scratch s;
     CHECK_THROWS_WITH(read_mesh(s.file("model.off", "OFF\n3 1 0\n")), Contains("model.off") && Contains("'.off'"));

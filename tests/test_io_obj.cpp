@@ -171,10 +171,8 @@ TEST_CASE("obj: bad files are errors naming the file, the line and the problem",
         CHECK_THROWS_WITH(read_obj(path), Contains("'" + path + "'") && Contains(what));
     };
     fails_whole("", "file is empty");
-    fails_whole(tri, "no faces");
-    fails_whole("# only a comment\n\n", "no faces");
-    fails_whole("\x01\x02\x7f binary bytes\n", "no faces");
-    fails_whole(tri + "l 1 2 3\np 1\n", "no faces");
+    fails_whole("\x01\x02\x7f binary bytes\n", "no faces ('f' statements), and '\?\?\?' (line 1) is not an OBJ");
+    fails_whole(tri + "hello world\n", "'hello' (line 4) is not an OBJ statement");
     CHECK_THROWS_WITH(read_obj(s.dir + "/missing.obj"), Contains("missing.obj") && Contains("does not exist"));
 
     // Tokens with binary bytes are shown with '?', never cut short.

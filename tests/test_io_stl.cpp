@@ -106,7 +106,6 @@ TEST_CASE("stl: bad files are errors naming the file", "[io][stl][errors]") {
     fails("garbage.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "expected 'vertex', found end of file");
     fails("garbage.stl", "solid x\nhello\n", "expected 'facet' or 'endsolid'");
     fails("garbage.stl", "solid x\n", "ends inside a solid");
-    fails("garbage.stl", "solid x\nendsolid x\n", "no triangles");
     // Binary bytes in a token are shown as '?': a NUL used to cut the message short.
     const char nul[] = "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0 0 0\nvertex 1 1 1\n"
                        "end\0loop\nendfacet\nendsolid\n";
@@ -116,7 +115,6 @@ TEST_CASE("stl: bad files are errors naming the file", "[io][stl][errors]") {
                      "endloop\nendfacet\nendsolid\n",
           "non-finite");
     fails("empty.stl", "", "empty");
-    fails("zero.stl", std::string(84, '\0'), "no triangles");
     std::filesystem::create_directory(s.dir + "/dir.stl");
     CHECK_THROWS_WITH(read_stl(s.dir + "/dir.stl"), Contains("dir.stl") && Contains("directory"));
     CHECK_THROWS_WITH(read_stl(s.dir + "/missing.stl"), Contains("missing.stl") && Contains("does not exist"));

@@ -147,7 +147,8 @@ std::vector<unsigned char> write_nrrd_to_memory(const VolumeView& volume, const 
 // welded by exact float position (-0 and +0 are one position): positions and indices
 // filled, normals empty. Triangles keep the file's order and winding; non-finite
 // coordinates are an error, and so is an ASCII number beyond the float range (one too small
-// for a float reads as 0).
+// for a float reads as 0). No triangles (an 84-byte binary file, "solid"/"endsolid") is an
+// empty mesh, as write_mesh writes one.
 Mesh read_stl(const std::string& path);
 // PLY: ascii, binary_little_endian or binary_big_endian 1.0. The "vertex" element's x, y, z
 // (any PLY scalar type, read as float) become positions, and its nx, ny, nz normals where all
@@ -165,11 +166,13 @@ Mesh read_ply(const std::string& path);
 // fanned from their first corner in the file's order and winding; vertices kept as the file
 // indexes them (not welded). Normals are filled only where the file has one finite "vn" per
 // "v" and every corner names the normal of its own vertex (as write_mesh writes them);
-// otherwise they are left empty. Other statements (vt, vp, o, g, s, usemtl, mtllib, l, p and
-// unknown ones) are skipped; '#' comments end with their line, and a '\' ending a line
+// otherwise they are left empty. Other statements (vt, vp, o, g, s, usemtl, mtllib, l, p,
+// free-form geometry's and unknown ones) are skipped; '#' comments end with their line, and a '\' ending a line
 // continues the statement. Errors name the line: a face with fewer than three corners, an
 // index 0 or beyond the items read so far (no forward references), a malformed corner, a
-// non-finite or beyond-float coordinate, and a file without faces.
+// non-finite or beyond-float coordinate, and a file without faces that holds a statement
+// OBJ does not have (other text, not a model). Without faces it is otherwise vertices with no
+// triangles (write_mesh's empty mesh, a point cloud), as in read_ply.
 Mesh read_obj(const std::string& path);
 // read_stl, read_ply or read_obj, chosen by the extension (.stl, .ply, .obj; any case).
 Mesh read_mesh(const std::string& path);

@@ -17,6 +17,8 @@
 
 #include <voxmesh/io.hpp>
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -78,16 +80,35 @@ public:
         else if (keyword == "vn") normal(words);
         else if (keyword == "vt") ++texcoords_;
         // Anything else (o, g, s, usemtl, mtllib, l, p, vp, unknown) says nothing we keep.
+        else if (unknown_.empty() && !keyword.empty() && !is_obj_keyword(keyword)) unknown_ = shown(keyword, line);
     }
 
     Mesh finish() {
-        if (mesh_.indices.empty()) fail(path_, "no faces ('f' statements)");
+        // No faces is an empty mesh (write_mesh writes one so) where every statement was OBJ;
+        // a file of other text is not taken for an empty model.
+        if (mesh_.indices.empty() && !unknown_.empty())
+            fail(path_, "no faces ('f' statements), and " + unknown_ + " is not an OBJ statement");
         if (normals_paired_ && normals_finite_ && normals_.size() == mesh_.positions.size())
             mesh_.normals = std::move(normals_);
         return std::move(mesh_);
     }
 
 private:
+    // The OBJ statements (the spec's, free-form geometry's included) other than v, vn, vt, f.
+    static bool is_obj_keyword(std::string_view k) {
+        static constexpr std::string_view kKnown[] = {
+            "o", "g", "s", "usemtl", "mtllib", "l", "p", "vp", "mg", "cstype", "deg", "bmat", "step", "curv",
+            "curv2", "surf", "parm", "trim", "hole", "scrv", "sp", "end", "con", "bevel", "c_interp", "d_interp",
+            "lod", "maplib", "usemap", "shadow_obj", "trace_obj", "ctech", "stech"};
+        return std::find(std::begin(kKnown), std::end(kKnown), k) != std::end(kKnown);
+    }
+    static std::string shown(std::string_view keyword, std::size_t line) {
+        std::string word;
+        for (const char c : keyword.substr(0, 40)) word += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+        return "'" + word + "' (line " + std::to_string(line) + ")";
+    }
+    std::string unknown_;  // the first statement that is not OBJ's, as shown in errors
+
     std::string where() const { return "line " + std::to_string(line_) + ": "; }
     [[noreturn]] void error(const std::string& what) const { fail(path_, where() + what); }
 

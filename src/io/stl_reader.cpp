@@ -168,7 +168,7 @@ Mesh io::read_stl_from(const InputFile& input) {
         if constexpr (std::endian::native == std::endian::big) io::swap_bytes(&count, 1, 4);
         const std::uint64_t expected = 84 + 50 * std::uint64_t{count};
         if (expected == size) {
-            if (count == 0) fail(path, "binary STL with no triangles");
+            // Count 0 in 84 bytes: an empty mesh, as write_mesh writes one (and PLY reads one).
             read_binary(path, data, count, mesh);
             return mesh;
         }
@@ -184,8 +184,7 @@ Mesh io::read_stl_from(const InputFile& input) {
     } catch (const Error& e) {
         detail::rethrow_with_message(e, std::string(e.what()) + " (" + binary_problem + ")");
     }
-    if (mesh.indices.empty()) fail(path, "ASCII STL with no triangles");
-    return mesh;
+    return mesh;  // "solid x / endsolid x" included: an empty mesh, as in binary STL
 }
 
 }  // namespace voxmesh
