@@ -4,6 +4,6 @@
 #include "fuzz_common.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-    fuzz::read_mesh_input("input.ply", data, size, false);
+    fuzz::read_mesh_input("input.ply", data, size);
     return 0;
 }
