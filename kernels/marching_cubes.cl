@@ -345,6 +345,7 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
             continue;
         }
         const uint any_crossed = m.x | m.y | m.z;
+        if (id + edge_count(m) > row_end) return;  // once a word, not once a sample
         if (any_crossed) {  // the next row's lines that its gradients touch first (see PREFETCH)
             __global const voxel* s = data + row_sample + nx + 32 * q + lowest_bit(any_crossed);
             PREFETCH(s + 2 * plane);
@@ -355,7 +356,6 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
             const uint b = lowest_bit(any);
             const uint x = 32 * q + b;
             const uint axes = (m.x >> b & 1u) | (m.y >> b & 1u) << 1 | (m.z >> b & 1u) << 2;
-            if (id + popcount(axes) > row_end) return;
             sample_vertices(data, row_sample + x, x, j, z, axes, nx, plane, nx, ny, nz, thr, iso, iso_int, iso_frac, ox,
                             oy, oz, sx, sy, sz, ix, iy, iz, inside_below, want_normals, positions + 3 * id,
                             normals + 3 * id);
