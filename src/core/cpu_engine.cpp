@@ -521,8 +521,8 @@ private:
     // 8-bit rows with crossings are packed again from the volume (classify keeps no bits for
     // them): each row's vertices and cell row's triangles are checked against classify's counts
     // once written, in case the volume changed in between (throw_volume_changed). A row that
-    // has more writes into the next rows' room, or into the arrays' slack (kGenerateSlack...).
-    // Checks per vertex or per word cost 3-6 % of generate (gyroid u8 256³, in-process A/B).
+    // has more writes into the next rows' room, or into the spare row allocate_output leaves.
+    // Checks per vertex or per word cost 3-10 % of generate (gyroid u8 256³, in-process A/B).
     static constexpr bool kRepacked = sizeof(T) == 1;
 
     // One x-edge of each row of id lines a cell reads (j and j + 1).

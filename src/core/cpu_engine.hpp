@@ -123,8 +123,9 @@ struct NonFiniteSamples : Error {
 
 // Generate read a row's samples again and found other crossings than classify counted: the
 // volume was written to during the call (another thread; Python releases the GIL). Its
-// vertices and triangles go where classify's counts put them, so a row that would pass its
-// share is refused before it writes, never past the mesh's arrays.
+// vertices and triangles go where classify's counts put them; a row is checked once written,
+// so one that has more wrote into the next rows' room or allocate_output's spare row, never
+// past the mesh's arrays.
 [[noreturn]] void throw_volume_changed(std::size_t plane);
 // The first z-plane holding a NaN or infinite sample; dims[2] when there is none.
 std::size_t first_non_finite_plane(const VolumeView& volume);
