@@ -18,7 +18,6 @@
 #include <voxmesh/io.hpp>
 
 #include <algorithm>
-#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
@@ -80,7 +79,8 @@ public:
         else if (keyword == "vn") normal(words);
         else if (keyword == "vt") ++texcoords_;
         // Anything else (o, g, s, usemtl, mtllib, l, p, vp, unknown) says nothing we keep.
-        else if (unknown_.empty() && !keyword.empty() && !is_obj_keyword(keyword)) unknown_ = shown(keyword, line);
+        else if (unknown_.empty() && !keyword.empty() && !is_obj_keyword(keyword))
+            unknown_.append("'").append(io::shown(keyword)).append("' (line ").append(std::to_string(line)).append(")");
     }
 
     Mesh finish() {
@@ -101,11 +101,6 @@ private:
             "curv2", "surf", "parm", "trim", "hole", "scrv", "sp", "end", "con", "bevel", "c_interp", "d_interp",
             "lod", "maplib", "usemap", "shadow_obj", "trace_obj", "ctech", "stech"};
         return std::find(std::begin(kKnown), std::end(kKnown), k) != std::end(kKnown);
-    }
-    static std::string shown(std::string_view keyword, std::size_t line) {
-        std::string word;
-        for (const char c : keyword.substr(0, 40)) word += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
-        return "'" + word + "' (line " + std::to_string(line) + ")";
     }
     std::string unknown_;  // the first statement that is not OBJ's, as shown in errors
 
