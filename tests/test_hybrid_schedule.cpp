@@ -190,3 +190,57 @@ TEST_CASE("Hybrid: a change of the data brings rechecks of the modes close to th
     CHECK(f.stale[2]);
     CHECK_FALSE(f.stale[1]);
 }
+
+// Runs one call of `volume` through the book as Hybrid does, its modes taking the given times.
+static HybridMode call(HybridModeBook<int>& book, int shape, const void* volume, double split_s, double cpu_s,
+                       double device_s) {
+    const HybridMode m = book.choose(shape, volume);
+    book.record(shape, volume, m, m == HybridMode::Split ? split_s : m == HybridMode::CpuAlone ? cpu_s : device_s);
+    return m;
+}
+
+TEST_CASE("Hybrid: volumes of one shape meshed in turn keep their own mode times", "[hybrid]") {
+    // A sparse and a dense volume of one shape, taking turns (as a benchmark's fields do): the
+    // CPU engine is quicker on the sparse one, the device on the dense one. One shared record
+    // saw a 3x change at every call and ran whichever mode the other volume had last picked.
+    HybridModeBook<int> book;
+    const int sparse_data = 0, dense_data = 0;
+    const void* sparse = &sparse_data;
+    const void* dense = &dense_data;
+    std::vector<HybridMode> sparse_ran, dense_ran;
+    for (int round = 0; round < 40; ++round) {
+        sparse_ran.push_back(call(book, 7, sparse, 12, 10, 11.5));
+        dense_ran.push_back(call(book, 7, dense, 33, 36, 30));
+    }
+    CHECK(book.size() == 2);
+    // From the fifth round on, rechecks aside, each runs its own quickest.
+    const auto runs = [](const std::vector<HybridMode>& ran, HybridMode m) {
+        return std::count(ran.begin() + 5, ran.end(), m);
+    };
+    CHECK(runs(sparse_ran, HybridMode::CpuAlone) >= 30);
+    CHECK(runs(dense_ran, HybridMode::DeviceAlone) >= 30);
+    // A volume not seen before starts from the shape's latest times: no split, no exploring.
+    const int fresh_data = 0;
+    CHECK(book.choose(7, &fresh_data) == book.choose(7, dense));
+    CHECK(call(book, 7, &fresh_data, 33, 36, 30) == HybridMode::DeviceAlone);
+    // Another shape has nothing yet: its first call splits (untimed).
+    CHECK(book.choose(8, sparse) == HybridMode::Split);
+}
+
+TEST_CASE("Hybrid: the book forgets the least recently meshed volumes of a shape", "[hybrid]") {
+    HybridModeBook<int> book;
+    std::vector<int> volumes(HybridModeBook<int>::kVolumesPerShape + 3);
+    for (int& v : volumes) call(book, 1, &v, 1, 1, 1);
+    call(book, 2, &volumes[0], 1, 1, 1);
+    CHECK(book.size() == HybridModeBook<int>::kVolumesPerShape + 1);
+    // Each new volume copied the latest times, so the shape's exploration carried on across them:
+    // the untimed split, the timed split, then the CPU engine alone and the device alone once.
+    HybridModeBook<int> chain;
+    std::vector<HybridMode> ran;
+    for (int& v : volumes) ran.push_back(call(chain, 1, &v, 3, 1, 2));
+    CHECK(ran[0] == HybridMode::Split);
+    CHECK(ran[1] == HybridMode::Split);
+    CHECK(ran[2] == HybridMode::CpuAlone);
+    CHECK(ran[3] == HybridMode::DeviceAlone);
+    CHECK(ran[4] == HybridMode::CpuAlone);
+}

@@ -94,7 +94,7 @@ struct RatesKey {
 };
 std::mutex g_rates_mutex;
 std::map<RatesKey, HybridRates> g_rates;
-std::map<RatesKey, HybridModeTimes> g_modes;  // under g_rates_mutex too
+HybridModeBook<RatesKey> g_modes;  // under g_rates_mutex too
 constexpr std::size_t kMaxRates = 64;  // shapes remembered; the map starts over beyond that
 
 // Seconds and samples of one side's pass in this call.
@@ -334,8 +334,8 @@ private:
     bool chooses_mode(const std::vector<std::shared_ptr<Device>>& chosen) const {
         return hybrid_ && chosen.size() == 1 && options_.chunk_planes == 0 && !g_hybrid_split_only;
     }
-    static HybridMode choose_mode(const RatesKey& key);
-    static void record_mode(const RatesKey& key, HybridMode mode, double seconds);
+    HybridMode choose_mode(const RatesKey& key) const;
+    void record_mode(const RatesKey& key, HybridMode mode, double seconds) const;
     std::mutex mutex_;  // warnings_, fallback_ stats
     std::vector<std::string> warnings_;
     DeviceStats cpu_stats_, fallback_stats_;
@@ -599,16 +599,14 @@ void Engine::plan_hybrid(const std::vector<DeviceJob>& jobs) {
     planned_device_chunks_ = hybrid_device_chunks(chunks_.size(), chunk_samples(), rates_);
 }
 
-HybridMode Engine::choose_mode(const RatesKey& key) {
+HybridMode Engine::choose_mode(const RatesKey& key) const {
     std::lock_guard<std::mutex> lock(g_rates_mutex);
-    const auto it = g_modes.find(key);
-    return it == g_modes.end() ? HybridMode::Split : hybrid_choose_mode(it->second);
+    return g_modes.choose(key, volume_.data);
 }
 
-void Engine::record_mode(const RatesKey& key, HybridMode mode, double seconds) {
+void Engine::record_mode(const RatesKey& key, HybridMode mode, double seconds) const {
     std::lock_guard<std::mutex> lock(g_rates_mutex);
-    if (g_modes.size() >= kMaxRates && !g_modes.count(key)) g_modes.clear();
-    hybrid_record_mode(g_modes[key], mode, seconds);
+    g_modes.record(key, volume_.data, mode, seconds);
 }
 
 // This call's rates, for the next call's plan; a side that did no work in a pass keeps the

@@ -15,7 +15,7 @@
 // where host memory bandwidth bounds both, splitting a volume costs more than it gains. So a
 // call with one device picks, from what earlier calls with the same device, shape and settings
 // took end to end, the quickest of the split, the CPU engine alone and the device alone
-// (hybrid_choose_mode).
+// (hybrid_choose_mode), kept per volume (HybridModeBook).
 #pragma once
 
 #include <algorithm>
@@ -23,6 +23,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <iterator>
+#include <map>
+#include <utility>
 
 namespace voxmesh::detail {
 
@@ -183,5 +185,73 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
         if (data_changed && t.seconds[o] <= 2 * now) t.stale[o] = true;
     }
 }
+
+// Mode times per volume, within one device, shape and settings: calls that take turns between
+// volumes of one shape (several scans, a benchmark's fields) each keep their own times, since
+// one volume's surface says little about another's, and sharing one record let each volume's
+// calls mark the others' times stale. A volume not seen before (a sculpting loop that meshes a
+// new array each call, say) starts from the times of the shape's latest call, so it is not
+// measured afresh. The volume is known by its samples' address; `Shape` is any ordered key.
+template <class Shape>
+class HybridModeBook {
+public:
+    static constexpr std::size_t kVolumesPerShape = 8, kMaxEntries = 512;
+
+    HybridMode choose(const Shape& shape, const void* volume) const {
+        if (const auto it = entries_.find(key(shape, volume)); it != entries_.end()) return hybrid_choose_mode(it->second.times);
+        const Entry* latest = latest_of(shape);
+        return latest ? hybrid_choose_mode(latest->times) : HybridMode::Split;
+    }
+
+    void record(const Shape& shape, const void* volume, HybridMode mode, double seconds) {
+        auto it = entries_.find(key(shape, volume));
+        if (it == entries_.end()) {
+            const Entry* latest = latest_of(shape);
+            const Entry start = latest ? *latest : Entry{};
+            forget_for(shape);
+            it = entries_.emplace(key(shape, volume), start).first;
+        }
+        hybrid_record_mode(it->second.times, mode, seconds);
+        it->second.used = ++clock_;
+    }
+
+    std::size_t size() const { return entries_.size(); }
+
+private:
+    using Key = std::pair<Shape, std::uintptr_t>;  // an address as a number: ordered everywhere
+    struct Entry {
+        HybridModeTimes times;
+        std::uint64_t used = 0;  // clock_ at the latest call
+    };
+
+    static Key key(const Shape& shape, const void* volume) { return {shape, reinterpret_cast<std::uintptr_t>(volume)}; }
+
+    const Entry* latest_of(const Shape& shape) const {
+        const Entry* latest = nullptr;
+        for (auto it = entries_.lower_bound(Key{shape, 0}); it != entries_.end() && !(shape < it->first.first) &&
+                                                              !(it->first.first < shape);
+             ++it)
+            if (!latest || it->second.used > latest->used) latest = &it->second;
+        return latest;
+    }
+
+    // Room for one more volume of `shape`: its least recently meshed volume goes past
+    // kVolumesPerShape, everything past kMaxEntries.
+    void forget_for(const Shape& shape) {
+        if (entries_.size() >= kMaxEntries) entries_.clear();
+        std::size_t count = 0;
+        auto oldest = entries_.end();
+        for (auto it = entries_.lower_bound(Key{shape, 0}); it != entries_.end() && !(shape < it->first.first) &&
+                                                              !(it->first.first < shape);
+             ++it) {
+            ++count;
+            if (oldest == entries_.end() || it->second.used < oldest->second.used) oldest = it;
+        }
+        if (count >= kVolumesPerShape) entries_.erase(oldest);
+    }
+
+    std::map<Key, Entry> entries_;
+    std::uint64_t clock_ = 0;
+};
 
 }  // namespace voxmesh::detail
