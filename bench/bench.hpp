@@ -57,6 +57,9 @@ struct Result {
     double kernel_s = 0, transfer_s = 0;  // summed over devices (OpenCL)
     std::string device_names;             // Stats::devices names, '+'-joined
     double cpu_share = -1;                // Hybrid: median share of the samples the CPU engine meshed (-1: not Hybrid)
+    // Hybrid with one device: what each call ran, in order: S the split, C the CPU engine alone,
+    // D the device alone; lower case for warm-up calls.
+    std::string hybrid_modes;
 
     std::size_t triangles = 0, vertices = 0;
     double mvox_s = 0;

@@ -230,6 +230,18 @@ bool rss_reset_works() {
     return works;
 }
 
+// What a Hybrid call with one device ran (Result::hybrid_modes), from which side meshed samples;
+// 0 for other backends and for several devices.
+char hybrid_mode(const voxmesh::Stats& stats) {
+    if (stats.backend != voxmesh::Backend::Hybrid || stats.devices.size() != 2) return 0;
+    std::size_t cpu = 0, all = 0;
+    for (const auto& d : stats.devices) {
+        all += d.voxels;
+        if (d.name == "cpu") cpu += d.voxels;
+    }
+    return cpu == all ? 'C' : cpu == 0 ? 'D' : 'S';
+}
+
 // ---- one combination -----------------------------------------------------------------------
 
 Runner::Runner(const Input& input, const Combo& combo, const Settings& settings)
@@ -305,6 +317,7 @@ bool Runner::run(bool timed) {
         else fresh = voxmesh::extract(view_, options_, stats);
         const double t1 = now_s();
         r.backend_ran = voxmesh::backend_name(stats.backend);
+        if (const char mode = hybrid_mode(stats)) r.hybrid_modes += timed ? mode : static_cast<char>(mode + ('a' - 'A'));
         if (!timed) return true;
         const double hwm = status_mb("VmHWM");
         const voxmesh::Mesh& m = settings_.reuse_mesh ? kept_ : fresh;

@@ -230,7 +230,8 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
         o << "],\"classify_s\":" << opt(r.classify_s) << ",\"scan_s\":" << opt(r.scan_s)
           << ",\"generate_s\":" << opt(r.generate_s) << ",\"total_s\":" << opt(r.total_s)
           << ",\"kernel_s\":" << opt(r.kernel_s) << ",\"transfer_s\":" << opt(r.transfer_s)
-          << ",\"cpu_share\":" << (r.cpu_share >= 0 ? num(r.cpu_share) : "null")
+          << ",\"cpu_share\":" << (r.cpu_share >= 0 ? num(r.cpu_share) : "null") << ",\"hybrid_modes\":\""
+          << r.hybrid_modes << '"'
           << ",\"triangles\":" << (ok ? std::to_string(r.triangles) : "null")
           << ",\"vertices\":" << (ok ? std::to_string(r.vertices) : "null") << ",\"mvox_s\":" << opt(r.mvox_s)
           << ",\"floor_s\":" << (r.floor_s > 0 ? num(r.floor_s) : "null")
