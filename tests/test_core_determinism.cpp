@@ -209,6 +209,24 @@ TEST_CASE("extract_into a mesh too small for the result gives extract()'s mesh",
     }
 }
 
+// Hybrid compares its modes by their time less what growing the mesh's arrays took
+// (hybrid_schedule.hpp): cpu_extract reports that time only where the storage was replaced.
+TEST_CASE("cpu_extract reports the time spent replacing the mesh's storage, and only then", "[core]") {
+    namespace d = voxmesh::detail;
+    const Dims dims{40, 36, 38};
+    const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));
+    const voxmesh::VolumeView view = vmtest::view_of(values, dims);
+    const voxmesh::Options o = cpu_options(0.15, 2);
+    voxmesh::Stats stats;
+    double grown = -1;
+    voxmesh::Mesh mesh = d::cpu_extract(view, o, stats, {}, &grown);
+    CHECK(grown > 0);
+    CHECK(grown <= stats.times.total);
+    grown = -1;
+    mesh = d::cpu_extract(view, o, stats, std::move(mesh), &grown);  // the same surface: room enough
+    CHECK(grown == 0);
+}
+
 TEST_CASE("extract_into gives extract()'s mesh in a reused mesh's storage", "[core]") {
     const Dims dims{33, 29, 31};
     const std::vector<float> values = vmtest::sample_field<float>(dims, vmtest::wavy(0.45));

@@ -134,3 +134,19 @@ TEST_CASE("ArraySizing gives every array its size, whatever storage it had", "[c
         }
     }
 }
+
+TEST_CASE("ArraySizing says whether it replaced some array's storage", "[core][pages]") {
+    std::vector<float> a(100), b;
+    b.reserve(50);
+    voxmesh::detail::ArraySizing room;
+    room.add(a, 80);  // shrinks
+    room.add(b, 50);  // grows within its capacity
+    room.run(2);
+    CHECK_FALSE(room.replaced());
+    voxmesh::detail::ArraySizing grows;
+    grows.add(a, 80);
+    grows.add(b, 51);
+    grows.run(2);
+    CHECK(grows.replaced());
+    CHECK(b.size() == 51);
+}

@@ -200,7 +200,7 @@ static HybridMode call(HybridModeBook<int>& book, int shape, const void* volume,
 }
 
 TEST_CASE("Hybrid: volumes of one shape meshed in turn keep their own mode times", "[hybrid]") {
-    // A sparse and a dense volume of one shape, taking turns (as a benchmark's fields do): the
+    // A sparse and a dense volume of one shape, taking turns (two scans of one size): the
     // CPU engine is quicker on the sparse one, the device on the dense one. One shared record
     // saw a 3x change at every call and ran whichever mode the other volume had last picked.
     HybridModeBook<int> book;

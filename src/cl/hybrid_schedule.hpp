@@ -112,7 +112,10 @@ inline std::size_t hybrid_device_chunks(std::size_t chunks, double samples, cons
 enum class HybridMode : unsigned { Split = 0, CpuAlone = 1, DeviceAlone = 2 };
 constexpr unsigned kHybridModes = 3;
 
-// End-to-end seconds of earlier calls per mode, with one device, volume shape and settings.
+// End-to-end seconds of earlier calls per mode, with one device, volume shape and settings, less
+// the time a call spent replacing the mesh's arrays (allocate_output): that comes once where a
+// reused mesh grows, in whichever mode ran then, and one such call once kept a mode 2x quicker
+// from being picked (a GPU alone, gyroid u8 512^3 on the H200 machine, forty-third session).
 struct HybridModeTimes {
     double seconds[kHybridModes] = {0, 0, 0};             // 0: not measured yet
     std::uint64_t measured_at[kHybridModes] = {0, 0, 0};  // `calls` when last measured
@@ -187,9 +190,9 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
 }
 
 // Mode times per volume, within one device, shape and settings: calls that take turns between
-// volumes of one shape (several scans, a benchmark's fields) each keep their own times, since
-// one volume's surface says little about another's, and sharing one record let each volume's
-// calls mark the others' times stale. A volume not seen before (a sculpting loop that meshes a
+// volumes of one shape (several scans of one size, two sculpted objects) each keep their own
+// times, since one volume's surface says little about another's, and sharing one record let
+// each volume's calls mark the others' times stale. A volume not seen before (a sculpting loop that meshes a
 // new array each call, say) starts from the times of the shape's latest call, so it is not
 // measured afresh. The volume is known by its samples' address; `Shape` is any ordered key.
 template <class Shape>

@@ -25,6 +25,7 @@ public:
     template <class T>
     void add(std::vector<T>& array, std::size_t n) {
         if (n > array.capacity()) {
+            replaced_ = true;
             array.clear();  // reserve then copies nothing
             reserve_huge(array, n);
             // Only pages not yet in memory are worth faulting in first: the heap often hands
@@ -40,6 +41,9 @@ public:
     // Sizes the arrays on up to `threads` threads (0: all cores), no more than the cores.
     void run(unsigned threads);
 
+    // Whether some array's storage was too small and has been replaced.
+    bool replaced() const { return replaced_; }
+
 private:
     struct Resize {
         std::size_t bytes;  // what it writes
@@ -47,6 +51,7 @@ private:
     };
     std::vector<Resize> arrays_;
     std::vector<ByteRange> fresh_;
+    bool replaced_ = false;
 };
 
 }  // namespace voxmesh::detail

@@ -557,8 +557,9 @@ constexpr unsigned kClassifySlabsPerThread = 4, kGenerateSlabsPerThread = 4;
 // The mesh's arrays sized for the counts, in parallel (array_sizing.hpp: a new Mesh's fresh
 // pages are most of what that costs; a 10 M-triangle mesh, 230 MB, took 70 ms into a new
 // Mesh and 27 ms into a reused one on the H200 machine's 16 cores, with one thread per array).
-void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads,
-                     std::size_t row_samples) {
+double allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads,
+                       std::size_t row_samples) {
+    const auto t0 = Clock::now();
     vertices += 3 * std::uint64_t{row_samples};
     triangles += 5 * std::uint64_t{row_samples};
     ArraySizing sizing;
@@ -567,6 +568,7 @@ void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles
     if (normals) sizing.add(mesh.normals, static_cast<std::size_t>(3 * vertices));
     else mesh.normals.clear();  // a reused mesh may have had normals
     sizing.run(std::max(threads, 1u));
+    return sizing.replaced() ? seconds_since(t0) : 0;
 }
 
 void trim_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles) {
@@ -710,7 +712,7 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
     });
 }
 
-Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage) {
+Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage, double* grown_sizing_s) {
     const auto t0 = Clock::now();
     validate_volume(volume);
     const unsigned threads = resolve_threads(options.threads);
@@ -725,7 +727,8 @@ Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats,
     // Output allocation counts toward generate: it is the first write of the output.
     const auto t = Clock::now();
     Mesh mesh = std::move(storage);
-    allocate_output(mesh, plan.vertices, plan.triangles, options.normals, threads, volume.dims[0]);
+    const double grown = allocate_output(mesh, plan.vertices, plan.triangles, options.normals, threads, volume.dims[0]);
+    if (grown_sizing_s) *grown_sizing_s = grown;
 
     cpu_generate(plan, volume, options, threads,
                  MeshOut{mesh.positions.data(), options.normals ? mesh.normals.data() : nullptr, mesh.indices.data(), 0});

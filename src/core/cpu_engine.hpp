@@ -88,13 +88,18 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
 // generate checks a re-read 8-bit row against classify's counts only once it is written, so
 // a volume changed during the call may write one row's vertices (3 a sample) and one cell
 // row's triangles (5 a cell) more before it throws. trim_output cuts the arrays to the counts.
-void allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads,
-                     std::size_t row_samples);
+// Returns the seconds it took where some array's storage was too small and was replaced (a new
+// Mesh, or a reused one whose surface grew), else 0: Hybrid leaves that out of the time it
+// compares its modes by, since it comes once where a reused mesh grows.
+double allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads,
+                       std::size_t row_samples);
 void trim_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles);
 
 // Whole-volume extraction written straight into the mesh (no merge copy).
 // `storage`: a mesh whose arrays' capacity the result reuses (extract_into).
-Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage = {});
+// `grown_sizing_s`: where given, allocate_output's return.
+Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats, Mesh storage = {},
+                 double* grown_sizing_s = nullptr);
 
 // The longest row (nx) a volume may have: a row's vertex and triangle counts stay 32-bit.
 constexpr std::size_t kMaxRowSamples = std::size_t{1} << 29;
