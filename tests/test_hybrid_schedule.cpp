@@ -2,11 +2,14 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cstdint>
 #include <vector>
 
 #include "cl/hybrid_schedule.hpp"
 
 using namespace voxmesh::detail;
+
+constexpr std::uint64_t kTriangles = 1000;  // one surface size for the calls that keep it
 
 TEST_CASE("Hybrid: the CPU worker's runs follow its share of the throughput", "[hybrid]") {
     CHECK(hybrid_cpu_run(0, 0, 0) == 0);
@@ -89,14 +92,14 @@ TEST_CASE("Hybrid: a call picks the quickest of the split, the CPU alone and the
     HybridModeTimes t;
     // The first split builds and measures; it is not timed. Then each mode once, in order.
     CHECK(hybrid_choose_mode(t) == HybridMode::Split);
-    hybrid_record_mode(t, HybridMode::Split, 100);
+    hybrid_record_mode(t, HybridMode::Split, 100, kTriangles);
     CHECK(t.seconds[0] == 0);
     CHECK(hybrid_choose_mode(t) == HybridMode::Split);
-    hybrid_record_mode(t, HybridMode::Split, 10);
+    hybrid_record_mode(t, HybridMode::Split, 10, kTriangles);
     CHECK(hybrid_choose_mode(t) == HybridMode::CpuAlone);
-    hybrid_record_mode(t, HybridMode::CpuAlone, 8);
+    hybrid_record_mode(t, HybridMode::CpuAlone, 8, kTriangles);
     CHECK(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
-    hybrid_record_mode(t, HybridMode::DeviceAlone, 12);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 12, kTriangles);
     // The quickest from then on, but for rechecks of the others: the split (25 % slower) every
     // 25 calls, the device alone (50 % slower) every 50; together about 2 % of the time.
     std::vector<HybridMode> ran;
@@ -106,7 +109,7 @@ TEST_CASE("Hybrid: a call picks the quickest of the split, the CPU alone and the
         ran.push_back(m);
         const double s = m == HybridMode::CpuAlone ? 8 : m == HybridMode::Split ? 10 : 12;
         spent += s;
-        hybrid_record_mode(t, m, s);
+        hybrid_record_mode(t, m, s, kTriangles);
     }
     CHECK(std::count(ran.begin(), ran.end(), HybridMode::Split) == 8);
     CHECK(std::count(ran.begin(), ran.end(), HybridMode::DeviceAlone) == 4);
@@ -115,30 +118,30 @@ TEST_CASE("Hybrid: a call picks the quickest of the split, the CPU alone and the
     // The quickest mode slower by a quarter (a busier machine, a denser surface): that is its
     // time now, and the others' follow by the same factor, so that it stays the quickest until
     // a recheck says otherwise.
-    hybrid_record_mode(t, HybridMode::CpuAlone, 10);
+    hybrid_record_mode(t, HybridMode::CpuAlone, 10, kTriangles);
     CHECK(t.seconds[1] == Approx(10));
     CHECK(t.seconds[0] == Approx(12.5));
     CHECK(t.seconds[2] == Approx(15));
     CHECK_FALSE(t.stale[0]);
     CHECK(hybrid_choose_mode(t) == HybridMode::CpuAlone);
     // A recheck that finds another mode quicker makes it the quickest.
-    hybrid_record_mode(t, HybridMode::DeviceAlone, 9);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 9, kTriangles);
     CHECK(t.seconds[1] == Approx(10));
     CHECK(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
     // A mode measured as taking no time at all still counts as measured.
     HybridModeTimes z;
-    hybrid_record_mode(z, HybridMode::Split, 0);
-    hybrid_record_mode(z, HybridMode::Split, 0);
+    hybrid_record_mode(z, HybridMode::Split, 0, kTriangles);
+    hybrid_record_mode(z, HybridMode::Split, 0, kTriangles);
     CHECK(hybrid_choose_mode(z) == HybridMode::CpuAlone);
 }
 
 // The times after a shape's first calls: an untimed split, then each mode once.
 static HybridModeTimes explored(double split_s, double cpu_s, double device_s) {
     HybridModeTimes t;
-    hybrid_record_mode(t, HybridMode::Split, 1);
-    hybrid_record_mode(t, HybridMode::Split, split_s);
-    hybrid_record_mode(t, HybridMode::CpuAlone, cpu_s);
-    hybrid_record_mode(t, HybridMode::DeviceAlone, device_s);
+    hybrid_record_mode(t, HybridMode::Split, 1, kTriangles);
+    hybrid_record_mode(t, HybridMode::Split, split_s, kTriangles);
+    hybrid_record_mode(t, HybridMode::CpuAlone, cpu_s, kTriangles);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, device_s, kTriangles);
     return t;
 }
 
@@ -157,7 +160,7 @@ TEST_CASE("Hybrid: modes as quick as the best are rechecked often, slow ones sel
         const HybridMode m = hybrid_choose_mode(t);
         split += m == HybridMode::Split;
         cpu += m == HybridMode::CpuAlone;
-        hybrid_record_mode(t, m, m == HybridMode::Split ? 10.2 : m == HybridMode::CpuAlone ? 50 : 10);
+        hybrid_record_mode(t, m, m == HybridMode::Split ? 10.2 : m == HybridMode::CpuAlone ? 50 : 10, kTriangles);
     }
     CHECK(split == 10);  // every fourth call
     CHECK(cpu == 0);
@@ -167,26 +170,26 @@ TEST_CASE("Hybrid: a change of the data brings rechecks of the modes close to th
     // A sparse surface: the CPU alone quickest, the device alone and the split close behind,
     // the quickest's calls steady (a change of less than kHybridDataChange is no sign of one).
     HybridModeTimes t = explored(12, 10, 11);
-    hybrid_record_mode(t, HybridMode::CpuAlone, 12);
+    hybrid_record_mode(t, HybridMode::CpuAlone, 12, kTriangles);
     CHECK(hybrid_choose_mode(t) == HybridMode::CpuAlone);
     // A dense one of the same shape: the CPU takes 2.5x as long, the device only 1.2x. Without
     // the change seen, the device's recheck would wait 10 calls, on the old order.
-    hybrid_record_mode(t, HybridMode::CpuAlone, 30);
+    hybrid_record_mode(t, HybridMode::CpuAlone, 30, kTriangles);
     CHECK(t.stale[0]);
     CHECK(t.stale[2]);
     REQUIRE(hybrid_choose_mode(t) == HybridMode::DeviceAlone);  // the closest first
-    hybrid_record_mode(t, HybridMode::DeviceAlone, 13);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 13, kTriangles);
     CHECK_FALSE(t.stale[2]);
     REQUIRE(hybrid_choose_mode(t) == HybridMode::Split);  // still due, though now far behind
-    hybrid_record_mode(t, HybridMode::Split, 28);
+    hybrid_record_mode(t, HybridMode::Split, 28, kTriangles);
     for (int call = 0; call < 10; ++call) {
         REQUIRE(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
-        hybrid_record_mode(t, HybridMode::DeviceAlone, 13);
+        hybrid_record_mode(t, HybridMode::DeviceAlone, 13, kTriangles);
     }
     // A mode more than twice as slow as the quickest is left to its paced rechecks.
     HybridModeTimes f = explored(10, 50, 10.5);
-    hybrid_record_mode(f, HybridMode::Split, 10);
-    hybrid_record_mode(f, HybridMode::Split, 4);
+    hybrid_record_mode(f, HybridMode::Split, 10, kTriangles);
+    hybrid_record_mode(f, HybridMode::Split, 4, kTriangles);
     CHECK(f.stale[2]);
     CHECK_FALSE(f.stale[1]);
 }
@@ -195,7 +198,7 @@ TEST_CASE("Hybrid: a change of the data brings rechecks of the modes close to th
 static HybridMode call(HybridModeBook<int>& book, int shape, const void* volume, double split_s, double cpu_s,
                        double device_s) {
     const HybridMode m = book.choose(shape, volume);
-    book.record(shape, volume, m, m == HybridMode::Split ? split_s : m == HybridMode::CpuAlone ? cpu_s : device_s);
+    book.record(shape, volume, m, m == HybridMode::Split ? split_s : m == HybridMode::CpuAlone ? cpu_s : device_s, kTriangles);
     return m;
 }
 
@@ -243,4 +246,48 @@ TEST_CASE("Hybrid: the book forgets the least recently meshed volumes of a shape
     CHECK(ran[2] == HybridMode::CpuAlone);
     CHECK(ran[3] == HybridMode::DeviceAlone);
     CHECK(ran[4] == HybridMode::CpuAlone);
+}
+
+TEST_CASE("Hybrid: a mesh of another size makes the modes timed on the old surface due again", "[hybrid]") {
+    // A dense surface (10 M triangles) where the device alone is quickest, then a sparser one
+    // (2.8 M) whose first call runs the CPU engine (a recheck): the CPU took a third of its old
+    // time, and the device's and the split's times, taken on the dense surface, follow it. Time
+    // ratios alone missed this: the device's old time was more than twice the CPU's new one, so
+    // it was left to a recheck 140 calls later, where it was 16 % quicker (the H200 machine's
+    // CT phantom u8 512^3 after the gyroid, 16 threads).
+    const std::uint64_t dense = 10'110'063, sparse = 2'785'632;
+    HybridModeTimes t;
+    hybrid_record_mode(t, HybridMode::Split, 1, dense);
+    hybrid_record_mode(t, HybridMode::Split, 40.8, dense);
+    hybrid_record_mode(t, HybridMode::CpuAlone, 38.8, dense);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 31.5, dense);
+    REQUIRE(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
+    hybrid_record_mode(t, HybridMode::CpuAlone, 13.1, sparse);
+    CHECK(t.seconds[2] == Approx(31.5 * 13.1 / 38.8));
+    CHECK(t.seconds[0] == Approx(40.8 * 13.1 / 38.8));
+    CHECK(t.stale[2]);
+    CHECK(t.stale[0]);
+    REQUIRE(hybrid_choose_mode(t) == HybridMode::DeviceAlone);  // its estimate is the quickest
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 11.0, sparse);
+    CHECK_FALSE(t.stale[2]);
+    // The split's old time stays due; once measured on this surface, nothing is due.
+    REQUIRE(hybrid_choose_mode(t) == HybridMode::Split);
+    hybrid_record_mode(t, HybridMode::Split, 13.7, sparse);
+    // The device's time, taken on the new surface already, did not follow the split's change.
+    CHECK(t.seconds[2] == Approx(11.0));
+    for (int call = 0; call < 3; ++call) {
+        REQUIRE(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
+        hybrid_record_mode(t, HybridMode::DeviceAlone, 11.0, sparse + 1000 * call);  // a steady surface
+    }
+    CHECK_FALSE(t.stale[0]);
+    CHECK_FALSE(t.stale[1]);
+    // A mode more than twice as slow as the quickest is left to its paced rechecks.
+    HybridModeTimes f;
+    hybrid_record_mode(f, HybridMode::Split, 1, sparse);
+    hybrid_record_mode(f, HybridMode::Split, 30, sparse);
+    hybrid_record_mode(f, HybridMode::CpuAlone, 10, sparse);
+    hybrid_record_mode(f, HybridMode::DeviceAlone, 11, sparse);
+    hybrid_record_mode(f, HybridMode::CpuAlone, 10, dense / 2);
+    CHECK(f.stale[2]);
+    CHECK_FALSE(f.stale[0]);
 }

@@ -122,7 +122,16 @@ struct HybridModeTimes {
     std::uint64_t calls = 0;                              // calls measured
     std::uint64_t split_calls = 0;                        // split calls, the first included
     bool stale[kHybridModes] = {false, false, false};     // due for a recheck: the data changed
+    std::uint64_t triangles_at[kHybridModes] = {0, 0, 0};  // the mesh's triangles when last measured
 };
+
+// Whether meshes of `a` and `b` triangles differ by more than kHybridSurfaceChange times (the
+// +1 lets an empty mesh count).
+constexpr double kHybridSurfaceChange = 1.25;
+inline bool hybrid_surface_changed(std::uint64_t a, std::uint64_t b) {
+    const double ratio = (static_cast<double>(a) + 1) / (static_cast<double>(b) + 1);
+    return ratio > kHybridSurfaceChange || ratio * kHybridSurfaceChange < 1;
+}
 
 // How often a mode other than the quickest is measured again (a recheck), so that a change of
 // load or of the data in a volume of the same shape is noticed: a mode `gap` slower than the
@@ -147,12 +156,14 @@ inline unsigned hybrid_quickest_mode(const HybridModeTimes& t) {
 
 // The mode for the next call: the split first (its first call builds the device's programs and
 // measures the rates later splits are planned by, so its time is not counted), then each mode
-// not measured yet, then the quickest, or a recheck that is due (the one closest to the quickest).
+// not measured yet, then the quickest, or a recheck that is due (the one closest to the quickest;
+// the quickest first where its own time is due, an estimate from another surface).
 inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
     if (t.split_calls == 0) return HybridMode::Split;
     for (unsigned m = 0; m < kHybridModes; ++m)
         if (t.seconds[m] <= 0) return static_cast<HybridMode>(m);
     const unsigned best = hybrid_quickest_mode(t);
+    if (t.stale[best]) return static_cast<HybridMode>(best);  // an estimate: measured first
     unsigned pick = best;
     for (unsigned m = 0; m < kHybridModes; ++m) {
         if (m == best) continue;
@@ -162,30 +173,43 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
     return static_cast<HybridMode>(pick);
 }
 
-// A call in `mode` took `seconds` end to end: that is the mode's time now. Where the mode was
-// the quickest, the others' times follow its change by the same factor: the same shape can hold
-// a sparser or a denser surface than the calls they were timed on (or the machine can be
-// busier), and only a call in another mode can say that their order has changed. A change of
-// more than kHybridDataChange times says the data changed, and the sides do not scale alike
-// with the surface (a GPU gains more on a dense one): the modes up to twice as slow as the
-// quickest are measured again in the next calls, closest first.
+// A call in `mode` took `seconds` end to end and made `triangles`: that is the mode's time now.
+// Where the mode was the quickest, the others' times follow its change by the same factor: the
+// same shape can hold a sparser or a denser surface than the calls they were timed on (or the
+// machine can be busier), and only a call in another mode can say that their order has
+// changed. The sides do not scale alike with the surface (a GPU's copies cost the same for any
+// surface, the CPU engine's generate grows with it), so where the data changed, the modes up to
+// twice as slow as the quickest are measured again in the next calls, closest first. The data
+// changed where the mesh's size differs by more than kHybridSurfaceChange from that mode's
+// last measurement (exact, unlike times), or the quickest mode's time by more than
+// kHybridDataChange (a change that keeps the size, or a busier machine).
 constexpr double kHybridDataChange = 2;
-inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double seconds) {
+inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double seconds, std::uint64_t triangles) {
     if (mode == HybridMode::Split && t.split_calls++ == 0) return;
     const auto m = static_cast<unsigned>(mode);
     const double before = t.seconds[m], now = std::max(seconds, 1e-9);
     const bool measured = std::all_of(std::begin(t.seconds), std::end(t.seconds), [](double s) { return s > 0; });
     const bool quickest = measured && before <= t.seconds[hybrid_quickest_mode(t)];
+    const std::uint64_t before_triangles = t.triangles_at[m];
     t.seconds[m] = now;
     t.measured_at[m] = t.calls++;
     t.stale[m] = false;
-    if (!quickest) return;
-    const double change = now / before;
-    const bool data_changed = change > kHybridDataChange || change * kHybridDataChange < 1;
+    t.triangles_at[m] = triangles;
+    // The others follow the quickest mode's change; where the surface changed, any mode's, but
+    // only those timed on its old surface (one timed on the new surface already is news).
+    const bool surface_moved = before > 0 && hybrid_surface_changed(before_triangles, triangles);
+    const double change = (quickest || surface_moved) && before > 0 ? now / before : 1;
+    const bool time_changed = quickest && (change > kHybridDataChange || change * kHybridDataChange < 1);
     for (unsigned o = 0; o < kHybridModes; ++o) {
-        if (o == m) continue;
-        t.seconds[o] *= change;
-        if (data_changed && t.seconds[o] <= 2 * now) t.stale[o] = true;
+        if (o == m || t.seconds[o] <= 0) continue;
+        const bool follows = !surface_moved || !hybrid_surface_changed(t.triangles_at[o], before_triangles);
+        if (follows) t.seconds[o] *= change;
+    }
+    if (!measured) return;
+    const double quickest_s = t.seconds[hybrid_quickest_mode(t)];
+    for (unsigned o = 0; o < kHybridModes; ++o) {
+        if (o == m || t.seconds[o] > 2 * quickest_s) continue;
+        if (time_changed || hybrid_surface_changed(t.triangles_at[o], triangles)) t.stale[o] = true;
     }
 }
 
@@ -206,7 +230,7 @@ public:
         return latest ? hybrid_choose_mode(latest->times) : HybridMode::Split;
     }
 
-    void record(const Shape& shape, const void* volume, HybridMode mode, double seconds) {
+    void record(const Shape& shape, const void* volume, HybridMode mode, double seconds, std::uint64_t triangles) {
         auto it = entries_.find(key(shape, volume));
         if (it == entries_.end()) {
             const Entry* latest = latest_of(shape);
@@ -214,7 +238,7 @@ public:
             forget_for(shape);
             it = entries_.emplace(key(shape, volume), start).first;
         }
-        hybrid_record_mode(it->second.times, mode, seconds);
+        hybrid_record_mode(it->second.times, mode, seconds, triangles);
         it->second.used = ++clock_;
     }
 
