@@ -4,8 +4,9 @@
 # thread counts: Options::threads also sets how many host threads fill and empty the pinned
 # copy blocks), with fresh meshes and with one reused, then thread scaling, then runs the whole
 # test suite there. Each step runs under a timeout (SIGINT makes voxmesh-bench print what it
-# finished); the steps' limits add up to under 10 minutes, one device call. Outputs go to $OUT (or bench/gpu/out): eight files, the most the device tool
-# brings back.
+# finished); the limits add up to 570 s, one device call (the forty-third session's run took
+# 170 s, 110 of them the suite). Outputs go to $OUT (or bench/gpu/out): eight files, the most
+# the device tool brings back.
 set -uo pipefail
 out=${OUT:-bench/gpu/out}
 mkdir -p "$out"
@@ -23,19 +24,19 @@ bench=.gpu/voxmesh-bench
   cat .gpu/commit.txt; nproc; grep -m1 'model name' /proc/cpuinfo; nvidia-smi -L 2>&1 | head -3
   $bench --list-devices
 } > "$out/machine.txt" 2>&1
-timeout 40 .gpu/voxmesh-cl-bandwidth > "$out/cl_bandwidth.txt" 2>&1
+timeout 30 .gpu/voxmesh-cl-bandwidth > "$out/cl_bandwidth.txt" 2>&1
 # Sizing fresh and reused result arrays on one thread and on all (array_sizing.hpp), beside the
 # copies: both are what a fresh mesh costs on this machine.
-timeout 40 .gpu/voxmesh-array-sizing --repeat 9 40 240 >> "$out/cl_bandwidth.txt" 2>&1
+timeout 30 .gpu/voxmesh-array-sizing --repeat 9 40 240 >> "$out/cl_bandwidth.txt" 2>&1
 threads=$(nproc)
-timeout -s INT -k 10 200 $bench --field sphere,gyroid,ct --type f32,u8 --sizes 256,512 --threads 2,"$threads" --backends cpu,opencl,hybrid \
+timeout -s INT -k 10 120 $bench --field sphere,gyroid,ct --type f32,u8 --sizes 256,512 --threads 2,"$threads" --backends cpu,opencl,hybrid \
   --interleave --repeat 7 --warmup 1 --setup-first --save "$out/backends.jsonl" > "$out/backends.txt" 2>&1
 # The same with one Mesh per combination (extract_into), as a sculpting loop: a fresh mesh's pages
 # cost the H200 machine about half of a dense call (thirty-sixth session).
-timeout -s INT -k 10 110 $bench --field sphere,gyroid,ct --type f32,u8 --sizes 256,512 --threads 2,"$threads" --backends cpu,opencl,hybrid \
+timeout -s INT -k 10 90 $bench --field sphere,gyroid,ct --type f32,u8 --sizes 256,512 --threads 2,"$threads" --backends cpu,opencl,hybrid \
   --interleave --repeat 7 --warmup 1 --setup-first --reuse-mesh --save "$out/backends_reuse.jsonl" > "$out/backends_reuse.txt" 2>&1
 timeout -s INT -k 10 60 $bench --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 1,2,"$threads" --interleave --repeat 7 \
   --no-floor --reuse-mesh > "$out/scaling_into.txt" 2>&1
 # The whole suite last: the comparisons matter most when device time runs short.
-timeout 200 .gpu/voxmesh_tests > "$out/tests.txt" 2>&1; echo "voxmesh_tests exit $?" >> "$out/tests.txt"
+timeout 240 .gpu/voxmesh_tests > "$out/tests.txt" 2>&1; echo "voxmesh_tests exit $?" >> "$out/tests.txt"
 tail -2 "$out/tests.txt"

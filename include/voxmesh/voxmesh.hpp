@@ -35,7 +35,8 @@ const char* scalar_name(ScalarType type);  // "u8", "i16", "f32", ...
 
 // Hybrid meshes with the OpenCL devices and the CPU threads together; with one device, a call
 // runs whichever of that split, the CPU engine alone and the device alone earlier calls on the
-// same volume shape found quickest (the mesh is the same whichever runs; see the README).
+// same volume (or, for a new one, volume shape) found quickest (the mesh is the same whichever
+// runs; see the README).
 enum class Backend { Auto, Cpu, OpenCL, Hybrid };
 const char* backend_name(Backend backend);  // "auto", "cpu", "opencl", "hybrid"
 
