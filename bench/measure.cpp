@@ -317,7 +317,8 @@ bool Runner::run(bool timed) {
         else fresh = voxmesh::extract(view_, options_, stats);
         const double t1 = now_s();
         r.backend_ran = voxmesh::backend_name(stats.backend);
-        if (const char mode = hybrid_mode(stats)) r.hybrid_modes += timed ? mode : static_cast<char>(mode + ('a' - 'A'));
+        if (const char mode = hybrid_mode(stats))
+            r.hybrid_modes += timed ? mode : static_cast<char>(mode + ('a' - 'A'));  // lower case: warm-up
         if (!timed) return true;
         const double hwm = status_mb("VmHWM");
         const voxmesh::Mesh& m = settings_.reuse_mesh ? kept_ : fresh;

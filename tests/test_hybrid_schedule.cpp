@@ -198,7 +198,8 @@ TEST_CASE("Hybrid: a change of the data brings rechecks of the modes close to th
 static HybridMode call(HybridModeBook<int>& book, int shape, const void* volume, double split_s, double cpu_s,
                        double device_s) {
     const HybridMode m = book.choose(shape, volume);
-    book.record(shape, volume, m, m == HybridMode::Split ? split_s : m == HybridMode::CpuAlone ? cpu_s : device_s, kTriangles);
+    const double s = m == HybridMode::Split ? split_s : m == HybridMode::CpuAlone ? cpu_s : device_s;
+    book.record(shape, volume, m, s, kTriangles);
     return m;
 }
 

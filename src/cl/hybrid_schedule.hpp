@@ -216,16 +216,18 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
 // Mode times per volume, within one device, shape and settings: calls that take turns between
 // volumes of one shape (several scans of one size, two sculpted objects) each keep their own
 // times, since one volume's surface says little about another's, and sharing one record let
-// each volume's calls mark the others' times stale. A volume not seen before (a sculpting loop that meshes a
-// new array each call, say) starts from the times of the shape's latest call, so it is not
-// measured afresh. The volume is known by its samples' address; `Shape` is any ordered key.
+// each volume's calls mark the others' times stale. A volume not seen before (a sculpting loop
+// that meshes a new array each call, say) starts from the times of the shape's latest call, so
+// it is not measured afresh. The volume is known by its samples' address; `Shape` is any
+// ordered key.
 template <class Shape>
 class HybridModeBook {
 public:
     static constexpr std::size_t kVolumesPerShape = 8, kMaxEntries = 512;
 
     HybridMode choose(const Shape& shape, const void* volume) const {
-        if (const auto it = entries_.find(key(shape, volume)); it != entries_.end()) return hybrid_choose_mode(it->second.times);
+        if (const auto it = entries_.find(key(shape, volume)); it != entries_.end())
+            return hybrid_choose_mode(it->second.times);
         const Entry* latest = latest_of(shape);
         return latest ? hybrid_choose_mode(latest->times) : HybridMode::Split;
     }
