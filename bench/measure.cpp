@@ -230,16 +230,18 @@ bool rss_reset_works() {
     return works;
 }
 
-// What a Hybrid call with one device ran (Result::hybrid_modes), from which side meshed samples;
-// 0 for other backends and for several devices.
+// What a Hybrid call with one device ran (Result::hybrid_modes); 0 for other backends and for
+// several devices. Not from who meshed what, since a split can leave either side idle: the
+// device alone runs with no CPU workers, and the CPU engine alone lists the device with no time.
 char hybrid_mode(const voxmesh::Stats& stats) {
-    if (stats.backend != voxmesh::Backend::Hybrid || stats.devices.size() != 2) return 0;
-    std::size_t cpu = 0, all = 0;
-    for (const auto& d : stats.devices) {
-        all += d.voxels;
-        if (d.name == "cpu") cpu += d.voxels;
-    }
-    return cpu == all ? 'C' : cpu == 0 ? 'D' : 'S';
+    if (stats.backend != voxmesh::Backend::Hybrid || stats.devices.empty()) return 0;
+    const auto opencl_devices = std::count_if(stats.devices.begin(), stats.devices.end(), [](const auto& d) {
+        return d.name != "cpu" && d.name != "cpu (fallback)";
+    });
+    if (opencl_devices != 1) return 0;
+    if (stats.workers == 0) return 'D';
+    const voxmesh::DeviceStats& device = stats.devices[0];
+    return device.wall_s == 0 && device.chunks == 0 ? 'C' : 'S';
 }
 
 // ---- one combination -----------------------------------------------------------------------

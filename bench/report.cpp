@@ -188,7 +188,7 @@ void print_csv(const std::vector<Result>& results) {
                 "status,error,median_s,min_s,max_s,classify_s,scan_s,generate_s,total_s,kernel_s,transfer_s,"
                 "triangles,vertices,mvox_s,floor_s,floor_ratio,speedup,speedup_base_threads,compute_ceiling,"
                 "floor_speedup,peak_rss_mb,extract_rss_mb,rss_scope,volume_mb,mesh_mb,warnings,reuse_mesh,interleaved,"
-                "pause_ms,cpu_share,setup_s,setup_rss_mb\n");
+                "pause_ms,cpu_share,setup_s,setup_rss_mb,hybrid_modes\n");
     for (const auto& r : results) {
         std::ostringstream o;
         o << csv_field(r.field) << ',' << r.type << ',' << r.size_label() << ',' << r.dims[0] << ',' << r.dims[1]
@@ -206,7 +206,8 @@ void print_csv(const std::vector<Result>& results) {
           << ',' << num(r.extract_rss_mb) << ',' << r.rss_scope << ',' << num(r.volume_mb) << ','
           << num(r.mesh_mb) << ',' << csv_field(joined(r.warnings, "; ")) << ',' << (r.reuse_mesh ? 1 : 0) << ','
           << (r.interleaved ? 1 : 0) << ',' << num(r.pause_ms) << ',' << (r.cpu_share >= 0 ? num(r.cpu_share) : "")
-          << ',' << (r.setup_s >= 0 ? num(r.setup_s) : "") << ',' << (r.setup_rss_mb >= 0 ? num(r.setup_rss_mb) : "");
+          << ',' << (r.setup_s >= 0 ? num(r.setup_s) : "") << ',' << (r.setup_rss_mb >= 0 ? num(r.setup_rss_mb) : "")
+          << ',' << r.hybrid_modes;
         std::printf("%s\n", o.str().c_str());
     }
 }

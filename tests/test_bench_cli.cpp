@@ -84,6 +84,26 @@ TEST_CASE("bench: every backend and thread count reports the same mesh of a volu
     CHECK(triangles.size() == 8);
 }
 
+TEST_CASE("bench: each Hybrid call's mode is recorded, the warm-up's in lower case", "[bench]") {
+    if (voxmesh::list_devices().empty()) return;
+    Scratch s;
+    // Device 0 named: Hybrid leaves a CPU device out otherwise, and runs the CPU engine alone.
+    const auto r = bench(s, "--field gyroid --type u8 --sizes 24 --threads 2 --backends cpu,hybrid --devices 0 "
+                            "--repeat 6 --warmup 1 --json --no-floor");
+    INFO(r.err);
+    REQUIRE(r.code == 0);
+    const auto rows = lines_of(r.out);
+    REQUIRE(rows.size() == 2);
+    CHECK(json_value(rows[0], "hybrid_modes").empty());  // the CPU engine: no modes
+    const std::string modes = json_value(rows[1], "hybrid_modes");
+    INFO(rows[1]);
+    // A new shape: the untimed split (the warm-up), the split timed, then the CPU engine alone
+    // and the device alone once each, then the quickest (hybrid_schedule.hpp).
+    REQUIRE(modes.size() == 7);
+    CHECK(modes.substr(0, 4) == "sSCD");
+    CHECK(modes.find_first_not_of("SCD", 1) == std::string::npos);
+}
+
 TEST_CASE("bench: CSV has one header and rows of its width; the table names its columns", "[bench]") {
     Scratch s;
     auto fields = [](const std::string& line) {  // commas outside quotes, plus one
