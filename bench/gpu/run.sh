@@ -22,6 +22,8 @@ mkdir -p build/src/cli build/bench && cp .gpu/voxmesh build/src/cli/ && cp .gpu/
 bench=.gpu/voxmesh-bench
 {
   cat .gpu/commit.txt; nproc; grep -m1 'model name' /proc/cpuinfo; nvidia-smi -L 2>&1 | head -3
+  # Whether CPUs 0 and 1 share a core (2-thread scaling read 1.45-1.73 there, forty-third session).
+  lscpu 2>&1 | grep -iE 'thread|core|socket|numa|mhz'; grep . /sys/devices/system/cpu/cpu[01]/topology/thread_siblings_list
   $bench --list-devices
 } > "$out/machine.txt" 2>&1
 timeout 30 .gpu/voxmesh-cl-bandwidth > "$out/cl_bandwidth.txt" 2>&1
