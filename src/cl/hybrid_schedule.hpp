@@ -198,7 +198,7 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
     // The others follow the quickest mode's change; where the surface changed, any mode's, but
     // only those timed on its old surface (one timed on the new surface already is news).
     const bool surface_moved = before > 0 && hybrid_surface_changed(before_triangles, triangles);
-    const double change = (quickest || surface_moved) && before > 0 ? now / before : 1;
+    const double change = quickest || surface_moved ? now / before : 1;  // either: before > 0
     const bool time_changed = quickest && (change > kHybridDataChange || change * kHybridDataChange < 1);
     for (unsigned o = 0; o < kHybridModes; ++o) {
         if (o == m || t.seconds[o] <= 0) continue;
@@ -255,11 +255,13 @@ private:
 
     static Key key(const Shape& shape, const void* volume) { return {shape, reinterpret_cast<std::uintptr_t>(volume)}; }
 
+    // The first entry of `shape` and the one past its last (keys sort by shape, then address).
+    auto first_of(const Shape& shape) const { return entries_.lower_bound(Key{shape, 0}); }
+    auto end_of(const Shape& shape) const { return entries_.upper_bound(Key{shape, UINTPTR_MAX}); }
+
     const Entry* latest_of(const Shape& shape) const {
         const Entry* latest = nullptr;
-        for (auto it = entries_.lower_bound(Key{shape, 0}); it != entries_.end() && !(shape < it->first.first) &&
-                                                              !(it->first.first < shape);
-             ++it)
+        for (auto it = first_of(shape); it != end_of(shape); ++it)
             if (!latest || it->second.used > latest->used) latest = &it->second;
         return latest;
     }
@@ -269,12 +271,10 @@ private:
     void forget_for(const Shape& shape) {
         if (entries_.size() >= kMaxEntries) entries_.clear();
         std::size_t count = 0;
-        auto oldest = entries_.end();
-        for (auto it = entries_.lower_bound(Key{shape, 0}); it != entries_.end() && !(shape < it->first.first) &&
-                                                              !(it->first.first < shape);
-             ++it) {
+        auto oldest = entries_.cend();
+        for (auto it = first_of(shape); it != end_of(shape); ++it) {
             ++count;
-            if (oldest == entries_.end() || it->second.used < oldest->second.used) oldest = it;
+            if (oldest == entries_.cend() || it->second.used < oldest->second.used) oldest = it;
         }
         if (count >= kVolumesPerShape) entries_.erase(oldest);
     }
