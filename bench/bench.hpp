@@ -68,8 +68,10 @@ struct Result {
     double speedup = -1;                  // vs the fewest threads of the same series; -1: none
     unsigned speedup_base_threads = 0;
     // What the machine allows that speed-up, against the same base thread count (-1: not
-    // measured): a compute-only loop's speed-up (compute_ceiling) and the streaming floor's.
-    double compute_ceiling = -1, floor_speedup = -1;
+    // measured): a compute-only loop's speed-up (compute_ceiling: one dependent chain a thread;
+    // compute_ceiling_wide: a core's full issue width, below 2 where two threads share a core)
+    // and the streaming floor's.
+    double compute_ceiling = -1, compute_ceiling_wide = -1, floor_speedup = -1;
 
     double peak_rss_mb = 0;     // process peak while extracting (VmHWM after a reset)
     double extract_rss_mb = 0;  // that peak minus the RSS just before extract()
@@ -105,10 +107,14 @@ double median(std::vector<double> v);
 // Time to read every sample once with `threads` threads (median over repeats, after warmup).
 double streaming_floor(const voxmesh::VolumeView& view, unsigned threads, int repeat, int warmup);
 // Rounds per second in which `threads` threads, started together, finish a fixed amount of
-// arithmetic (a dependent integer chain per thread, no memory traffic), median of 7 rounds:
-// the ratio of two thread counts' rates is the machine's own ceiling for a speed-up (cores,
-// SMT, a VM's share of them).
-double compute_rate(unsigned threads);
+// arithmetic (no memory traffic), median of 7 rounds: the ratio of two thread counts' rates is
+// the machine's own ceiling for a speed-up (cores, SMT, a VM's share of them). `chain`: one
+// dependent integer chain per thread, which hyperthreads of one core hide; `wide`: six
+// independent chains, a core's full issue width, which they share.
+struct ComputeRates {
+    double chain = 0, wide = 0;
+};
+ComputeRates compute_rates(unsigned threads);
 // Runs one combination on one input: warmup, then `repeat` timed extract() calls.
 Result measure(const Input& input, const Combo& combo, const Settings& settings);
 // All combinations of one input, taking turns run by run (forward, then backward): on a
@@ -143,8 +149,8 @@ unsigned hardware_threads();
 
 // ---- report.cpp ----
 // Speed-ups within each series (same input, backend, device), with the ceilings beside them
-// when `compute_rates` (compute_rate per thread count) has the counts.
-void compute_speedups(std::vector<Result>& results, const std::map<unsigned, double>& compute_rates = {});
+// when `compute_rates` (compute_rates() per thread count) has the counts.
+void compute_speedups(std::vector<Result>& results, const std::map<unsigned, ComputeRates>& compute_rates = {});
 void print_table(const std::vector<Result>& results);
 void print_csv(const std::vector<Result>& results);
 void print_json(const std::vector<Result>& results, std::FILE* out = stdout);

@@ -419,14 +419,14 @@ int main(int argc, char** argv) {
         // The machine's own speed-up per thread count, beside the measured ones (when there are two
         // or more counts to compare). Counts above the cores get the ceiling of all cores: the CPU
         // engine starts no more workers than cores, whatever Options::threads asks for.
-        std::map<unsigned, double> rates;
-        for (const auto& r : results) rates.emplace(r.threads, 0.0);
+        std::map<unsigned, ComputeRates> rates;
+        for (const auto& r : results) rates.emplace(r.threads, ComputeRates{});
         if (rates.size() > 1 && !g_interrupted) {
-            std::map<unsigned, double> measured;
+            std::map<unsigned, ComputeRates> measured;
             for (auto& [count, rate] : rates) {
                 const unsigned running = std::clamp(count, 1u, hardware_threads());
                 auto it = measured.find(running);
-                if (it == measured.end()) it = measured.emplace(running, compute_rate(running)).first;
+                if (it == measured.end()) it = measured.emplace(running, compute_rates(running)).first;
                 rate = it->second;
             }
         } else {

@@ -102,7 +102,7 @@ std::string backend_label(const Result& r) {
 
 }  // namespace
 
-void compute_speedups(std::vector<Result>& results, const std::map<unsigned, double>& compute_rates) {
+void compute_speedups(std::vector<Result>& results, const std::map<unsigned, ComputeRates>& compute_rates) {
     std::map<std::string, const Result*> base;
     for (const auto& r : results) {
         if (r.status != "ok") continue;
@@ -116,18 +116,20 @@ void compute_speedups(std::vector<Result>& results, const std::map<unsigned, dou
             r.speedup = b->median_s / r.median_s;
             r.speedup_base_threads = b->threads;
             const auto at = compute_rates.find(r.threads), base_at = compute_rates.find(b->threads);
-            if (at != compute_rates.end() && base_at != compute_rates.end() && base_at->second > 0)
-                r.compute_ceiling = at->second / base_at->second;
+            if (at != compute_rates.end() && base_at != compute_rates.end()) {
+                if (base_at->second.chain > 0) r.compute_ceiling = at->second.chain / base_at->second.chain;
+                if (base_at->second.wide > 0) r.compute_ceiling_wide = at->second.wide / base_at->second.wide;
+            }
             if (r.floor_s > 0 && b->floor_s > 0) r.floor_speedup = b->floor_s / r.floor_s;
         }
     }
 }
 
 void print_table(const std::vector<Result>& results) {
-    std::printf("%-8s %-4s %-6s %-10s %-8s %3s %9s %9s %9s %8s %10s %9s %8s %6s %6s %6s %7s %7s %6s %8s %8s %8s %8s "
-                "%8s\n",
+    std::printf("%-8s %-4s %-6s %-10s %-8s %3s %9s %9s %9s %8s %10s %9s %8s %6s %6s %6s %6s %7s %7s %6s %8s %8s %8s "
+                "%8s %8s\n",
                 "field", "type", "size", "backend", "device", "thr", "median_s", "min_s", "max_s", "Mvox/s",
-                "triangles", "floor_s", "x_floor", "speed", "ceil", "fl_sp", "rss_MB", "ext_MB", "over%", "classify",
+                "triangles", "floor_s", "x_floor", "speed", "ceil", "ceil_w", "fl_sp", "rss_MB", "ext_MB", "over%", "classify",
                 "scan", "generate", "kernel", "transfer");
     for (const auto& r : results) {
         if (r.status != "ok") {
@@ -138,6 +140,7 @@ void print_table(const std::vector<Result>& results) {
         }
         std::string speed = r.speedup > 0 ? num(r.speedup, "%.2f") : "-";
         std::string ceiling = r.compute_ceiling > 0 ? num(r.compute_ceiling, "%.2f") : "-";
+        std::string ceiling_wide = r.compute_ceiling_wide > 0 ? num(r.compute_ceiling_wide, "%.2f") : "-";
         std::string floor_speed = r.floor_speedup > 0 ? num(r.floor_speedup, "%.2f") : "-";
         std::string kernel = r.kernel_s > 0 ? num(r.kernel_s, "%.4f") : "-";
         std::string transfer = r.transfer_s > 0 ? num(r.transfer_s, "%.4f") : "-";
@@ -146,11 +149,11 @@ void print_table(const std::vector<Result>& results) {
         std::string floor_ratio = r.floor_ratio > 0 ? num(r.floor_ratio, "%.2f") : "-";
         // Memory the extraction took beyond its mesh, in % of volume + mesh (issue 6: <= 10 %).
         const double over = 100 * (r.extract_rss_mb - r.mesh_mb) / std::max(r.volume_mb + r.mesh_mb, 1e-9);
-        std::printf("%-8s %-4s %-6s %-10s %-8s %3u %9.4f %9.4f %9.4f %8.1f %10zu %9s %8s %6s %6s %6s %7.0f %7.0f "
+        std::printf("%-8s %-4s %-6s %-10s %-8s %3u %9.4f %9.4f %9.4f %8.1f %10zu %9s %8s %6s %6s %6s %6s %7.0f %7.0f "
                     "%6.1f %8.4f %8.4f %8.4f %8s %8s\n",
                     r.field.c_str(), r.type.c_str(), r.size_label().c_str(), backend_label(r).c_str(),
                     r.device.c_str(), r.threads, r.median_s, r.min_s, r.max_s, r.mvox_s, r.triangles, floor_s.c_str(),
-                    floor_ratio.c_str(), speed.c_str(), ceiling.c_str(), floor_speed.c_str(), r.peak_rss_mb,
+                    floor_ratio.c_str(), speed.c_str(), ceiling.c_str(), ceiling_wide.c_str(), floor_speed.c_str(), r.peak_rss_mb,
                     r.extract_rss_mb, over, r.classify_s, r.scan_s, r.generate_s, kernel.c_str(), transfer.c_str());
         if (r.setup_rss_mb >= 0)
             std::printf("    note: set-up (--setup-first, one untimed extract before the runs) took %.3f s and %.0f MB\n",
@@ -169,7 +172,8 @@ void print_table(const std::vector<Result>& results) {
         std::printf("\nmedian/min/max: end-to-end %s seconds over %d runs after %d warmup%s%s; x_floor: median / "
                     "streaming floor (one threaded read of the volume%s); speed: vs the fewest threads of the same "
                     "series; ceil: the same for a compute-only loop on at most as many threads as cores (the "
-                    "machine's ceiling; the CPU engine runs no more workers than cores); fl_sp: the same for the "
+                    "machine's ceiling; the CPU engine runs no more workers than cores); ceil_w: the same for a loop "
+                    "that fills a core's issue width (below ceil where threads share a core, as hyperthreads); fl_sp: the same for the "
                     "streaming floor; rss_MB: process peak RSS while extracting (%s); ext_MB: that peak minus RSS "
                     "before the call; over%%: ext_MB minus the mesh, in %% of volume + mesh (a fresh process: --repeat 1 "
                     "--warmup 0); classify/scan/generate: Stats pass medians; kernel/transfer: OpenCL device time.\n\n",
@@ -187,7 +191,7 @@ void print_csv(const std::vector<Result>& results) {
     std::printf("field,type,size,nx,ny,nz,iso,backend,backend_ran,device,device_names,threads,normals,repeat,warmup,"
                 "status,error,median_s,min_s,max_s,classify_s,scan_s,generate_s,total_s,kernel_s,transfer_s,"
                 "triangles,vertices,mvox_s,floor_s,floor_ratio,speedup,speedup_base_threads,compute_ceiling,"
-                "floor_speedup,peak_rss_mb,extract_rss_mb,rss_scope,volume_mb,mesh_mb,warnings,reuse_mesh,interleaved,"
+                "compute_ceiling_wide,floor_speedup,peak_rss_mb,extract_rss_mb,rss_scope,volume_mb,mesh_mb,warnings,reuse_mesh,interleaved,"
                 "pause_ms,cpu_share,setup_s,setup_rss_mb,hybrid_modes\n");
     for (const auto& r : results) {
         std::ostringstream o;
@@ -202,6 +206,7 @@ void print_csv(const std::vector<Result>& results) {
           << (r.floor_ratio > 0 ? num(r.floor_ratio) : "") << ','
           << (r.speedup > 0 ? num(r.speedup) : "") << ',' << r.speedup_base_threads << ','
           << (r.compute_ceiling > 0 ? num(r.compute_ceiling) : "") << ','
+          << (r.compute_ceiling_wide > 0 ? num(r.compute_ceiling_wide) : "") << ','
           << (r.floor_speedup > 0 ? num(r.floor_speedup) : "") << ',' << num(r.peak_rss_mb)
           << ',' << num(r.extract_rss_mb) << ',' << r.rss_scope << ',' << num(r.volume_mb) << ','
           << num(r.mesh_mb) << ',' << csv_field(joined(r.warnings, "; ")) << ',' << (r.reuse_mesh ? 1 : 0) << ','
@@ -241,6 +246,7 @@ void print_json(const std::vector<Result>& results, std::FILE* out) {
           << ",\"speedup\":" << (r.speedup > 0 ? num(r.speedup) : "null")
           << ",\"speedup_base_threads\":" << r.speedup_base_threads
           << ",\"compute_ceiling\":" << (r.compute_ceiling > 0 ? num(r.compute_ceiling) : "null")
+          << ",\"compute_ceiling_wide\":" << (r.compute_ceiling_wide > 0 ? num(r.compute_ceiling_wide) : "null")
           << ",\"floor_speedup\":" << (r.floor_speedup > 0 ? num(r.floor_speedup) : "null")
           << ",\"peak_rss_mb\":" << opt(r.peak_rss_mb)
           << ",\"extract_rss_mb\":" << opt(r.extract_rss_mb)
