@@ -211,6 +211,14 @@ void write_file_atomically(const std::string& path, const std::function<void(std
         ::unlink(temp.c_str());
         throw Error("cannot write '" + path + "': " + std::strerror(err));
     }
+    // The rename is in the directory: synced too, so a power cut after we return leaves the new
+    // file under its name, not the old one. Best effort: the file is whole either way, and some
+    // file systems refuse fsync on a directory.
+    const int dir_fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dir_fd >= 0) {
+        (void)::fsync(dir_fd);
+        ::close(dir_fd);
+    }
 }
 
 void write_to_stream(std::FILE* file, const std::string& name, const std::function<void(std::FILE*)>& write) {
