@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cctype>
 #include <charconv>
 #include <cstdint>
@@ -32,6 +33,9 @@ std::string lower_extension(const std::string& path) {
 
 // Binary STL: 80-byte header, uint32 count, then per triangle a facet normal, 3 vertices and
 // a 16-bit attribute, all little-endian (x86 and ARM hosts are little-endian).
+// STL and the PLY header below name little-endian bytes and are written as the host's: a
+// big-endian host would need a swap here, so it does not build instead of writing wrong files.
+static_assert(std::endian::native == std::endian::little, "binary STL and PLY are written as the host's bytes");
 void write_stl(std::FILE* f, const Mesh& mesh) {
     char header[80] = {};
     std::snprintf(header, sizeof header, "binary STL written by voxmesh %s", VOXMESH_VERSION_STRING);
