@@ -39,6 +39,14 @@ timeout -s INT -k 10 90 $bench --field sphere,gyroid,ct --type f32,u8 --sizes 25
   --interleave --repeat 7 --warmup 1 --setup-first --reuse-mesh --save "$out/backends_reuse.jsonl" > "$out/backends_reuse.txt" 2>&1
 timeout -s INT -k 10 60 $bench --field sphere,gyroid --type f32,u8 --sizes 256,512 --threads 1,2,"$threads" --interleave --repeat 7 \
   --no-floor --reuse-mesh > "$out/scaling_into.txt" 2>&1
+# Two threads on two chosen CPUs: beside ceil (a dependent chain, which hyperthreads of one core
+# hide) and ceil_w (a core's full issue width, which they share), whether CPUs 0 and 1 are one
+# core's two threads and whether another pair scales better.
+for cpus in 0,1 0,$((threads / 2)); do
+  echo "### taskset -c $cpus" >> "$out/scaling_into.txt"
+  timeout -s INT -k 10 25 taskset -c "$cpus" $bench --field sphere,gyroid --type u8 --sizes 512 --threads 1,2 --interleave \
+    --repeat 7 --no-floor --reuse-mesh >> "$out/scaling_into.txt" 2>&1
+done
 # The whole suite last: the comparisons matter most when device time runs short.
-timeout 240 .gpu/voxmesh_tests > "$out/tests.txt" 2>&1; echo "voxmesh_tests exit $?" >> "$out/tests.txt"
+timeout 190 .gpu/voxmesh_tests > "$out/tests.txt" 2>&1; echo "voxmesh_tests exit $?" >> "$out/tests.txt"
 tail -2 "$out/tests.txt"
