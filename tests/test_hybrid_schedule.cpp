@@ -88,6 +88,67 @@ TEST_CASE("Hybrid: a side planned out grows more hopeful until it is given a chu
     CHECK(d.cpu_generate == before.cpu_generate);
 }
 
+// A GPU allocates a buffer on first use, and a mode's first call on a bigger volume may make
+// buffers the split did not: that call timed the set-up too. Its mode is measured once more
+// instead of waiting up to 256 calls for a recheck, and its time moves no other mode's.
+TEST_CASE("Hybrid: a call that set up device buffers is measured again, once", "[hybrid]") {
+    const auto measured = [] {
+        HybridModeTimes t;
+        hybrid_record_mode(t, HybridMode::Split, 100, kTriangles);  // builds: never timed
+        hybrid_record_mode(t, HybridMode::Split, 10, kTriangles);
+        hybrid_record_mode(t, HybridMode::CpuAlone, 8, kTriangles);
+        return t;
+    };
+    // The device alone takes 6, but its first call made buffers and took 16.
+    HybridModeTimes t = measured();
+    REQUIRE(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 16, kTriangles, false);
+    CHECK(t.seconds[2] == 16);  // an upper bound until measured again
+    CHECK(t.seconds[0] == 10);
+    CHECK(t.seconds[1] == 8);
+    CHECK(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
+    hybrid_record_mode(t, HybridMode::DeviceAlone, 6, kTriangles);
+    CHECK(t.seconds[0] == 10);  // a time after a set-up moves no other mode
+    CHECK(t.seconds[1] == 8);
+    for (int call = 0; call < 5; ++call) {
+        REQUIRE(hybrid_choose_mode(t) == HybridMode::DeviceAlone);
+        hybrid_record_mode(t, HybridMode::DeviceAlone, 6, kTriangles);
+    }
+    // Without the flag, the 16 stood for the device until a recheck 100 calls on.
+    HybridModeTimes plain = measured();
+    hybrid_record_mode(plain, HybridMode::DeviceAlone, 16, kTriangles);
+    int device_calls = 0;
+    for (int call = 0; call < 90; ++call) {
+        const HybridMode m = hybrid_choose_mode(plain);
+        device_calls += m == HybridMode::DeviceAlone;
+        hybrid_record_mode(plain, m, m == HybridMode::Split ? 10 : m == HybridMode::CpuAlone ? 8 : 6, kTriangles);
+    }
+    CHECK(device_calls == 0);
+
+    // A mode with a time keeps it through a set-up call: the quickest stays the quickest.
+    HybridModeTimes k = measured();
+    hybrid_record_mode(k, HybridMode::DeviceAlone, 12, kTriangles);
+    REQUIRE(hybrid_choose_mode(k) == HybridMode::CpuAlone);
+    hybrid_record_mode(k, HybridMode::CpuAlone, 30, kTriangles, false);
+    CHECK(k.seconds[1] == 8);
+    CHECK(k.seconds[2] == 12);
+    CHECK(hybrid_choose_mode(k) == HybridMode::CpuAlone);  // the quickest, due again
+    hybrid_record_mode(k, HybridMode::CpuAlone, 8, kTriangles);
+    CHECK_FALSE(k.stale[1]);
+
+    // A caller that sets up again before every call (release_memory()): a slow device is
+    // measured again once, then left to its rechecks, not run every other call.
+    HybridModeTimes r = measured();
+    int slow_device_calls = 0;
+    for (int call = 0; call < 40; ++call) {
+        const HybridMode m = hybrid_choose_mode(r);
+        slow_device_calls += m == HybridMode::DeviceAlone;
+        const bool device = m != HybridMode::CpuAlone;
+        hybrid_record_mode(r, m, m == HybridMode::Split ? 10 : m == HybridMode::CpuAlone ? 8 : 40, kTriangles, !device);
+    }
+    CHECK(slow_device_calls == 2);
+}
+
 TEST_CASE("Hybrid: a call picks the quickest of the split, the CPU alone and the device alone", "[hybrid]") {
     HybridModeTimes t;
     // The first split builds and measures; it is not timed. Then each mode once, in order.

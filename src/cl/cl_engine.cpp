@@ -335,7 +335,7 @@ private:
         return hybrid_ && chosen.size() == 1 && options_.chunk_planes == 0 && !g_hybrid_split_only;
     }
     HybridMode choose_mode(const RatesKey& key) const;
-    void record_mode(const RatesKey& key, HybridMode mode, double seconds, std::uint64_t triangles) const;
+    void record_mode(const RatesKey& key, HybridMode mode, double seconds, std::uint64_t triangles, bool settled) const;
     std::mutex mutex_;  // warnings_, fallback_ stats
     std::vector<std::string> warnings_;
     DeviceStats cpu_stats_, fallback_stats_;
@@ -604,9 +604,10 @@ HybridMode Engine::choose_mode(const RatesKey& key) const {
     return g_modes.choose(key, volume_.data);
 }
 
-void Engine::record_mode(const RatesKey& key, HybridMode mode, double seconds, std::uint64_t triangles) const {
+void Engine::record_mode(const RatesKey& key, HybridMode mode, double seconds, std::uint64_t triangles,
+                         bool settled) const {
     std::lock_guard<std::mutex> lock(g_rates_mutex);
-    g_modes.record(key, volume_.data, mode, seconds, triangles);
+    g_modes.record(key, volume_.data, mode, seconds, triangles, settled);
 }
 
 // This call's rates, for the next call's plan; a side that did no work in a pass keeps the
@@ -1137,7 +1138,7 @@ Mesh Engine::run(Stats& stats) {
     if (mode == HybridMode::CpuAlone) {
         double grown = 0;
         Mesh mesh = cpu_extract(volume_, options_, stats, std::move(storage_), &grown);
-        record_mode(mode_key, mode, seconds_since(t0) - grown, mesh.triangle_count());
+        record_mode(mode_key, mode, seconds_since(t0) - grown, mesh.triangle_count(), true);
         stats.backend = Backend::Hybrid;
         DeviceStats idle;
         idle.name = chosen.front()->info.name;
@@ -1159,6 +1160,13 @@ Mesh Engine::run(Stats& stats) {
     std::sort(by_address.begin(), by_address.end());
     std::vector<std::unique_lock<std::mutex>> locks;
     for (const auto& d : by_address) locks.emplace_back(d->mutex);
+    // Programs built and buffers made in this call: its time is then not a steady one.
+    const auto set_up_count = [&] {
+        std::size_t n = 0;
+        for (const auto& d : chosen) n += d->programs_built + d->allocations;
+        return n;
+    };
+    const std::size_t set_up_before = set_up_count();
 
     std::vector<DeviceJob> jobs(chosen.size());
     for (std::size_t i = 0; i < chosen.size(); ++i) {
@@ -1228,7 +1236,7 @@ Mesh Engine::run(Stats& stats) {
     stats.times.scan = cpu_pass_seconds_[1];
     stats.times.generate = cpu_pass_seconds_[2];
     stats.times.total = seconds_since(t0);
-    if (choosing) record_mode(mode_key, mode, stats.times.total - grown, triangles);
+    if (choosing) record_mode(mode_key, mode, stats.times.total - grown, triangles, set_up_count() == set_up_before);
     report();
     return mesh;
 }

@@ -225,6 +225,7 @@ PinnedStaging& Device::staging() {
     if (!staging_ || staging_->block_bytes() != block) {
         staging_.reset();
         staging_ = std::make_unique<PinnedStaging>(context, queue, block);
+        ++allocations;
     }
     return *staging_;
 }
@@ -310,6 +311,7 @@ cl::Buffer& Device::buffer(unsigned id, std::size_t bytes) {
     std::size_t size = std::min<std::size_t>(round_up(bytes + bytes / 8, 4096), info.max_allocation);
     size = std::max(size, bytes);
     cl::Buffer buffer(context, CL_MEM_READ_WRITE, size);
+    ++allocations;
     return buffers_.emplace(id, std::make_pair(buffer, size)).first->second.first;
 }
 

@@ -123,6 +123,7 @@ struct HybridModeTimes {
     std::uint64_t split_calls = 0;                        // split calls, the first included
     bool stale[kHybridModes] = {false, false, false};     // due for a recheck: the data changed
     std::uint64_t triangles_at[kHybridModes] = {0, 0, 0};  // the mesh's triangles when last measured
+    bool unsettled[kHybridModes] = {false, false, false};  // last timed with a set-up in it
 };
 
 // Whether meshes of `a` and `b` triangles differ by more than kHybridSurfaceChange times (the
@@ -183,10 +184,30 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
 // changed where the mesh's size differs by more than kHybridSurfaceChange from that mode's
 // last measurement (exact, unlike times), or the quickest mode's time by more than
 // kHybridDataChange (a change that keeps the size, or a busier machine).
+//
+// A call that was not `settled` (it built device programs or made device buffers, which a GPU
+// allocates on first use) timed that set-up too, once, in whichever mode ran then: its mode is
+// measured again in the next calls, keeping an earlier time where it has one, and neither that
+// time nor the next one moves the others. A second such call in a row counts as settled.
 constexpr double kHybridDataChange = 2;
-inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double seconds, std::uint64_t triangles) {
+inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double seconds, std::uint64_t triangles,
+                               bool settled = true) {
     if (mode == HybridMode::Split && t.split_calls++ == 0) return;
     const auto m = static_cast<unsigned>(mode);
+    // Once: a caller whose every call sets up again (release_memory() between calls) would
+    // otherwise have this mode measured again and again, however slow.
+    if (!settled && !t.unsettled[m]) {
+        if (t.seconds[m] <= 0) {  // no time at all yet: this one, as an upper bound
+            t.seconds[m] = std::max(seconds, 1e-9);
+            t.triangles_at[m] = triangles;
+            t.measured_at[m] = t.calls++;
+        }
+        t.unsettled[m] = true;
+        t.stale[m] = true;
+        return;
+    }
+    const bool after_set_up = t.unsettled[m];
+    t.unsettled[m] = false;
     const double before = t.seconds[m], now = std::max(seconds, 1e-9);
     const bool measured = std::all_of(std::begin(t.seconds), std::end(t.seconds), [](double s) { return s > 0; });
     const bool quickest = measured && before <= t.seconds[hybrid_quickest_mode(t)];
@@ -198,7 +219,7 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
     // The others follow the quickest mode's change; where the surface changed, any mode's, but
     // only those timed on its old surface (one timed on the new surface already is news).
     const bool surface_moved = before > 0 && hybrid_surface_changed(before_triangles, triangles);
-    const double change = quickest || surface_moved ? now / before : 1;  // either: before > 0
+    const double change = !after_set_up && (quickest || surface_moved) ? now / before : 1;  // either: before > 0
     const bool time_changed = quickest && (change > kHybridDataChange || change * kHybridDataChange < 1);
     for (unsigned o = 0; o < kHybridModes; ++o) {
         if (o == m || t.seconds[o] <= 0) continue;
@@ -232,7 +253,8 @@ public:
         return latest ? hybrid_choose_mode(latest->times) : HybridMode::Split;
     }
 
-    void record(const Shape& shape, const void* volume, HybridMode mode, double seconds, std::uint64_t triangles) {
+    void record(const Shape& shape, const void* volume, HybridMode mode, double seconds, std::uint64_t triangles,
+                bool settled = true) {
         auto it = entries_.find(key(shape, volume));
         if (it == entries_.end()) {
             const Entry* latest = latest_of(shape);
@@ -240,7 +262,7 @@ public:
             forget_for(shape);
             it = entries_.emplace(key(shape, volume), start).first;
         }
-        hybrid_record_mode(it->second.times, mode, seconds, triangles);
+        hybrid_record_mode(it->second.times, mode, seconds, triangles, settled);
         it->second.used = ++clock_;
     }
 
