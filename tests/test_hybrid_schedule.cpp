@@ -353,3 +353,45 @@ TEST_CASE("Hybrid: a mesh of another size makes the modes timed on the old surfa
     CHECK(f.stale[2]);
     CHECK_FALSE(f.stale[0]);
 }
+
+// One volume whose data takes turns between two surfaces call by call (a viewer toggling two
+// time steps loaded into one buffer): the estimates scaled from one surface to the other were
+// scaled again on every other call: 1e291 s after 200 calls, then inf and NaN (a review's
+// reproduction). An estimate stays between its mode's measured time and that time grown with
+// the triangles: here at most 0.06 s x 1000.
+TEST_CASE("Hybrid: surfaces taking turns keep the estimates bounded", "[hybrid]") {
+    const std::uint64_t triangles[2] = {1'000, 1'000'000};
+    const double truth[2][3] = {{0.025, 0.010, 0.030}, {0.040, 0.050, 0.060}};  // split, CPU, device
+    HybridModeTimes t;
+    for (int call = 0; call < 3000; ++call) {
+        const int s = call < 4 ? 0 : call & 1;  // the modes measured on the first surface, then turns
+        const auto m = static_cast<unsigned>(hybrid_choose_mode(t));
+        hybrid_record_mode(t, static_cast<HybridMode>(m), truth[s][m], triangles[s]);
+        INFO("call " << call);
+        if (call < 4) continue;  // each mode measured once by then
+        for (unsigned o = 0; o < kHybridModes; ++o) {
+            CHECK(t.seconds[o] >= 0.010 / 1001);
+            CHECK(t.seconds[o] <= 0.060 * 1001);
+        }
+    }
+}
+
+// The same turns, with times where the quickest and the next closest mode are marked due on
+// every call: the third was never measured again after the first calls (stale, but always
+// behind the others). No mode goes more than kHybridMaxRecheckCalls calls unmeasured.
+TEST_CASE("Hybrid: no mode waits more than the longest recheck interval", "[hybrid]") {
+    const std::uint64_t triangles[2] = {1'000'000, 2'000'000};
+    const double truth[2][3] = {{14.7, 21.7, 28.4}, {26.2, 12.8, 18.1}};
+    HybridModeTimes t;
+    std::uint64_t last[kHybridModes] = {0, 0, 0};
+    std::uint64_t longest = 0;
+    for (std::uint64_t call = 0; call < 3000; ++call) {
+        const int s = static_cast<int>(call & 1);
+        const auto m = static_cast<unsigned>(hybrid_choose_mode(t));
+        hybrid_record_mode(t, static_cast<HybridMode>(m), truth[s][m], triangles[s]);
+        longest = std::max(longest, call - last[m]);
+        last[m] = call;
+    }
+    for (unsigned m = 0; m < kHybridModes; ++m) longest = std::max(longest, 3000 - last[m]);
+    CHECK(longest <= kHybridMaxRecheckCalls + 4);
+}

@@ -124,6 +124,7 @@ struct HybridModeTimes {
     bool stale[kHybridModes] = {false, false, false};     // due for a recheck: the data changed
     std::uint64_t triangles_at[kHybridModes] = {0, 0, 0};  // the mesh's triangles when last measured
     bool unsettled[kHybridModes] = {false, false, false};  // last timed with a set-up in it
+    double measured_s[kHybridModes] = {0, 0, 0};           // the time measured at triangles_at
 };
 
 // Whether meshes of `a` and `b` triangles differ by more than kHybridSurfaceChange times (the
@@ -158,12 +159,20 @@ inline unsigned hybrid_quickest_mode(const HybridModeTimes& t) {
 // The mode for the next call: the split first (its first call builds the device's programs and
 // measures the rates later splits are planned by, so its time is not counted), then each mode
 // not measured yet, then the quickest, or a recheck that is due (the one closest to the quickest;
-// the quickest first where its own time is due, an estimate from another surface).
+// the quickest first where its own time is due, an estimate from another surface). A mode left
+// kHybridMaxRecheckCalls calls goes before all: surfaces that take turns call by call kept
+// marking the quickest and the next closest due, and the third went unmeasured for good.
 inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
     if (t.split_calls == 0) return HybridMode::Split;
     for (unsigned m = 0; m < kHybridModes; ++m)
         if (t.seconds[m] <= 0) return static_cast<HybridMode>(m);
     const unsigned best = hybrid_quickest_mode(t);
+    unsigned oldest = best;
+    for (unsigned m = 0; m < kHybridModes; ++m)
+        if (m != best && t.calls - t.measured_at[m] >= kHybridMaxRecheckCalls &&
+            (oldest == best || t.measured_at[m] < t.measured_at[oldest]))
+            oldest = m;
+    if (oldest != best) return static_cast<HybridMode>(oldest);
     if (t.stale[best]) return static_cast<HybridMode>(best);  // an estimate: measured first
     unsigned pick = best;
     for (unsigned m = 0; m < kHybridModes; ++m) {
@@ -185,6 +194,11 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
 // last measurement (exact, unlike times), or the quickest mode's time by more than
 // kHybridDataChange (a change that keeps the size, or a busier machine).
 //
+// A time that follows a change of surface stays between the time measured on the mode's own
+// surface and that time grown in proportion to the triangles (a call reads the whole volume
+// whatever its surface, and writes each triangle): where a volume's surfaces took turns call by
+// call, the estimates were scaled again on every other call, to 1e291 s, then inf.
+//
 // A call that was not `settled` (it built device programs or made device buffers, which a GPU
 // allocates on first use) timed that set-up too, once, in whichever mode ran then: its mode is
 // measured again in the next calls, keeping an earlier time where it has one, and neither that
@@ -198,7 +212,7 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
     // otherwise have this mode measured again and again, however slow.
     if (!settled && !t.unsettled[m]) {
         if (t.seconds[m] <= 0) {  // no time at all yet: this one, as an upper bound
-            t.seconds[m] = std::max(seconds, 1e-9);
+            t.seconds[m] = t.measured_s[m] = std::max(seconds, 1e-9);
             t.triangles_at[m] = triangles;
             t.measured_at[m] = t.calls++;
         }
@@ -212,7 +226,7 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
     const bool measured = std::all_of(std::begin(t.seconds), std::end(t.seconds), [](double s) { return s > 0; });
     const bool quickest = measured && before <= t.seconds[hybrid_quickest_mode(t)];
     const std::uint64_t before_triangles = t.triangles_at[m];
-    t.seconds[m] = now;
+    t.seconds[m] = t.measured_s[m] = now;
     t.measured_at[m] = t.calls++;
     t.stale[m] = false;
     t.triangles_at[m] = triangles;
@@ -224,7 +238,13 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
     for (unsigned o = 0; o < kHybridModes; ++o) {
         if (o == m || t.seconds[o] <= 0) continue;
         const bool follows = !surface_moved || !hybrid_surface_changed(t.triangles_at[o], before_triangles);
-        if (follows) t.seconds[o] *= change;
+        if (!follows) continue;
+        t.seconds[o] *= change;
+        if (surface_moved) {
+            // Between the same time and one that grew with the triangles, from where it was measured.
+            const double r = (static_cast<double>(triangles) + 1) / (static_cast<double>(t.triangles_at[o]) + 1);
+            t.seconds[o] = std::clamp(t.seconds[o], t.measured_s[o] * std::min(1.0, r), t.measured_s[o] * std::max(1.0, r));
+        }
     }
     if (!measured) return;
     const double quickest_s = t.seconds[hybrid_quickest_mode(t)];
