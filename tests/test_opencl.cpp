@@ -673,6 +673,70 @@ TEST_CASE("Hybrid hands chunks between a slow device and the CPU worker", "[open
     }
 }
 
+// Found by a review: the CPU worker counts a device's piece again to take it over, and counts
+// that differ were reported as an "internal error" where the caller's thread had written to
+// the volume in between (voxmesh.hpp promises the volume-changed Error then).
+TEST_CASE("Hybrid: a volume changed before a piece is taken over is the volume-changed Error", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{48, 48, 96}};
+    const auto original = gyroid(g);
+    std::vector<float> f = original;
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Pretend discrete(detail::opencl_pretend_discrete);
+    Options o;
+    o.chunk_planes = 2;
+    o.devices = {0};
+    // The CPU worker starts after the device has counted every chunk and takes pieces over
+    // (the hand-over test's last section); before its first, every sample moves inside.
+    const Slow slow(0, 0.05, 0, 0.5);
+    std::atomic<int> take_overs{0};
+    detail::opencl_before_take_over([&] {
+        if (take_overs++ == 0)
+            for (float& x : f) x = 1e6f;
+    });
+    CHECK_THROWS_WITH(run(v, o, Backend::Hybrid), Catch::Contains("changed while it was being meshed"));
+    detail::opencl_before_take_over({});
+    CHECK(take_overs >= 1);
+    f = original;
+    require_same(run(v, Options{}, Backend::Cpu), run(v, o, Backend::Hybrid), v);
+}
+
+#endif  // VOXMESH_HAS_OPENCL
+
+// Found by a review: a chunk cut in halves to fit a device counts where it starts, so when only
+// its upper half ran on the CPU engine the "cpu (fallback)" entry had voxels but no chunk, and
+// was left out: the devices' voxels no longer added up to the volume.
+TEST_CASE("OpenCL and Hybrid stats account for every voxel when half a chunk falls back to the CPU", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{32, 32, 4}};
+    std::vector<float> f(g.size());
+    for (std::size_t i = 0; i < f.size(); ++i)
+        f[i] = static_cast<float>(std::sin(0.3 * double(i % 32)) + std::cos(0.3 * double(i / 32 % 32)) -
+                                  0.2 * double(i / (32 * 32)));
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, Options{}, Backend::Cpu);
+    for (const Backend backend : {Backend::OpenCL, Backend::Hybrid}) {
+        for (const std::size_t budget : {12000u, 16000u, 20000u, 30000u}) {
+            Options o;
+            o.devices = {0};
+            o.chunk_planes = 2;
+            o.memory_budget = budget;
+            o.threads = 1;
+            Stats stats;
+            require_same(cpu, run(v, o, backend, &stats), v);
+            std::size_t voxels = 0;
+            std::string entries;
+            for (const DeviceStats& d : stats.devices) {
+                voxels += d.voxels;
+                entries += " [" + d.name + " chunks " + std::to_string(d.chunks) + " voxels " + std::to_string(d.voxels) + "]";
+            }
+            INFO(backend_name(backend) << ", budget " << budget << ":" << entries);
+            CHECK(voxels == g.size());
+        }
+    }
+}
+
+#ifdef VOXMESH_HAS_OPENCL  // uses test hooks of the OpenCL build
 // With automatic chunks, a call plans its split from what the previous call on the same
 // device and volume shape measured; the plan only moves work, never the mesh.
 TEST_CASE("Hybrid's planned split from earlier calls gives the same mesh", "[opencl]") {

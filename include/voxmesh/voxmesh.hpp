@@ -130,7 +130,9 @@ struct Stats {
     std::vector<DeviceStats> devices;
     std::vector<std::string> warnings;  // also sent to Options::log
     // The most CPU threads that ran the slabs at once: `threads` capped at the CPUs this
-    // process may use (a volume too thin for that many slabs runs on fewer); 0 with no CPU work.
+    // process may use (a volume too thin for that many slabs runs on fewer); 0 where no CPU
+    // worker ran (the OpenCL engine, Hybrid running the device alone). A Hybrid split counts its
+    // CPU worker even where the plan left it no chunk.
     // (Last, so that the fields before it keep their places for code built against 0.1.0.)
     unsigned workers = 0;
 };

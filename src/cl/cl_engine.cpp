@@ -32,8 +32,10 @@
 #include <cmath>
 #include <condition_variable>
 #include <exception>
+#include <functional>
 #include <limits>
 #include <map>
+#include <mutex>
 #include <set>
 #include <tuple>
 #include <thread>
@@ -73,6 +75,10 @@ std::atomic<bool> g_deal_first_chunks{false};
 // Test hook: Hybrid always splits (no choice of the CPU engine or the device alone), for tests
 // of the split's schedule.
 std::atomic<bool> g_hybrid_split_only{false};
+
+// Test hook: run by Hybrid's CPU worker before it counts a device's piece again.
+std::mutex g_before_take_over_mutex;
+std::function<void()> g_before_take_over;
 
 // Sleeps `times` × the hook's seconds (a chunk count for per-chunk hooks); nothing when unset.
 void pretend_slow(const std::atomic<double>& seconds, std::size_t times = 1) {
@@ -973,9 +979,10 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
 // same counts (both follow the canonical mesh), and generated at the piece's offsets.
 void Engine::generate_counted_on_cpu(const Piece& counted, unsigned worker, unsigned threads, Mesh& mesh) {
     Piece cpu = count_on_cpu(counted.range, worker, threads);
+    // Both follow the canonical mesh, so other counts mean other samples: the caller's thread
+    // wrote to the volume between the two counts (reported as "internal error" before).
     if (cpu.vertices != counted.vertices || cpu.triangles != counted.triangles)
-        throw Error("internal error: the CPU engine counted z-planes [" + std::to_string(counted.range.begin) + ", " +
-                    std::to_string(counted.range.end) + ") differently from the OpenCL device");
+        throw_volume_changed(counted.range.begin);
     cpu.first_vertex = counted.first_vertex;
     cpu.first_triangle = counted.first_triangle;
     generate_on_cpu(cpu, mesh);
@@ -1078,6 +1085,10 @@ void Engine::cpu_generate_worker(std::vector<DeviceJob>& jobs, unsigned worker, 
             continue;
         }
         const auto t = Clock::now();
+        {
+            std::lock_guard<std::mutex> hook_lock(g_before_take_over_mutex);
+            if (g_before_take_over) g_before_take_over();
+        }
         generate_counted_on_cpu(*p, worker, threads_, mesh);
         pretend_slow(g_slow_cpu_count_s, chunks_in(p->range));  // it counts the piece again: as slow as its own
         p->vbase = p->tbase = p->cell_groups = p->data = p->bits = cl::Buffer();
@@ -1235,7 +1246,9 @@ Mesh Engine::run(Stats& stats) {
         for (int p = 0; p < 3; ++p) cpu_pass_seconds_[p] += job.pass_seconds[p];
     }
     if (hybrid_ || mode == HybridMode::DeviceAlone) stats.devices.push_back(cpu_stats_);
-    if (fallback_stats_.chunks > 0) stats.devices.push_back(fallback_stats_);
+    // By voxels: a chunk cut in halves to fit a device counts where it starts, so a fallback
+    // of only its upper half has voxels and no chunk (and was left out of the stats).
+    if (fallback_stats_.voxels > 0) stats.devices.push_back(fallback_stats_);
     stats.times.classify = cpu_pass_seconds_[0];
     stats.times.scan = cpu_pass_seconds_[1];
     stats.times.generate = cpu_pass_seconds_[2];
@@ -1309,6 +1322,11 @@ void opencl_staging_block_bytes(std::size_t bytes) { cl_engine::set_staging_bloc
 void opencl_deal_first_chunks(bool deal) { g_deal_first_chunks = deal; }
 
 void opencl_hybrid_split_only(bool split_only) { g_hybrid_split_only = split_only; }
+
+void opencl_before_take_over(std::function<void()> f) {
+    std::lock_guard<std::mutex> lock(g_before_take_over_mutex);
+    g_before_take_over = std::move(f);
+}
 
 void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s, double cpu_start_s) {
     g_slow_count_s = count_s;

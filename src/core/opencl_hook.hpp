@@ -59,6 +59,9 @@ void opencl_deal_first_chunks(bool deal);
 // Hybrid always splits the volume between the CPU worker and the devices, instead of choosing
 // the CPU engine or a device alone where earlier calls found that quicker (for tests of the split).
 void opencl_hybrid_split_only(bool split_only);
+// Runs `f` (empty: nothing) in Hybrid's CPU worker just before it counts again a piece a device
+// counted, to take it over: a test changes the volume there, as a caller's thread could.
+void opencl_before_take_over(std::function<void()> f);
 // Runs f holding the device registry's lock, as a thread inside devices() would; with
 // `as_discovery`, as one caught discovering (the device list half built).
 void opencl_with_registry_locked(bool as_discovery, const std::function<void()>& f);
