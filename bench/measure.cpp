@@ -201,7 +201,7 @@ double streaming_floor(const voxmesh::VolumeView& view, unsigned threads, int re
 // ---- compute ceiling -----------------------------------------------------------------------
 
 ComputeRates compute_rates(unsigned threads) {
-    // About 10 ms on one core each (a wide step is six chains' steps).
+    // A few ms on one core each (a wide step is six chains' steps).
     return {loop_rate(threads, 4'000'000, spin), loop_rate(threads, 1'000'000, spin_wide)};
 }
 

@@ -56,7 +56,8 @@ public:
     std::mutex mutex;  // whoever uses queue, kernels or buffers holds it
     std::size_t programs_built = 0;  // by build(): programs are cached, so this stops growing
     // Kept buffers and pinned blocks made (buffer(), staging()): these also stop growing once
-    // the largest chunk has come, and a call that made any timed that set-up too (Hybrid's choice).
+    // the largest chunk and mesh piece have come, and a call that made any timed that set-up
+    // too (Hybrid's choice).
     std::size_t allocations = 0;
 
     // Kernels of marching_cubes.cl built with `options`, and of scan.cl. Build failures

@@ -196,14 +196,16 @@ inline HybridMode hybrid_choose_mode(const HybridModeTimes& t) {
 //
 // A time that follows a change of surface stays between the time measured on the mode's own
 // surface and that time grown in proportion to the triangles (a call reads the whole volume
-// whatever its surface, and writes each triangle): where a volume's surfaces took turns call by
-// call, the estimates were scaled again on every other call, to 1e291 s, then inf.
+// whatever its surface, and writes each triangle), and one that follows the quickest mode on
+// one surface within kHybridLoadBand of that: estimates follow estimates, and where a volume's
+// surfaces (or two data sets of one size) took turns call by call, they were scaled again on
+// every other call, to 1e291 s, then inf, until a recheck.
 //
 // A call that was not `settled` (it built device programs or made device buffers, which a GPU
 // allocates on first use) timed that set-up too, once, in whichever mode ran then: its mode is
 // measured again in the next calls, keeping an earlier time where it has one, and neither that
-// time nor the next one moves the others. A second such call in a row counts as settled.
-constexpr double kHybridDataChange = 2;
+// time nor the next one scales the others. A second such call in a row counts as settled.
+constexpr double kHybridDataChange = 2, kHybridLoadBand = 4;
 inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double seconds, std::uint64_t triangles,
                                bool settled = true) {
     if (mode == HybridMode::Split && t.split_calls++ == 0) return;
@@ -240,11 +242,12 @@ inline void hybrid_record_mode(HybridModeTimes& t, HybridMode mode, double secon
         const bool follows = !surface_moved || !hybrid_surface_changed(t.triangles_at[o], before_triangles);
         if (!follows) continue;
         t.seconds[o] *= change;
-        if (surface_moved) {
-            // Between the same time and one that grew with the triangles, from where it was measured.
-            const double r = (static_cast<double>(triangles) + 1) / (static_cast<double>(t.triangles_at[o]) + 1);
-            t.seconds[o] = std::clamp(t.seconds[o], t.measured_s[o] * std::min(1.0, r), t.measured_s[o] * std::max(1.0, r));
-        }
+        // Between the same time and one that grew with the triangles, from where it was
+        // measured; on one surface, within kHybridLoadBand of that (a busier or quieter machine).
+        const double r = (static_cast<double>(triangles) + 1) / (static_cast<double>(t.triangles_at[o]) + 1);
+        const double band = surface_moved ? 1 : kHybridLoadBand;
+        t.seconds[o] = std::clamp(t.seconds[o], t.measured_s[o] * std::min(1.0, r) / band,
+                                  t.measured_s[o] * std::max(1.0, r) * band);
     }
     if (!measured) return;
     const double quickest_s = t.seconds[hybrid_quickest_mode(t)];
