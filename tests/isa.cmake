@@ -5,3 +5,8 @@
 # the oracle, so running them again this way checks the portable paths give the same meshes.
 add_test(NAME voxmesh_core_portable_isa COMMAND voxmesh_tests "[core]")
 set_tests_properties(voxmesh_core_portable_isa PROPERTIES ENVIRONMENT "VOXMESH_ISA=portable;${VOXMESH_TEST_ENV}")
+
+# The voxelizer's distance rows have an AVX2 copy too (src/voxelize/triangle_rows.cpp); its
+# tests compare every sample with a brute-force oracle, so they check the portable rows.
+add_test(NAME voxmesh_voxelize_portable_isa COMMAND voxmesh_tests "[voxelize]")
+set_tests_properties(voxmesh_voxelize_portable_isa PROPERTIES ENVIRONMENT "VOXMESH_ISA=portable;${VOXMESH_TEST_ENV}")

@@ -16,6 +16,7 @@
 #include "core/out_of_memory.hpp"
 #include "core/parallel.hpp"
 #include "io/input_file.hpp"
+#include "voxelize/triangle_rows.hpp"
 
 #include <algorithm>
 #include <array>
@@ -39,13 +40,8 @@ constexpr std::size_t kMaxPadding = 256;
 // determinants below (products of two differences) stay below 2^60: exact in int64.
 constexpr std::size_t kMaxDim = std::size_t(1) << 13;
 
-using Vec3 = std::array<double, 3>;
-
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 cross(const Vec3& a, const Vec3& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
+using detail::GridTriangle;
+using detail::Vec3;
 
 // A welded, validated triangle list.
 struct Soup {
@@ -252,36 +248,10 @@ private:
     std::vector<std::uint32_t> listed_;
 };
 
-// Squared distance from p to the segment from a to a + ab, given ap = p - a and len2 = |ab|^2
-// (ab may have zero length).
-double segment_distance2(const Vec3& ap, const Vec3& ab, double len2) {
-    double t = len2 > 0 ? dot(ap, ab) / len2 : 0.0;
-    t = std::clamp(t, 0.0, 1.0);
-    const Vec3 d{ap[0] - t * ab[0], ap[1] - t * ab[1], ap[2] - t * ab[2]};
-    return dot(d, d);
-}
-
-struct GridTriangle {
-    Vec3 a, b, c, n;  // grid coordinates; n = (b - a) x (c - a)
-    double n2 = 0;    // |n|^2
-    // Its edges b - a, c - b, a - c and their squared lengths: every sample near the triangle
-    // uses them, so they are computed once.
-    std::array<Vec3, 3> edge{};
-    std::array<double, 3> len2{};
-};
-
-GridTriangle grid_triangle(const Vec3& a, const Vec3& b, const Vec3& c) {
-    GridTriangle t{a, b, c, cross(sub(b, a), sub(c, a)), 0};
-    t.n2 = dot(t.n, t.n);
-    t.edge = {sub(b, a), sub(c, b), sub(a, c)};
-    for (int e = 0; e < 3; ++e) t.len2[e] = dot(t.edge[e], t.edge[e]);
-    return t;
-}
-
 // The bounding box (min, max) of the points of t whose coordinate `axis` lies in [lo, hi]:
 // its vertices there and its edges' crossings of lo and hi (t is convex). False where none is.
 bool box_in_slab(const GridTriangle& t, int axis, double lo, double hi, Vec3& min, Vec3& max) {
-    const Vec3* v[3] = {&t.a, &t.b, &t.c};
+    const Vec3* v[3] = {&t.v[0], &t.v[1], &t.v[2]};
     min.fill(std::numeric_limits<double>::infinity());
     max.fill(-std::numeric_limits<double>::infinity());
     const auto take = [&](const Vec3& point) {
@@ -301,24 +271,6 @@ bool box_in_slab(const GridTriangle& t, int axis, double lo, double hi, Vec3& mi
             }
     }
     return min[0] <= max[0];
-}
-
-double triangle_distance2(const Vec3& p, const GridTriangle& t) {
-    const Vec3 from[3] = {sub(p, t.a), sub(p, t.b), sub(p, t.c)};  // p from each edge's start
-    bool beyond[3] = {true, true, true};  // p lies outside the edge's side of the triangle
-    if (t.n2 > 0) {
-        for (int e = 0; e < 3; ++e) beyond[e] = dot(cross(t.edge[e], from[e]), t.n) < 0;
-        if (!beyond[0] && !beyond[1] && !beyond[2]) {  // over the triangle: the plane's distance
-            const double d = dot(from[0], t.n);
-            return d * d / t.n2;
-        }
-    }
-    // Else the nearest point is on an edge p lies beyond (in the plane, a convex polygon's
-    // nearest boundary point from outside is on an edge facing the point): only those.
-    double best = std::numeric_limits<double>::infinity();
-    for (int e = 0; e < 3; ++e)
-        if (beyond[e]) best = std::min(best, segment_distance2(from[e], t.edge[e], t.len2[e]));
-    return best;
 }
 
 Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
@@ -400,7 +352,7 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
     std::vector<GridTriangle> gtris;
     if (distance) {
         gtris.reserve(soup.tris.size());
-        for (const auto& t : soup.tris) gtris.push_back(grid_triangle(gp[t[0]], gp[t[1]], gp[t[2]]));
+        for (const auto& t : soup.tris) gtris.push_back(detail::grid_triangle(gp[t[0]], gp[t[1]], gp[t[2]]));
     }
 
     const double band = options.band, band2 = band * band;
@@ -419,54 +371,46 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
                 i0 = static_cast<std::size_t>(std::clamp(std::ceil(lo), 0.0, double(n)));
                 i1 = static_cast<std::size_t>(std::clamp(std::floor(hi) + 1, 0.0, double(n)));
             };
+            detail::TrianglePlane::Row terms;
             for (const GridTriangle& t : gtris) {
+                const Vec3 &a = t.v[0], &b = t.v[1], &c = t.v[2];
                 std::size_t i0, i1, j0, j1, k0, k1;
-                range(std::min({t.a[2], t.b[2], t.c[2]}) - band, std::max({t.a[2], t.b[2], t.c[2]}) + band, nz, k0, k1);
+                range(std::min({a[2], b[2], c[2]}) - band, std::max({a[2], b[2], c[2]}) + band, nz, k0, k1);
                 k0 = std::max(k0, z0);
                 k1 = std::min(k1, z1);
                 if (k0 >= k1) continue;
-                range(std::min({t.a[1], t.b[1], t.c[1]}) - band, std::max({t.a[1], t.b[1], t.c[1]}) + band, ny, j0, j1);
-                range(std::min({t.a[0], t.b[0], t.c[0]}) - band, std::max({t.a[0], t.b[0], t.c[0]}) + band, nx, i0, i1);
-                const double nlen = std::sqrt(t.n2), reach = band * nlen, na = dot(t.n, t.a);
+                range(std::min({a[1], b[1], c[1]}) - band, std::max({a[1], b[1], c[1]}) + band, ny, j0, j1);
+                range(std::min({a[0], b[0], c[0]}) - band, std::max({a[0], b[0], c[0]}) + band, nx, i0, i1);
                 // A sample within `band` of a point q of the triangle has each coordinate
                 // within `band` of q's: so its y lies within `band` of the y range of the
                 // triangle's part in the plane's z slab, and its x within `band` of the x
-                // ranges of its parts in the row's z slab and y slab. Without this a long thin
-                // triangle lying across the axes (a fan in a cylinder's cap, a cone's side)
-                // was scanned over its whole bounding box. A little beyond `band`, for
-                // rounding: a superset of the samples, so the distances do not change.
+                // range of that part. Without this a long thin triangle
+                // lying across the axes (a fan in a cylinder's cap, a cone's side) was scanned
+                // over its whole bounding box. TrianglePlane narrows each row further, to
+                // within `band` of the plane and of each edge's side. A little
+                // beyond `band`, for rounding: a superset of the samples, so the distances do
+                // not change.
                 const double slack = band + 1e-6;
+                const bool flat = !(t.n2 > 0);
                 for (std::size_t k = k0; k < k1; ++k) {
                     Vec3 z_min, z_max, y_min, y_max;
                     if (!box_in_slab(t, 2, double(k) - slack, double(k) + slack, z_min, z_max)) continue;
-                    std::size_t ja = 0, jb = 0;
+                    const detail::TrianglePlane rows(t, double(k), slack);
+                    std::size_t ja = 0, jb = 0, za = 0, zb = 0;
                     range(z_min[1] - slack, z_max[1] + slack, ny, ja, jb);
+                    range(z_min[0] - slack, z_max[0] + slack, nx, za, zb);
                     for (std::size_t j = std::max(j0, ja); j < std::min(j1, jb); ++j) {
-                        if (!box_in_slab(t, 1, double(j) - slack, double(j) + slack, y_min, y_max)) continue;
-                        std::size_t xa = i0, xb = i1, near0 = 0, near1 = 0;
-                        range(std::max(z_min[0], y_min[0]) - slack, std::min(z_max[0], y_max[0]) + slack, nx, near0,
-                              near1);
-                        xa = std::max(xa, near0);
-                        xb = std::min(xb, near1);
+                        std::size_t xa = std::max(i0, za), xb = std::min(i1, zb);
+                        if (flat) {  // no sides to narrow the row by: the y slab's part instead
+                            if (!box_in_slab(t, 1, double(j) - slack, double(j) + slack, y_min, y_max)) continue;
+                            std::size_t ya = 0, yb = 0;
+                            range(y_min[0] - slack, y_max[0] + slack, nx, ya, yb);
+                            xa = std::max(xa, ya);
+                            xb = std::min(xb, yb);
+                        }
                         if (xa >= xb) continue;
-                        // Only the x span within `band` of the triangle's plane can be near it.
-                        if (t.n2 > 0) {
-                            const double c = na - t.n[1] * double(j) - t.n[2] * double(k);
-                            if (std::abs(t.n[0]) > 1e-9 * nlen) {
-                                const double u = (c - reach) / t.n[0], v = (c + reach) / t.n[0];
-                                std::size_t s0, s1;
-                                range(std::min(u, v), std::max(u, v), nx, s0, s1);
-                                xa = std::max(xa, s0);
-                                xb = std::min(xb, s1);
-                            } else if (std::abs(c) > reach) {
-                                continue;
-                            }
-                        }
-                        float* row = dist + plane * k + nx * j;
-                        for (std::size_t i = xa; i < xb; ++i) {
-                            const float d2 = static_cast<float>(triangle_distance2({double(i), double(j), double(k)}, t));
-                            if (d2 < row[i]) row[i] = d2;
-                        }
+                        if (!rows.narrow(double(j), nx, xa, xb, terms)) continue;
+                        rows.lower(terms, xa, xb, nx, dist + plane * k + nx * j);
                     }
                 }
             }
