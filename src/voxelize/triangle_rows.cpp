@@ -15,8 +15,9 @@ namespace voxmesh::detail {
 
 namespace {
 
-// 1 / slope, or 0 where the slope is rounding noise beside `scale`.
-double inverse_slope(double slope, double scale) { return std::abs(slope) > 1e-9 * scale ? 1.0 / slope : 0.0; }
+// 1 / slope, or 0 where the side is parallel to x. A slope however small still counts: a
+// cut-off there dropped its term, up to some 1e-9 x the row's length, from the bound.
+double inverse_slope(double slope) { return slope != 0 ? 1.0 / slope : 0.0; }
 
 // The first whole x at or after `x`, and one past the last at or before it, within [0, nx].
 // Truncation instead of std::ceil and std::floor, which are calls on x86-64 without SSE4.1:
@@ -39,17 +40,30 @@ std::size_t past_at_or_before(double x, std::size_t nx) {
 GridTriangle grid_triangle(const Vec3& a, const Vec3& b, const Vec3& c) {
     GridTriangle t;
     t.v = {a, b, c};
-    t.n = cross(sub(b, a), sub(c, a));
-    t.n2 = dot(t.n, t.n);
     t.edge = {sub(b, a), sub(c, b), sub(a, c)};
-    for (int e = 0; e < 3; ++e) {
-        const double len2 = dot(t.edge[e], t.edge[e]);
-        t.inv_len2[e] = len2 > 0 ? 1.0 / len2 : 0.0;
-        t.out[e] = cross(t.n, t.edge[e]);
-        t.out_len[e] = std::sqrt(dot(t.out[e], t.out[e]));
-        t.inv_out_x[e] = inverse_slope(t.out[e][0], t.out_len[e]);
+    std::array<double, 3> len2{};
+    for (int e = 0; e < 3; ++e) len2[e] = dot(t.edge[e], t.edge[e]);
+    // n = edge[i] x edge[i + 1] for any i; the two edges at the corner facing the longest
+    // edge give it with the least rounding (their angle is the triangle's widest).
+    const int longest = static_cast<int>(std::max_element(len2.begin(), len2.end()) - len2.begin());
+    t.n = cross(t.edge[(longest + 1) % 3], t.edge[(longest + 2) % 3]);
+    t.n2 = dot(t.n, t.n);
+    // A triangle narrower than 1e-8 of its length (|n| / longest edge is its least height),
+    // or so small that 1 / |n|^2 would overflow, is measured by its edges alone, as one with
+    // no area: that is off by at most that height, while its normal's direction, rounding
+    // noise for corners collinear in the model's floats, could put a sample's height over a
+    // plane the triangle does not have anywhere up to the band.
+    if (!(t.n2 > 1e-16 * len2[longest] * len2[longest]) || !(t.n2 > 1e-300)) {
+        t.n = {0, 0, 0};
+        t.n2 = 0;
     }
-    t.inv_n_x = inverse_slope(t.n[0], std::sqrt(t.n2));
+    for (int e = 0; e < 3; ++e) {
+        t.inv_len2[e] = len2[e] > 0 ? 1.0 / len2[e] : 0.0;
+        t.out[e] = cross(t.n, t.edge[e]);
+        t.out_len[e] = std::sqrt(t.n2) * std::sqrt(len2[e]);  // |n x edge| = |n| |edge|: |out|^2 can underflow
+        t.inv_out_x[e] = inverse_slope(t.out[e][0]);
+    }
+    t.inv_n_x = inverse_slope(t.n[0]);
     return t;
 }
 

@@ -27,13 +27,14 @@ inline Vec3 cross(const Vec3& a, const Vec3& b) {
 struct GridTriangle {
     std::array<Vec3, 3> v{};     // corners a, b, c
     Vec3 n{};                    // (b - a) x (c - a)
-    double n2 = 0;               // |n|^2; 0 for a triangle with no area (collinear corners)
+    double n2 = 0;               // |n|^2; n and n2 are 0 for a triangle measured as one with
+                                 // no area (collinear corners, or nearly: grid_triangle)
     std::array<Vec3, 3> edge{};  // b - a, c - b, a - c: edge e starts at v[e]
     std::array<Vec3, 3> out{};   // n x edge: its dot with p - v[e] is negative beyond edge e
     std::array<double, 3> inv_len2{};  // 1 / |edge|^2 (0 for an edge of no length)
     std::array<double, 3> out_len{};   // |out| = |n| |edge|
     // 1 / out[e][0] and 1 / n[0], for the x where a row meets a side; 0 where the side is
-    // parallel to x (a slope of rounding noise).
+    // parallel to x.
     std::array<double, 3> inv_out_x{};
     double inv_n_x = 0;
 };
