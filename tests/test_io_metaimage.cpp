@@ -168,6 +168,25 @@ TEST_CASE("metaimage: .mha LOCAL, .mhd detached, compressed, big endian", "[io][
     }
 }
 
+// Found by a review: MetaIO's MET_LONG and MET_ULONG (4 bytes, as MET_ValueTypeSize says) were
+// refused; HeaderSize = -1 reads the samples from the file's end.
+TEST_CASE("metaimage: MET_LONG and MET_ULONG are 32-bit, HeaderSize -1 reads the file's end", "[io][metaimage]") {
+    Scratch s;
+    std::string data;
+    for (std::int32_t i = 0; i < std::int32_t(kCount); ++i) {
+        const std::int32_t v = i * 1000 - 7;
+        data.append(reinterpret_cast<const char*>(&v), 4);
+    }
+    const std::string head = "NDims = 3\nDimSize = 4 3 2\nBinaryDataByteOrderMSB = False\n";
+    const Volume l = read_volume(s.file("l.mha", head + "ElementType = MET_LONG\nElementDataFile = LOCAL\n" + data));
+    REQUIRE(l.type == ScalarType::I32);
+    CHECK(static_cast<const std::int32_t*>(l.data)[5] == 4993);
+    const Volume u = read_volume(
+        s.file("u.mha", head + "ElementType = MET_ULONG\nHeaderSize = -1\nElementDataFile = LOCAL\n" + data));
+    REQUIRE(u.type == ScalarType::U32);
+    CHECK(static_cast<const std::uint32_t*>(u.data)[5] == 4993u);
+}
+
 TEST_CASE("metaimage: bad headers are errors naming the file", "[io][metaimage][errors]") {
     Scratch s;
     const std::string data = u16_samples(kCount, false);
@@ -182,6 +201,10 @@ TEST_CASE("metaimage: bad headers are errors naming the file", "[io][metaimage][
     fails("a.mha", "NDims = 3\nDimSize = 4 3 2\nElementType = MET_LONG_LONG\nElementDataFile = LOCAL\n" + data,
           "unsupported ElementType 'MET_LONG_LONG'");
     fails("a.mha", kHead + "ElementDataFile = LOCAL\n" + data.substr(1), "truncated");
+    // Found by a review: samples at the end of the file (HeaderSize = -1) read the header's
+    // own bytes as samples where the file was too short; "LIST 2D" was looked for as a file.
+    fails("a.mha", kHead + "HeaderSize = -1\nElementDataFile = LOCAL\n" + data.substr(10), "may not overlap");
+    fails("a.mhd", kHead + "ElementDataFile = LIST 2D\na.raw\n", "lists and file patterns are not supported");
     fails("a.mha", kHead + "ElementSpacing = 1 1\nElementDataFile = LOCAL\n" + data, "ElementSpacing");
     fails("a.mha", kHead + "BinaryDataByteOrderMSB = True\nElementByteOrderMSB = False\nElementDataFile = LOCAL\n" + data,
           "disagree");

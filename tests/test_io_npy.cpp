@@ -115,6 +115,15 @@ TEST_CASE("npy: axes of size 1 anywhere leave the 3-D volume", "[io][npy]") {
     check_samples<float>(read_volume(s.file("f.npy", npy(fortran, data))));
 }
 
+// Found by a review: numpy under Python 2 wrote sizes as longs, (3L, 4L, 5L); numpy reads them.
+TEST_CASE("npy: Python 2's long sizes read as sizes", "[io][npy]") {
+    const std::string f4 = iotest::read_file(corpus("f4_c.npy"));
+    const std::size_t header_length = static_cast<unsigned char>(f4[8]) | static_cast<unsigned char>(f4[9]) << 8;
+    Scratch s;
+    const std::string dict = "{'descr': '<f4', 'fortran_order': False, 'shape': (3L, 4L, 5L), }";
+    check_samples<float>(read_volume(s.file("py2.npy", npy(dict, f4.substr(10 + header_length)))));
+}
+
 TEST_CASE("npy: a volume numpy saved meshes as the samples it holds", "[io][npy]") {
     // A ball, 12³ floats, written here in numpy's layout.
     constexpr std::size_t n = 12;

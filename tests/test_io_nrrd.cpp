@@ -341,6 +341,36 @@ TEST_CASE("nrrd: encodings, byte orders, detached headers", "[io][nrrd]") {
 
 // Found by a review: 'kinds' was not read, so an RGB image or a vector field would be meshed as
 // if its components were a spatial axis.
+// Found by a review: without a space, teem places samples by 'axis mins' (cell-centred unless
+// 'centers' says node; the step from 'spacings', or from 'axis maxs'), which was ignored; and
+// teem reads 'type' and 'endian' in any case.
+TEST_CASE("nrrd: axis mins and maxs place the samples, type and endian in any case", "[io][nrrd]") {
+    Scratch s;
+    const std::size_t n = 3 * 4 * 5;
+    const std::string head = "NRRD0004\ntype: Short\ndimension: 3\nsizes: 3 4 5\nendian: LITTLE\nencoding: raw\n";
+    SECTION("mins with spacings, cell-centred: the first sample half a step in") {
+        const Volume v = read_volume(s.file("a.nrrd", head + "spacings: 2 3 4\naxis mins: 10 20 30\n\n" +
+                                                           i16_samples(n, false)));
+        check_i16(v, n);
+        CHECK(v.spacing == std::array<double, 3>{2, 3, 4});
+        CHECK(v.origin == std::array<double, 3>{11, 21.5, 32});
+    }
+    SECTION("mins and maxs, one axis node-centred, one unknown") {
+        const Volume v = read_volume(s.file("a.nrrd", head + "axis mins: 10 20 nan\naxis maxs: 16 32 50\n"
+                                                           "centers: cell node ???\n\n" + i16_samples(n, false)));
+        CHECK(v.spacing == std::array<double, 3>{2, 4, 1});
+        CHECK(v.origin == std::array<double, 3>{11, 20, 0});
+    }
+    SECTION("a max below the min runs the axis the other way") {
+        VolumeInfo info;
+        const Volume v = read_volume(
+            s.file("a.nrrd", head + "axis mins: 0 0 10\naxis maxs: 3 4 0\n\n" + i16_samples(n, false)), info);
+        CHECK(v.spacing == std::array<double, 3>{1, 1, 2});
+        CHECK(info.flipped == std::array<bool, 3>{false, false, true});
+        CHECK(v.origin[2] == 1);  // samples at 9, 7, ..., 1: the minimum corner
+    }
+}
+
 TEST_CASE("nrrd: axes of a kind that is not spatial are refused, or dropped where of size 1", "[io][nrrd]") {
     Scratch s;
     const std::size_t n = 3 * 4 * 5;
@@ -416,6 +446,11 @@ TEST_CASE("nrrd: bad headers and data are errors naming the file", "[io][nrrd][e
     std::filesystem::create_directory(s.dir + "/sub");
     fails(s.file("bad.nhdr", kHeader343 + "encoding: raw\ndata file: sub\n"), "directory");
     fails(s.file("bad.nhdr", kHeader343 + "encoding: raw\ndata file: LIST\nx.raw\n"), "LIST");
+    // Found by a review: "LIST 3" (a list with a sub-dimension) said a line was not a field;
+    // samples at the end of the file (byte skip -1) read the header as samples when too short.
+    fails(s.file("bad.nhdr", kHeader343 + "encoding: raw\ndata file: LIST 3\nx.raw\n"), "a list of data files");
+    fails(attached(kHeader343 + "encoding: raw\nbyte skip: -1\n\n", data.substr(0, data.size() - 20)),
+          "may not overlap");
     // Found by a review: 'line skip' past the end of the data file, or with none, was an error that
     // did not name the header, and counted the lines left instead of those asked for.
     s.file("short.raw", "one line\n");

@@ -19,7 +19,9 @@
 // TransformMatrix, or NIfTI's sform (sform_code > 0) else qform (qform_code > 0, quaternion
 // and qfac = pixdim[0] as in the NIfTI-1 standard). Spacing is the NRRD vector's length
 // (or NRRD `spacings`), MetaImage ElementSpacing, the length of the NIfTI sform's column
-// (sform) or pixdim (qform, or no transform).
+// (sform) or pixdim (qform, or no transform). A NRRD without a space takes its origin (and,
+// without `spacings`, its spacing) from `axis mins` and `axis maxs` as teem places samples:
+// cell-centred (min + step / 2) unless `centers` says node.
 // An axis whose direction points mostly along the negative of its own world axis (its largest
 // component is that axis's and negative: e.g. the common NIfTI sform diag(-2, 2, 2), also
 // slightly oblique) is "flipped": its samples are reversed on load and the origin moved

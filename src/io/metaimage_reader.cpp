@@ -22,12 +22,14 @@ ScalarType parse_element_type(const std::string& path, const std::string& value)
     static const std::map<std::string, ScalarType> kTypes = {
         {"MET_UCHAR", ScalarType::U8},   {"MET_CHAR", ScalarType::I8},  {"MET_USHORT", ScalarType::U16},
         {"MET_SHORT", ScalarType::I16},  {"MET_UINT", ScalarType::U32}, {"MET_INT", ScalarType::I32},
-        {"MET_FLOAT", ScalarType::F32},  {"MET_DOUBLE", ScalarType::F64}};
+        {"MET_FLOAT", ScalarType::F32},  {"MET_DOUBLE", ScalarType::F64},
+        // MetaIO's MET_LONG and MET_ULONG are 4 bytes (MET_ValueTypeSize), whatever C's long is.
+        {"MET_LONG", ScalarType::I32},   {"MET_ULONG", ScalarType::U32}};
     const auto it = kTypes.find(value);
     if (it == kTypes.end())
         fail(path, "unsupported ElementType '" + value +
-                       "' (supported: MET_UCHAR, MET_CHAR, MET_USHORT, MET_SHORT, MET_UINT, MET_INT, MET_FLOAT, "
-                       "MET_DOUBLE)");
+                       "' (supported: MET_UCHAR, MET_CHAR, MET_USHORT, MET_SHORT, MET_UINT, MET_INT, MET_ULONG, "
+                       "MET_LONG, MET_FLOAT, MET_DOUBLE)");
     return it->second;
 }
 
@@ -175,11 +177,13 @@ VolumeHeader read_metaimage_header(const InputFile& file) {
             fail(path, "HeaderSize " + std::to_string(header_size) + " points inside the header, which ends at byte " +
                            std::to_string(data_start));
         layout.offset = header_size > 0 ? static_cast<std::size_t>(header_size) : data_start;
+        layout.min_start = data_start;  // HeaderSize = -1: the samples end the file, after the header
     } else {
         if (data_file.empty()) fail(path, "ElementDataFile is empty");
-        // MetaIO takes LIST and names holding '%' (printf patterns, "img%03d.raw 1 10 1") as
+        // MetaIO takes LIST (or "LIST 2D") and names holding '%' (printf patterns, "img%03d.raw 1 10 1") as
         // several files; anything else is one file name, spaces included ("my scan.raw").
-        if (data_file == "LIST" || data_file.find('%') != std::string::npos)
+        const auto words = split_words(data_file);
+        if ((!words.empty() && words[0] == "LIST") || data_file.find('%') != std::string::npos)
             fail(path, "ElementDataFile '" + data_file + "': lists and file patterns are not supported");
         layout.data_path = detached_data_path(file, data_file);
         layout.offset = static_cast<std::size_t>(std::max(header_size, 0LL));

@@ -80,6 +80,7 @@ public:
             if (pos_ == start) fail(path_, "malformed .npy header: 'shape' must be a tuple of sizes");
             if (found.size() == 32) fail(path_, "'shape' has more than 32 axes");
             found.push_back(parse_size(path_, "shape", text_.substr(start, pos_ - start)));
+            if (pos_ < text_.size() && text_[pos_] == 'L') ++pos_;  // Python 2 wrote longs as 5L
             if (!take(',')) {
                 expect(')', "to close 'shape'");
                 break;

@@ -40,6 +40,41 @@ ScalarType parse_type(const std::string& path, const std::string& value) {
                    "' (supported: 8/16/32-bit signed and unsigned integers, float, double)");
 }
 
+// Without a space, teem places axis a's samples by 'axis mins' (and 'axis maxs'): sample i at
+// min + (i + 1/2) * step for cell centering (teem's default), min + i * step for node, where
+// step is the axis's 'spacings' value or else (max - min) / (size, or size - 1 for node).
+// The origin is sample 0's position; a step found from the extents is the axis's spacing (a
+// negative one runs the axis the other way). Without a step the origin is the min itself.
+void place_by_axis_extents(const std::string& path, VolumeHeader& h, const std::array<std::size_t, 3>& spatial,
+                           const std::vector<std::size_t>& sizes, const std::vector<double>& spacings,
+                           const std::vector<double>& mins, const std::vector<double>& maxs,
+                           const std::string* centers, std::array<std::vector<double>, 3>& axes) {
+    if (mins.empty()) return;
+    std::vector<std::string> center;
+    if (centers) {
+        for (std::string_view word : split_words(*centers)) center.push_back(lower(word));
+        if (center.size() != sizes.size())
+            fail(path, "'dimension' is " + std::to_string(sizes.size()) + " but 'centers' lists " +
+                           std::to_string(center.size()) + " values");
+    }
+    for (std::size_t k = 0; k < 3; ++k) {
+        const std::size_t a = spatial[k];
+        if (std::isnan(mins[a])) continue;
+        const bool node = !center.empty() && center[a] == "node";
+        double step = spacings.empty() ? NAN : spacings[a];
+        if (std::isnan(step) && !maxs.empty() && !std::isnan(maxs[a])) {
+            const std::size_t intervals = node ? sizes[a] - 1 : sizes[a];
+            if (intervals > 0) {
+                step = (maxs[a] - mins[a]) / static_cast<double>(intervals);
+                h.info.spacing[k] = checked_spacing(path, "axis mins and axis maxs", step);
+                if (step < 0) reverse_direction(axes, k);
+            }
+        }
+        const double first = std::isnan(step) || node ? mins[a] : mins[a] + 0.5 * step;
+        h.info.origin[k] = checked_origin(path, "axis mins", first);
+    }
+}
+
 // "(1,0,0)" as numbers; "none" as an empty vector.
 std::vector<std::vector<double>> parse_vectors(const std::string& path, const char* field, std::string_view value) {
     std::vector<std::vector<double>> out;
@@ -134,8 +169,8 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
             if (name == std::string(joined).erase(std::string(joined).find(' '), 1)) name = joined;
         if (!fields.emplace(name, std::string(trim(line.substr(sep + 2)))).second)
             fail(path, "header field '" + name + "' appears twice");
-        if (name == "data file" && fields[name] == "LIST")
-            fail(path, "'data file: LIST' (several data files) is not supported");
+        if (name == "data file" && !split_words(fields[name]).empty() && split_words(fields[name])[0] == "LIST")
+            fail(path, "'data file: " + fields[name] + "' (a list of data files) is not supported");
     }
     if (!blank_line && text.size() < file.size())
         fail(path, "no blank line ends the header within its first " + std::to_string(kMaxNrrdHeader) + " bytes");
@@ -200,7 +235,7 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
         check_kind(spatial[k]);
         info.dims[k] = sizes[spatial[k]];
     }
-    info.type = parse_type(path, required("type"));
+    info.type = parse_type(path, lower(required("type")));  // teem's type names are case-insensitive
 
     const std::string encoding = lower(required("encoding"));
     if (encoding == "raw") {
@@ -211,9 +246,10 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
         fail(path, "NRRD encoding '" + encoding + "' is not supported (use raw or gzip)");
     }
 
-    if (const std::string* endian = optional("endian")) {
-        if (*endian == "big") info.big_endian = true;
-        else if (*endian != "little") fail(path, "'endian' must be little or big, not '" + *endian + "'");
+    if (const std::string* given = optional("endian")) {
+        const std::string endian = lower(*given);  // case-insensitive, as teem reads it
+        if (endian == "big") info.big_endian = true;
+        else if (endian != "little") fail(path, "'endian' must be little or big, not '" + *given + "'");
     } else if (scalar_size(info.type) > 1) {
         fail(path, "header lacks 'endian', required for multi-byte samples");
     }
@@ -221,15 +257,22 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
     const std::string* spacings = optional("spacings");
     if (spacings && directions) fail(path, "header has both 'spacings' and 'space directions' (contradictory)");
     std::array<std::vector<double>, 3> axes;  // spatial axes' directions; empty without them
-    if (spacings) {
+    // Per-axis numbers, "nan" where an axis has none (teem writes "nan" for unknown values).
+    auto per_axis = [&](const char* field) {
         std::vector<double> values;
-        for (std::string_view word : split_words(*spacings))
-            values.push_back(lower(word) == "nan" ? NAN : parse_double(path, "spacings", word));
-        if (values.size() != dimension)
-            fail(path, "'dimension' is " + std::to_string(dimension) + " but 'spacings' lists " +
-                           std::to_string(values.size()) + " values");
+        if (const std::string* given = optional(field)) {
+            for (std::string_view word : split_words(*given))
+                values.push_back(lower(word) == "nan" ? NAN : parse_double(path, field, word));
+            if (values.size() != dimension)
+                fail(path, "'dimension' is " + std::to_string(dimension) + " but '" + field + "' lists " +
+                               std::to_string(values.size()) + " values");
+        }
+        return values;
+    };
+    const std::vector<double> spacing_values = per_axis("spacings");
+    if (spacings) {
         for (std::size_t k = 0; k < 3; ++k) {
-            const double value = values[spatial[k]];
+            const double value = spacing_values[spatial[k]];
             info.spacing[k] = std::isnan(value) ? 1.0 : checked_spacing(path, "spacings", value);
             if (value < 0) reverse_direction(axes, k);  // samples run toward lower positions
         }
@@ -265,6 +308,8 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
         for (std::size_t a = 0; a < 3 && a < space_dim; ++a)
             info.origin[a] = checked_origin(path, "space origin", vectors[0][a]);
     }
+    if (space_dim == 0) place_by_axis_extents(path, h, spatial, sizes, spacing_values, per_axis("axis mins"),
+                                              per_axis("axis maxs"), optional("centers"), axes);
     apply_directions(h, axis_directions(axes));
 
     layout.type = info.type;
@@ -294,6 +339,7 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
     }
     if (byte_skip == -1) {
         layout.at_end = true;
+        layout.min_start = offset;  // the samples end the file but may not reach into the header
     } else if (layout.compressed) {
         layout.skip = static_cast<std::size_t>(byte_skip);
     } else {

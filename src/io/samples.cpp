@@ -74,9 +74,13 @@ Located locate(const InputFile& file, const std::string& header_path, const Samp
     }
     if (!layout.compressed) {
         if (layout.at_end) {
-            if (at.file_size < bytes)
+            if (at.file_size < bytes || at.file_size - bytes < layout.min_start)
                 fail(path, "holds " + std::to_string(at.file_size) + " bytes but " + dims_text(layout.dims) + " " +
-                               scalar_name(layout.type) + " samples need " + std::to_string(bytes) + ctx);
+                               scalar_name(layout.type) + " samples need " + std::to_string(bytes) +
+                               (layout.min_start ? " after its " + std::to_string(layout.min_start) +
+                                                       "-byte header (samples at the end of the file may not overlap it)"
+                                                 : std::string()) +
+                               ctx);
             at.start = at.file_size - bytes;
         } else {
             if (layout.offset > at.file_size || at.file_size - layout.offset != bytes)
