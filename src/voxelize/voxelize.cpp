@@ -382,14 +382,13 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
                 range(std::min({a[1], b[1], c[1]}) - band, std::max({a[1], b[1], c[1]}) + band, ny, j0, j1);
                 range(std::min({a[0], b[0], c[0]}) - band, std::max({a[0], b[0], c[0]}) + band, nx, i0, i1);
                 // A sample within `band` of a point q of the triangle has each coordinate
-                // within `band` of q's: so its y lies within `band` of the y range of the
-                // triangle's part in the plane's z slab, and its x within `band` of the x
-                // range of that part. Without this a long thin triangle
-                // lying across the axes (a fan in a cylinder's cap, a cone's side) was scanned
-                // over its whole bounding box. TrianglePlane narrows each row further, to
-                // within `band` of the plane and of each edge's side. A little
-                // beyond `band`, for rounding: a superset of the samples, so the distances do
-                // not change.
+                // within `band` of q's: so its y and x lie within `band` of the y and x ranges
+                // of the triangle's part in the plane's z slab. Without this a long thin
+                // triangle lying across the axes (a fan in a cylinder's cap, a cone's side) was
+                // scanned over its whole bounding box. TrianglePlane narrows each row further,
+                // to within `band` of the plane and of each edge's side. A little beyond
+                // `band`, for rounding: a superset of the samples, so the distances do not
+                // change.
                 const double slack = band + 1e-6;
                 const bool flat = !(t.n2 > 0);
                 for (std::size_t k = k0; k < k1; ++k) {
