@@ -169,8 +169,11 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
             if (name == std::string(joined).erase(std::string(joined).find(' '), 1)) name = joined;
         if (!fields.emplace(name, std::string(trim(line.substr(sep + 2)))).second)
             fail(path, "header field '" + name + "' appears twice");
-        if (name == "data file" && !split_words(fields[name]).empty() && split_words(fields[name])[0] == "LIST")
-            fail(path, "'data file: " + fields[name] + "' (a list of data files) is not supported");
+        if (name == "data file") {
+            const auto words = split_words(fields[name]);  // "LIST" or "LIST 3": file names follow
+            if (!words.empty() && words[0] == "LIST")
+                fail(path, "'data file: " + fields[name] + "' (a list of data files) is not supported");
+        }
     }
     if (!blank_line && text.size() < file.size())
         fail(path, "no blank line ends the header within its first " + std::to_string(kMaxNrrdHeader) + " bytes");

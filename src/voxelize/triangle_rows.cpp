@@ -4,7 +4,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
 #include <limits>
 
 #ifdef VOXMESH_X86_DISPATCH
@@ -18,22 +17,6 @@ namespace {
 // 1 / slope, or 0 where the side is parallel to x. A slope however small still counts: a
 // cut-off there dropped its term, up to some 1e-9 x the row's length, from the bound.
 double inverse_slope(double slope) { return slope != 0 ? 1.0 / slope : 0.0; }
-
-// The first whole x at or after `x`, and one past the last at or before it, within [0, nx].
-// Truncation instead of std::ceil and std::floor, which are calls on x86-64 without SSE4.1:
-// a fanned model asks this for tens of millions of rows. x is finite.
-std::size_t first_at_or_after(double x, std::size_t nx) {
-    const double c = std::clamp(x, -1.0, double(nx));
-    auto i = static_cast<std::int64_t>(c);  // towards zero
-    if (double(i) < c) ++i;
-    return static_cast<std::size_t>(std::clamp<std::int64_t>(i, 0, std::int64_t(nx)));
-}
-std::size_t past_at_or_before(double x, std::size_t nx) {
-    const double c = std::clamp(x, -1.0, double(nx));
-    auto i = static_cast<std::int64_t>(c);
-    if (double(i) > c) --i;
-    return static_cast<std::size_t>(std::clamp<std::int64_t>(i + 1, 0, std::int64_t(nx)));
-}
 
 }  // namespace
 
@@ -132,8 +115,7 @@ bool TrianglePlane::narrow(double j, std::size_t nx, std::size_t& xa, std::size_
         hi = std::min(hi, std::max(u, w));
     }
     if (!(lo <= hi)) return false;
-    xa = first_at_or_after(lo, nx);
-    xb = past_at_or_before(hi, nx);
+    whole_range(lo, hi, nx, xa, xb);
     return xa < xb;
 }
 

@@ -10,8 +10,10 @@
 // be cheap.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
+#include <cstdint>
 
 namespace voxmesh::detail {
 
@@ -21,6 +23,18 @@ inline Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1]
 inline double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 inline Vec3 cross(const Vec3& a, const Vec3& b) {
     return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+// The whole numbers in [lo, hi] (finite), clipped to [0, n): [first, past). Truncation instead
+// of std::ceil and std::floor, which are calls on x86-64 without SSE4.1: a fanned model asks
+// this for tens of millions of rows.
+inline void whole_range(double lo, double hi, std::size_t n, std::size_t& first, std::size_t& past) {
+    const double l = std::clamp(lo, -1.0, double(n)), h = std::clamp(hi, -1.0, double(n));
+    auto i = static_cast<std::int64_t>(l), k = static_cast<std::int64_t>(h);  // towards zero
+    if (double(i) < l) ++i;
+    if (double(k) > h) --k;
+    first = static_cast<std::size_t>(std::clamp<std::int64_t>(i, 0, std::int64_t(n)));
+    past = static_cast<std::size_t>(std::clamp<std::int64_t>(k + 1, 0, std::int64_t(n)));
 }
 
 // A triangle in grid coordinates, with what every row near it uses.

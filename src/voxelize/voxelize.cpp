@@ -42,6 +42,7 @@ constexpr std::size_t kMaxDim = std::size_t(1) << 13;
 
 using detail::GridTriangle;
 using detail::Vec3;
+using detail::whole_range;
 
 // A welded, validated triangle list.
 struct Soup {
@@ -367,20 +368,16 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
         // Pass 1: squared distances (grid units) to the nearest triangle, capped at band^2.
         if (distance) {
             std::fill(dist + z0 * plane, dist + z1 * plane, static_cast<float>(band2));
-            auto range = [&](double lo, double hi, std::size_t n, std::size_t& i0, std::size_t& i1) {
-                i0 = static_cast<std::size_t>(std::clamp(std::ceil(lo), 0.0, double(n)));
-                i1 = static_cast<std::size_t>(std::clamp(std::floor(hi) + 1, 0.0, double(n)));
-            };
             detail::TrianglePlane::Row terms;
             for (const GridTriangle& t : gtris) {
                 const Vec3 &a = t.v[0], &b = t.v[1], &c = t.v[2];
                 std::size_t i0, i1, j0, j1, k0, k1;
-                range(std::min({a[2], b[2], c[2]}) - band, std::max({a[2], b[2], c[2]}) + band, nz, k0, k1);
+                whole_range(std::min({a[2], b[2], c[2]}) - band, std::max({a[2], b[2], c[2]}) + band, nz, k0, k1);
                 k0 = std::max(k0, z0);
                 k1 = std::min(k1, z1);
                 if (k0 >= k1) continue;
-                range(std::min({a[1], b[1], c[1]}) - band, std::max({a[1], b[1], c[1]}) + band, ny, j0, j1);
-                range(std::min({a[0], b[0], c[0]}) - band, std::max({a[0], b[0], c[0]}) + band, nx, i0, i1);
+                whole_range(std::min({a[1], b[1], c[1]}) - band, std::max({a[1], b[1], c[1]}) + band, ny, j0, j1);
+                whole_range(std::min({a[0], b[0], c[0]}) - band, std::max({a[0], b[0], c[0]}) + band, nx, i0, i1);
                 // A sample within `band` of a point q of the triangle has each coordinate
                 // within `band` of q's: so its y and x lie within `band` of the y and x ranges
                 // of the triangle's part in the plane's z slab. Without this a long thin
@@ -396,14 +393,14 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
                     if (!box_in_slab(t, 2, double(k) - slack, double(k) + slack, z_min, z_max)) continue;
                     const detail::TrianglePlane rows(t, double(k), slack);
                     std::size_t ja = 0, jb = 0, za = 0, zb = 0;
-                    range(z_min[1] - slack, z_max[1] + slack, ny, ja, jb);
-                    range(z_min[0] - slack, z_max[0] + slack, nx, za, zb);
+                    whole_range(z_min[1] - slack, z_max[1] + slack, ny, ja, jb);
+                    whole_range(z_min[0] - slack, z_max[0] + slack, nx, za, zb);
                     for (std::size_t j = std::max(j0, ja); j < std::min(j1, jb); ++j) {
                         std::size_t xa = std::max(i0, za), xb = std::min(i1, zb);
                         if (flat) {  // no sides to narrow the row by: the y slab's part instead
                             if (!box_in_slab(t, 1, double(j) - slack, double(j) + slack, y_min, y_max)) continue;
                             std::size_t ya = 0, yb = 0;
-                            range(y_min[0] - slack, y_max[0] + slack, nx, ya, yb);
+                            whole_range(y_min[0] - slack, y_max[0] + slack, nx, ya, yb);
                             xa = std::max(xa, ya);
                             xb = std::min(xb, yb);
                         }
