@@ -321,6 +321,17 @@ TEST_CASE("nrrd: encodings, byte orders, detached headers", "[io][nrrd]") {
         s.file("d.gz", "line one\nline two\n" + iotest::deflate_bytes(i16_samples(n, false), true));
         check_i16(read_volume(s.file("d.nhdr", kHeader343 + "encoding: gz\nline skip: 2\ndatafile: d.gz\n")), n);
     }
+    // Attached data with 'line skip' was refused; teem skips the lines after the blank line.
+    SECTION("attached raw and gzip with line skip") {
+        check_i16(read_volume(s.file("a.nrrd", kHeader343 + "encoding: raw\nline skip: 2\n\none\n\n" +
+                                                   i16_samples(n, false))),
+                  n);
+        check_i16(read_volume(s.file("a.nrrd", kHeader343 + "encoding: gzip\nline skip: 1\n\n# a\n" +
+                                                   iotest::deflate_bytes(i16_samples(n, false), true))),
+                  n);
+        CHECK_THROWS_WITH(read_volume(s.file("a.nrrd", kHeader343 + "encoding: raw\nline skip: 2\n\none line\n")),
+                          Contains("a.nrrd") && Contains("before the 2 lines"));
+    }
     SECTION("4-D with a trailing size-1 axis is 3-D") {
         const std::string header =
             "NRRD0004\ntype: short\ndimension: 4\nsizes: 3 4 5 1\nendian: little\nencoding: raw\n\n";

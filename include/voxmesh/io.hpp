@@ -114,6 +114,8 @@ std::optional<double> recorded_iso(const VolumeInfo& info, const std::string& na
 // COLOR_SCALARS (unsigned char; ASCII writes byte b as b/255) of one component, or a FIELD's
 // first array; BINARY (big-endian, copied) or ASCII (numbers that must fit the type); arrays
 // after it are ignored. read_volume_info checks ASCII data only for length.
+// NRRD: 'line skip' then 'byte skip' (-1: samples end the file; raw only) as teem applies
+// them, from the data file's start or, for attached data, from just past the blank line.
 // MetaImage: ElementDataFile LOCAL (also Local, local, as MetaIO) or one data file; HeaderSize
 // bytes are skipped from the start of the file holding the samples, a LOCAL .mha too (as
 // MetaIO seeks), or -1 for samples at its end.

@@ -116,11 +116,13 @@ std::size_t space_dimension_of(const std::string& path, const std::string& space
     return it->second;
 }
 
-// Offset just past `lines` newlines at the start of the data file; errors name the header too.
-std::size_t skip_lines(const InputFile& header, const SampleLayout& layout, std::size_t lines) {
+// Offset just past `lines` newlines from `offset` in the file holding the samples (the
+// header's own file for attached data, as teem reads on after the blank line); errors name
+// the header too.
+std::size_t skip_lines(const InputFile& header, const SampleLayout& layout, std::size_t lines, std::size_t offset) {
     std::optional<InputFile> detached;
     const InputFile& data = open_data(header, layout, detached);
-    std::size_t offset = 0, left = lines;
+    std::size_t left = lines;
     while (left > 0) {
         const std::string chunk = data.read(offset, 1 << 16);
         if (chunk.empty())
@@ -336,10 +338,7 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
     } else if (!blank_line) {
         fail(path, "no blank line after the header and no 'data file': the samples are missing");
     }
-    if (line_skip > 0) {
-        if (layout.data_path == path) fail(path, "'line skip' is only supported with a detached data file");
-        offset = skip_lines(file, layout, line_skip);
-    }
+    if (line_skip > 0) offset = skip_lines(file, layout, line_skip, offset);
     if (byte_skip == -1) {
         layout.at_end = true;
         layout.min_start = offset;  // the samples end the file but may not reach into the header
