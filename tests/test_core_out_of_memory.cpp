@@ -24,13 +24,16 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <future>
 #include <new>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 namespace {
@@ -51,6 +54,30 @@ void lift_cap() {
     setrlimit(RLIMIT_DATA, &cap);
 }
 
+// Bytes of thread arenas' heaps that shrank but stay writable, so charged to VmData already:
+// glibc gives them back with MADV_DONTNEED, not mprotect, and mallinfo2 does not count them
+// free. A capped allocation that fails in the calling thread's arena is retried in another,
+// which grows into them past the cap (seen running "[io]" in one process: reading a volume
+// with no room at all returned). malloc_info's totals: "mprotect" minus "total" address space.
+std::size_t shrunk_heap_bytes() {
+    char* text = nullptr;
+    std::size_t length = 0;
+    std::FILE* stream = open_memstream(&text, &length);
+    if (!stream) return 0;
+    malloc_info(0, stream);
+    std::fclose(stream);
+    const std::string info(text, length);
+    std::free(text);
+    // The last of each is the sum over every arena (the main one's two are equal).
+    const auto last_size = [&](const std::string& type) -> std::size_t {
+        const std::string key = "<aspace type=\"" + type + "\" size=\"";
+        const std::size_t at = info.rfind(key);
+        return at == std::string::npos ? 0 : std::strtoull(info.c_str() + at + key.size(), nullptr, 10);
+    };
+    const std::size_t total = last_size("total"), writable = last_size("mprotect");
+    return writable > total ? writable - total : 0;
+}
+
 // In a child about to be capped: takes up the memory malloc holds freed (kept; the child exits),
 // so that what the call allocates must be new memory, which the cap can refuse. Freed memory is
 // handed out past any cap: the set-up of an earlier section left 2.7-3.5 MB free, under
@@ -63,6 +90,26 @@ void take_up_freed_memory() {
         if (!std::malloc(size)) break;
         if (mallinfo2().fordblks + size / 2 > before) size /= 2;  // not served from freed memory
     }
+    // Then the other arenas' shrunk heaps. After fork every arena but the caller's is free, and
+    // a new thread takes a free one: each thread takes up its arena's until VmData grows, and
+    // stays until the last is done so that the next one takes another arena.
+    std::vector<std::thread> holders;
+    std::promise<void> release;
+    const std::shared_future<void> released = release.get_future().share();
+    for (int t = 0; t < 16 && shrunk_heap_bytes() > kLeft; ++t) {
+        std::promise<void> done;
+        std::future<void> took_up = done.get_future();
+        holders.emplace_back([&done, released] {
+            const std::size_t charged = data_bytes();
+            for (int step = 0; step < 1024 && data_bytes() == charged; ++step)  // 64 MB at most: a heap
+                if (!std::malloc(std::size_t{64} << 10)) break;
+            done.set_value();
+            released.wait();
+        });
+        took_up.wait();
+    }
+    release.set_value();
+    for (std::thread& holder : holders) holder.join();
 }
 
 // What `call` did in a child process capped at its data bytes + `headroom`: "returned",
