@@ -585,7 +585,7 @@ TEST_CASE("cli: bad input exits 2 with a message and leaves no output", "[cli]")
     // Values CLI11 would read as 0 or print as a 300-digit range, and an iso no volume reaches.
     expect_rejected(s, "mesh " + head + " -o " + quote(out) + " --iso ''", "--iso", out, "empty value");
     expect_rejected(s, "mesh " + head + " -o " + quote(out) + " --threads ''", "--threads", out, "empty value");
-    expect_rejected(s, "mesh " + head + " -o " + quote(out) + " --device -1", "--device", out, "not a number 0 or more");
+    expect_rejected(s, "mesh " + head + " -o " + quote(out) + " --device -1", "--device", out, "-1 is out of range");
     for (const char* iso : {"inf", "-inf", "1e400"}) expect_rejected(s, "mesh " + head + " -o " + quote(out) + " --iso " + iso, "--iso", out, "finite");
     {
         const Result r = run(s, "mesh " + head + " -o " + quote(out) + " --device -1");

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -106,7 +107,7 @@ int run_mesh(const MeshArgs& a) {
         iso_source = std::string("default: the file's ") + kRecordedIsoKey;
     } else if (a.iso_option->count() == 0) {
         const ValueRange r = value_range(volume.view(), std::nullopt, a.threads);
-        iso = 0.5 * (r.min + r.max);
+        iso = 0.5 * r.min + 0.5 * r.max;  // not 0.5 * (min + max): that overflows to inf near DBL_MAX
         iso_source = "default: midpoint of value range " + format_double(r.min) + ".." + format_double(r.max);
     }
 
@@ -166,8 +167,9 @@ Command add_mesh(CLI::App& app) {
     a->iso_option = sub->add_option("--iso", a->iso, "iso value (default: midpoint of the value range)");
     sub->add_option("--backend", a->backend, "auto, cpu, opencl or hybrid (default auto)")
         ->check(CLI::IsMember({"auto", "cpu", "opencl", "hybrid"}));
-    sub->add_option("--threads", a->threads, "CPU worker threads (default: every CPU this process may use)");
-    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(kNonNegative);
+    sub->add_option("--threads", a->threads, "CPU worker threads (default: every CPU this process may use)")
+        ->transform(whole_number_in(0, std::numeric_limits<unsigned>::max()));
+    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->transform(whole_number_in(0, std::numeric_limits<int>::max()));
     sub->add_flag("--no-normals", a->no_normals, "do not compute vertex normals");
     sub->add_flag("--inside-below", a->inside_below, "values below iso are inside (SDFs): flips winding and normals");
     add_largest_option(sub, a->largest, "drops the specks of noise around a CT's surface");

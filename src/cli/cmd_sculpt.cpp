@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -112,17 +113,18 @@ Command add_sculpt(CLI::App& app) {
     add_mesh_format_option(sub, a->format);
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (8..2048)")
         ->required()
-        ->check(whole_number_in(8, 2048));
+        ->transform(whole_number_in(8, 2048));
     sub->add_option("--padding", a->padding,
                     "samples of room around the model (0..256, default 2): a surface built up past it is cut open at "
                     "the volume's border")
-        ->check(whole_number_in(0, 256));
+        ->transform(whole_number_in(0, 256));
     sub->add_option("--backend", a->backend,
                     "where each update re-meshes: cpu (threads), opencl (a device; the CPU with a warning when there "
                     "is none) or auto (a GPU when there is one); default cpu")
         ->check(CLI::IsMember({"auto", "cpu", "opencl"}));
-    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->check(kNonNegative);
-    sub->add_option("--threads", a->threads, "CPU threads (default: every CPU this process may use)");
+    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->transform(whole_number_in(0, std::numeric_limits<int>::max()));
+    sub->add_option("--threads", a->threads, "CPU threads (default: every CPU this process may use)")
+        ->transform(whole_number_in(0, std::numeric_limits<unsigned>::max()));
     sub->add_flag("--frames", a->frames, "print every frame's edit and update time");
     add_largest_option(sub, a->largest, "drops what a brush cut off or left floating");
     return {sub, [a] { return run_sculpt(*a); }};

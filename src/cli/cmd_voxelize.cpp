@@ -51,9 +51,9 @@ Command add_voxelize(CLI::App& app) {
     sub->add_option("-o,--output", a->output, "volume file to write (.nrrd; -: standard output)")->required();
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (2..4096)")
         ->required()
-        ->check(whole_number_in(2, 4096));
+        ->transform(whole_number_in(2, 4096));
     sub->add_option("--padding", a->padding, "extra samples around the model on every side (default 2)")
-        ->check(whole_number_in(0, 256));
+        ->transform(whole_number_in(0, 256));
     sub->add_option("--field", a->field,
                     "distance: f32 signed distance, positive inside, mesh at iso 0 (default); "
                     "occupancy: u8 255 inside / 0 outside, mesh at iso 127.5")

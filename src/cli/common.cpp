@@ -42,17 +42,19 @@ const CLI::Validator kNonNegative(
 
 void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& why) {
     sub->add_option("--largest", largest, "write only the N connected pieces with the most triangles (" + why + ")")
-        ->check(whole_number_in(1, 1LL << 32));
+        ->transform(whole_number_in(1, 1LL << 32));
 }
 
 void add_raw_flags(CLI::App* sub, RawFlags& raw) {
     const char* group = "Headerless .raw input";
-    sub->add_option("--dims", raw.dims, "samples along x, y, z")->expected(3)->group(group);
+    // In decimal: CLI11 alone would read "010" as octal 8.
+    const CLI::Validator size = whole_number_in(0, std::numeric_limits<long long>::max());
+    sub->add_option("--dims", raw.dims, "samples along x, y, z")->expected(3)->transform(size)->group(group);
     sub->add_option("--type", raw.type, "sample type")->check(CLI::IsMember(kScalarNames))->group(group);
     sub->add_option("--endian", raw.endian, "byte order of the samples (default little)")
         ->check(CLI::IsMember({"little", "big"}))
         ->group(group);
-    sub->add_option("--offset", raw.offset, "bytes to skip before the first sample")->group(group);
+    sub->add_option("--offset", raw.offset, "bytes to skip before the first sample")->transform(size)->group(group);
     sub->add_option("--spacing", raw.spacing, "sample spacing SX SY SZ (default 1 1 1; a negative one runs its axis down from the origin)")->expected(3)->group(group);
     sub->add_option("--origin", raw.origin, "position of the first sample OX OY OZ (default 0 0 0)")
         ->expected(3)
@@ -180,6 +182,8 @@ Volume finite_samples(Volume v, const std::string& name, unsigned threads) {
 
 Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads, VolumeInfo* info_out) {
     if (arg == "-" && raw.any_given()) {  // raw samples piped in: the flags say what they are
+        if (::isatty(STDIN_FILENO))
+            throw BadInput(std::string(kStdinName) + " is a terminal: pipe or redirect raw samples into it");
         return finite_samples(about_file(kStdinName, [&] { return read_raw(std::cin, kStdinName, raw_layout(kStdinName, raw)); }),
                               kStdinName, threads);
     }

@@ -4,11 +4,29 @@
 #include "common.hpp"
 #include "core/exit_signals.hpp"
 
+#include <cerrno>
 #include <csignal>
+#include <cstdio>
+#include <cstring>
 #include <exception>
 #include <iostream>
 #include <new>
 #include <vector>
+
+namespace {
+
+// A command's exit code, unless what it printed on standard output (info's report, mesh's
+// --json) could not all be written (a full disk, a closed descriptor): then an error, as the
+// output is lost.
+int report_written(int code) {
+    std::cout.flush();
+    const bool failed = !std::cout || std::fflush(stdout) != 0 || std::ferror(stdout);
+    if (!failed) return code;
+    std::cerr << "voxmesh: error: cannot write standard output: " << std::strerror(errno) << "\n";
+    return code == voxmesh::cli::kExitOk ? voxmesh::cli::kExitBadInput : code;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
     using namespace voxmesh::cli;
@@ -16,6 +34,12 @@ int main(int argc, char** argv) {
     // of standard input (stdin_input.hpp lists it with the outputs' temporaries).
     for (const int sig : voxmesh::detail::kExitSignals)
         voxmesh::detail::handle_signal_unless_ignored(sig, voxmesh::detail::remove_partial_outputs_and_die);
+    // A file size limit (ulimit -f) reached while writing: the write fails with EFBIG, so the
+    // temporary is removed and the error named, instead of SIGXFSZ killing the process with
+    // the temporary (or the copy of standard input) left behind. (PoCL's LLVM installs a
+    // one-shot SIGXFSZ handler of its own, so without this the outcome depended on whether
+    // OpenCL had been loaded.)
+    std::signal(SIGXFSZ, SIG_IGN);
     pin_pocl_workers();
     CLI::App app{"voxmesh " VOXMESH_VERSION_STRING
                  ": marching cubes on every compute device (CPU threads, OpenCL), STL voxelization"};
@@ -35,7 +59,7 @@ int main(int argc, char** argv) {
 
     try {
         for (const Command& c : commands)
-            if (c.sub->parsed()) return c.run();
+            if (c.sub->parsed()) return report_written(c.run());
         std::cerr << "voxmesh: no subcommand given (see voxmesh --help)\n";
         return kExitBadInput;
     } catch (const BadInput& e) {

@@ -19,7 +19,9 @@ inline void refuse_empty_values(CLI::App& app) {
     for (CLI::App* sub : app.get_subcommands({})) refuse_empty_values(*sub);
 }
 
-// A whole number from lo to hi. CLI::Range said "Value abc not in range 2 to 4096" of text
+// A whole number from lo to hi, in decimal ("010" is 10, "0x10" is refused). Give it with
+// Option::transform, not check: check() marks a validator non-modifying, so the decimal text
+// below would not reach CLI11's conversion, which reads "010" as octal 8. CLI::Range said "Value abc not in range 2 to 4096" of text
 // that is no number, and of 100.5, which is in the range; checked on the text, as a negative
 // number given for an unsigned type wraps around. An empty value is left to
 // refuse_empty_values' message.
@@ -34,6 +36,9 @@ inline CLI::Validator whole_number_in(long long lo, long long hi) {
                 return "'" + text + "' is not a whole number";
             if (ec != std::errc() || value < lo || value > hi)
                 return text + " is out of range (" + std::to_string(lo) + ".." + std::to_string(hi) + ")";
+            // Handed on in plain decimal: CLI11 converts integers with base 0, so "010" would
+            // become 8 (octal) after being checked here as 10.
+            text = std::to_string(value);
             return std::string();
         },
         "INT in [" + std::to_string(lo) + " - " + std::to_string(hi) + "]");

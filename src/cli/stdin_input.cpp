@@ -148,13 +148,22 @@ namespace {
 // A new empty temporary in TMPDIR ending in `suffix`, listed in `listed` for the signal handler
 // before any signal can end the program (none is delivered between creating and listing it);
 // BadInput on failure.
+// TMPDIR, or /tmp where it is unset or empty (as mktemp(1) takes it). Not
+// fs::temp_directory_path(): it throws a filesystem_error (an "internal error", exit 1) for a
+// TMPDIR that is empty or names no directory, where mkostemps names the problem below.
+std::string temp_directory() {
+    const char* dir = std::getenv("TMPDIR");
+    return dir && *dir ? dir : "/tmp";
+}
+
 std::string make_temp_file(const std::string& suffix, voxmesh::detail::ListedTemporary& listed) {
     const voxmesh::detail::ExitSignalsHeld held;
-    std::string pattern = (fs::temp_directory_path() / "voxmesh-stdin-XXXXXX").string() + suffix;
+    const std::string dir = temp_directory();
+    std::string pattern = (fs::path(dir) / "voxmesh-stdin-XXXXXX").string() + suffix;
     const int fd = ::mkostemps(pattern.data(), static_cast<int>(suffix.size()), O_CLOEXEC);
     if (fd < 0)
-        throw BadInput(std::string("cannot make a temporary file for ") + kStdinName + " in '" +
-                       fs::temp_directory_path().string() + "': " + std::strerror(errno));
+        throw BadInput(std::string("cannot make a temporary file for ") + kStdinName + " in '" + dir +
+                       "' (TMPDIR): " + std::strerror(errno));
     ::close(fd);
     listed.list(pattern);
     return pattern;

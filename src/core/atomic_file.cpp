@@ -76,7 +76,8 @@ namespace {
 // (a signal while its name is listed would remove it: it is a leftover temporary too).
 // Only the first 200 bytes of a long name are used, so that the temporary's name stays within
 // NAME_MAX (255) where the target's does.
-int create_temp(const std::filesystem::path& dir, const std::string& filename, std::string& temp, ListedTemporary& listed) {
+int create_temp(const std::filesystem::path& dir, const std::string& filename, std::string& temp, ListedTemporary& listed,
+                mode_t mode) {
     static std::atomic<unsigned> counter{0};
     for (int attempt = 0; attempt < 1000; ++attempt) {
         // Built with append: gcc 12 gives a false -Wrestrict on operator+ chains here.
@@ -85,7 +86,7 @@ int create_temp(const std::filesystem::path& dir, const std::string& filename, s
         name.append(std::to_string(counter++));
         temp = (dir / name).string();
         listed.list(temp);
-        const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, mode);
         if (fd >= 0 || errno != EEXIST) return fd;
     }
     return -1;  // errno is EEXIST
@@ -169,7 +170,10 @@ void write_file_atomically(const std::string& path, const std::function<void(std
     std::string temp;
     // Listed while it exists; a signal after the rename unlinks a name that is gone.
     ListedTemporary listed;
-    const int fd = create_temp(dir, target.filename().string(), temp, listed);
+    // Created no more open than the file it replaces: made 0666 and narrowed by fchmod below, a
+    // private output's temporary was readable by anyone for a moment, long enough to open it
+    // and read the new contents through that descriptor.
+    const int fd = create_temp(dir, target.filename().string(), temp, listed, exists ? (existing.st_mode & 0777) : 0666);
     if (fd < 0) {
         const std::string reason = std::strerror(errno);
         if (exists)  // the file itself is writable: say what was refused

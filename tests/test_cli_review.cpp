@@ -1,0 +1,144 @@
+// The voxmesh tool where the review of its command line found it wanting: a file size limit,
+// a standard output that cannot be written, TMPDIR, and the default iso of samples near the
+// largest double.
+#include <catch2/catch.hpp>
+
+#ifdef VOXMESH_CLI_PATH
+
+#include "support/io_scratch.hpp"
+#include "support/mesh_checks.hpp"
+#include "support/run_program.hpp"
+
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <string>
+#include <sys/wait.h>
+#include <vector>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string quote(const std::string& s) { return vmtest::shell_quote(s); }
+
+std::string data_file(const std::string& name) {
+    const fs::path local = fs::path(VOXMESH_TEST_DATA) / name;
+    if (fs::exists(local)) return local.string();
+    return (fs::path("/work/shared/data") / name).string();
+}
+
+// `script` run by /bin/sh; its exit status, or -1 when it did not exit normally.
+int shell(const std::string& script) {
+    const int status = std::system(("sh -c " + quote(script)).c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::vector<std::string> stdin_copies(const std::string& tmpdir) {
+    std::vector<std::string> left;
+    for (const std::string& name : vmtest::directory_entries(tmpdir))
+        if (name.rfind("voxmesh-stdin-", 0) == 0) left.push_back(name);
+    return left;
+}
+
+}  // namespace
+
+// ulimit -f: SIGXFSZ killed the tool (exit 153, no message) with the temporary beside the
+// output, or the copy of standard input in TMPDIR, left behind; with PoCL loaded its LLVM's
+// one-shot handler let the write fail instead, so the outcome hung on the backend.
+TEST_CASE("cli: a file size limit fails the write, names it and leaves no temporary", "[cli]") {
+    iotest::Scratch s;
+    const std::string out = s.dir + "/out.stl";
+    iotest::write_file(out, "OLD");
+    const std::string voxmesh = quote(VOXMESH_CLI_PATH);
+    for (const char* backend : {"cpu", "auto"}) {
+        INFO(backend);
+        const int code = shell("ulimit -f 100; " + voxmesh + " mesh " + quote(data_file("headsq.nrrd")) +
+                               " --iso 499.5 --backend " + backend + " -o " + quote(out) + " > /dev/null 2> " +
+                               quote(s.dir + "/err.txt"));
+        CHECK(code == 2);
+        CHECK(iotest::read_file(s.dir + "/err.txt").find("File too large") != std::string::npos);
+        CHECK(iotest::read_file(out) == "OLD");
+        CHECK(vmtest::directory_entries(s.dir) == std::vector<std::string>{"err.txt", "out.stl"});
+    }
+    // The copy of standard input, over the limit.
+    const std::string tmp = s.dir + "/tmp";
+    fs::create_directories(tmp);
+    const int code = shell("ulimit -f 100; TMPDIR=" + quote(tmp) + " " + voxmesh + " info - < " +
+                           quote(data_file("mri_someones_anatomy.nii.gz")) + " > /dev/null 2> " + quote(s.dir + "/err.txt"));
+    CHECK(code == 2);
+    CHECK(iotest::read_file(s.dir + "/err.txt").find("File too large") != std::string::npos);
+    CHECK(stdin_copies(tmp).empty());
+}
+
+// info's report and mesh --json are the output: lost to a full disk they exited 0.
+TEST_CASE("cli: a report that cannot be written to standard output is an error", "[cli]") {
+    iotest::Scratch s;
+    const std::string voxmesh = quote(VOXMESH_CLI_PATH), head = quote(data_file("headsq.nrrd"));
+    const std::string err = " 2> " + quote(s.dir + "/err.txt");
+    CHECK(shell(voxmesh + " info " + head + " > /dev/full" + err) == 2);
+    CHECK(iotest::read_file(s.dir + "/err.txt").find("cannot write standard output") != std::string::npos);
+    CHECK(shell(voxmesh + " mesh " + head + " --iso 499.5 --json -o " + quote(s.dir + "/o.stl") + " > /dev/full" + err) == 2);
+    CHECK(shell(voxmesh + " info " + head + " > /dev/null" + err) == 0);
+}
+
+// fs::temp_directory_path() threw for these: "internal error: filesystem error", exit 1.
+TEST_CASE("cli: standard input with TMPDIR empty or missing", "[cli]") {
+    iotest::Scratch s;
+    const std::string args = "info - < " + quote(data_file("headsq.nrrd"));
+    const vmtest::ProgramResult empty = vmtest::run_program(VOXMESH_CLI_PATH, args, s.dir, "TMPDIR=");
+    CHECK(empty.code == 0);  // as unset: /tmp
+    CHECK(empty.out.find("64x64x93") != std::string::npos);
+    const vmtest::ProgramResult missing =
+        vmtest::run_program(VOXMESH_CLI_PATH, args, s.dir, "TMPDIR=" + quote(s.dir + "/missing"));
+    CHECK(missing.code == 2);
+    CHECK(missing.err.find("internal error") == std::string::npos);
+    CHECK(missing.err.find(s.dir + "/missing") != std::string::npos);
+}
+
+// 0.5 * (min + max) overflowed: iso inf, an empty mesh, exit 0, and "iso": inf in the JSON.
+TEST_CASE("cli: the default iso of samples near the largest double is finite", "[cli]") {
+    iotest::Scratch s;
+    std::vector<double> samples(27, 1.0e308);
+    samples[13] = 1.7e308;
+    std::string bytes(samples.size() * sizeof(double), '\0');
+    std::memcpy(bytes.data(), samples.data(), bytes.size());
+    const std::string raw = s.file("big.raw", bytes);
+    const vmtest::ProgramResult r = vmtest::run_program(
+        VOXMESH_CLI_PATH, "mesh " + quote(raw) + " --dims 3 3 3 --type f64 --json -o " + quote(s.dir + "/o.stl"), s.dir);
+    INFO(r.err);
+    CHECK(r.code == 0);
+    CHECK(r.out.find("\"iso\": 1.35e+308") != std::string::npos);
+    CHECK(r.out.find("\"triangles\": 8,") != std::string::npos);  // the octahedron around the centre sample
+    CHECK(r.err.find("no surface") == std::string::npos);
+}
+
+// CLI11 converts integers with base 0: --resolution 016 passed the check as 16 and ran as 14,
+// --dims 010 read 8 samples, --threads 010 ran 8, and 0x10 was 16 where --resolution refused it.
+TEST_CASE("cli: whole-number options are decimal", "[cli]") {
+    iotest::Scratch s;
+    const std::string model = quote(data_file("torus.stl")), out = quote(s.dir + "/o.nrrd");
+    const vmtest::ProgramResult padded =
+        vmtest::run_program(VOXMESH_CLI_PATH, "voxelize " + model + " -o " + out + " --resolution 016 --padding 02", s.dir);
+    CHECK(padded.code == 0);
+    CHECK(padded.out.find("20x20x10") != std::string::npos);  // as --resolution 16 --padding 2
+    const std::string raw = s.file("k.raw", std::string(1000, '\x01'));
+    const vmtest::ProgramResult dims =
+        vmtest::run_program(VOXMESH_CLI_PATH, "info " + quote(raw) + " --dims 010 010 010 --type u8", s.dir);
+    CHECK(dims.code == 0);
+    CHECK(dims.out.find("10x10x10") != std::string::npos);
+    const std::string head = quote(data_file("headsq.nrrd"));
+    const vmtest::ProgramResult threads = vmtest::run_program(
+        VOXMESH_CLI_PATH, "mesh " + head + " --backend cpu --threads 010 -o " + quote(s.dir + "/o.stl"), s.dir);
+    CHECK(threads.code == 0);
+    CHECK(threads.out.find("(10 threads") != std::string::npos);
+    for (const char* bad : {"--threads 0x10", "--threads -1", "--device 0x1", "--offset 0x10 --dims 2 2 2 --type u8"}) {
+        const vmtest::ProgramResult r =
+            vmtest::run_program(VOXMESH_CLI_PATH, "mesh " + quote(raw) + " -o " + quote(s.dir + "/o.stl") + " " + bad, s.dir);
+        INFO(bad << ": " << r.err);
+        CHECK(r.code == 2);
+        CHECK((r.err.find("is not a whole number") != std::string::npos || r.err.find("out of range") != std::string::npos));
+    }
+}
+
+#endif
