@@ -20,6 +20,7 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -138,16 +139,17 @@ int main(int argc, char** argv) {
         ->delimiter(',');
     auto* sizes_opt = app.add_option("--sizes", sizes, "cube sizes of built-in fields (default 64,128,256)")
                           ->delimiter(',')
-                          ->check(voxmesh::cli::whole_number_in(1, 65536));
+                          ->transform(voxmesh::cli::whole_number_in(1, 65536));
     auto* threads_opt =
         app.add_option("--threads", threads, "CPU thread counts (default 1 and all cores; 0 = all cores)")
             ->delimiter(',')
-            ->check(voxmesh::cli::whole_number_in(0, 65536));
+            ->transform(voxmesh::cli::whole_number_in(0, 65536));
     app.add_option("--backends", backends, "cpu, opencl, hybrid, auto (comma list)")->delimiter(',');
     app.add_option("--devices", devices, "OpenCL devices: all (together), I,J (each alone) or I+J (together)");
-    app.add_option("--repeat", settings.repeat, "timed runs per combination (median/min/max)")->check(voxmesh::cli::whole_number_in(1, 1000));
-    app.add_option("--warmup", settings.warmup, "untimed runs first")->check(voxmesh::cli::whole_number_in(0, 100));
-    app.add_option("--seed", seed, "seed of the blobs and ct fields");
+    app.add_option("--repeat", settings.repeat, "timed runs per combination (median/min/max)")->transform(voxmesh::cli::whole_number_in(1, 1000));
+    app.add_option("--warmup", settings.warmup, "untimed runs first")->transform(voxmesh::cli::whole_number_in(0, 100));
+    app.add_option("--seed", seed, "seed of the blobs and ct fields")
+        ->transform(voxmesh::cli::whole_number_in(0, std::numeric_limits<std::uint32_t>::max()));
     app.add_flag("--no-normals", no_normals, "mesh without normals (default: normals on)");
     app.add_flag("--reuse-mesh", settings.reuse_mesh,
                  "mesh every run into one kept Mesh with extract_into() (no fresh output pages), not extract()");
@@ -174,7 +176,7 @@ int main(int argc, char** argv) {
                  "time analyze_topology (1 worker, all), keep_largest_components, write_mesh (stl, ply, obj), "
                  "vertex_edges, triangle_cells and edge_cell_ranges beside the extract of each "
                  "--field/--type/--sizes volume (default sizes 256,512)");
-    app.add_option("--dabs", dabs, "brush dabs of the --sculpt stroke path")->check(voxmesh::cli::whole_number_in(1, 100000));
+    app.add_option("--dabs", dabs, "brush dabs of the --sculpt stroke path")->transform(voxmesh::cli::whole_number_in(1, 100000));
     app.add_flag("--csv", csv, "CSV output");
     app.add_flag("--json", json, "one JSON object per line");
     std::string save_path;

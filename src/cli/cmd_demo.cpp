@@ -127,6 +127,12 @@ int run_demo() {
         const Comparison c = compare(all.mesh, cl.mesh);
         std::printf("  opencl vs cpu: %s; opencl is %.2fx the speed of cpu on %u threads\n", comparison_text(c).c_str(),
                     all.best_s / std::max(cl.best_s, 1e-9), hw);
+        // The canonical mesh: the same index buffer; positions within a few ulps (a device may
+        // round its division differently), far under a thousandth of a voxel here.
+        if (!c.same_indices || c.max_position_diff > 1e-3) {
+            std::fprintf(stderr, "voxmesh: internal error: OpenCL and the CPU engine gave different meshes\n");
+            return kExitInternal;
+        }
     } catch (const Error& e) {
         std::printf("  opencl: unavailable: %s\n", e.what());
     }

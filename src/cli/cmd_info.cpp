@@ -98,7 +98,7 @@ int run_info(const InfoArgs& a) {
     const std::string& path = input.path();
     const bool is_raw = is_raw_path(path);
     if (!is_raw && a.raw.any_given())
-        throw BadInput("'" + input.display() + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
+        throw BadInput("'" + input.display() + "': --dims/--type/--endian/--offset/--spacing/--origin apply only to .raw input");
     if (is_model_path(path)) return run_model_info(input);
     const RawLayout layout = is_raw ? raw_layout(input.display(), a.raw) : RawLayout{};
     const VolumeInfo info = input.read([&] { return is_raw ? read_raw_info(path, layout) : read_volume_info(path); });

@@ -90,6 +90,7 @@ int run_mesh(const MeshArgs& a) {
     }
     if (a.iso_option->count() && !std::isfinite(a.iso))
         throw BadInput("--iso is " + format_double(a.iso) + "; give a finite value");
+    refuse_device_on_cpu(a.backend, a.device);
     VolumeInfo info;
     const Volume volume = load_volume(a.input, a.raw, a.threads, &info);
     // Named here: extract() would say the same without the file.
@@ -169,7 +170,8 @@ Command add_mesh(CLI::App& app) {
         ->check(CLI::IsMember({"auto", "cpu", "opencl", "hybrid"}));
     sub->add_option("--threads", a->threads, "CPU worker threads (default: every CPU this process may use)")
         ->transform(whole_number_in(0, std::numeric_limits<unsigned>::max()));
-    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->transform(whole_number_in(0, std::numeric_limits<int>::max()));
+    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")
+        ->transform(whole_number_in(0, std::numeric_limits<int>::max()));
     sub->add_flag("--no-normals", a->no_normals, "do not compute vertex normals");
     sub->add_flag("--inside-below", a->inside_below, "values below iso are inside (SDFs): flips winding and normals");
     add_largest_option(sub, a->largest, "drops the specks of noise around a CT's surface");

@@ -45,6 +45,7 @@ int run_sculpt(const SculptArgs& a) {
         dabs = strokes.read([&] { return read_stroke_script(strokes.path()); });
     }
 
+    refuse_device_on_cpu(a.backend, a.device);
     SculptOptions options;
     options.threads = a.threads;
     options.backend = parse_backend(a.backend);
@@ -122,7 +123,8 @@ Command add_sculpt(CLI::App& app) {
                     "where each update re-meshes: cpu (threads), opencl (a device; the CPU with a warning when there "
                     "is none) or auto (a GPU when there is one); default cpu")
         ->check(CLI::IsMember({"auto", "cpu", "opencl"}));
-    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")->transform(whole_number_in(0, std::numeric_limits<int>::max()));
+    sub->add_option("--device", a->device, "OpenCL device index (see voxmesh devices)")
+        ->transform(whole_number_in(0, std::numeric_limits<int>::max()));
     sub->add_option("--threads", a->threads, "CPU threads (default: every CPU this process may use)")
         ->transform(whole_number_in(0, std::numeric_limits<unsigned>::max()));
     sub->add_flag("--frames", a->frames, "print every frame's edit and update time");

@@ -32,13 +32,11 @@ ScalarType parse_scalar(const std::string& name) {
 
 }  // namespace
 
-const CLI::Validator kNonNegative(
-    [](std::string& text) {
-        double value = 0;
-        if (CLI::detail::lexical_cast(text, value) && value >= 0) return std::string();
-        return "'" + text + "' is not a number 0 or more";
-    },
-    "NONNEGATIVE", "NONNEGATIVE");
+void refuse_device_on_cpu(const std::string& backend, int device) {
+    if (backend == "cpu" && device >= 0)
+        throw BadInput("--device " + std::to_string(device) +
+                       " picks an OpenCL device, which --backend cpu does not use");
+}
 
 void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& why) {
     sub->add_option("--largest", largest, "write only the N connected pieces with the most triangles (" + why + ")")
@@ -191,7 +189,7 @@ Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads
     const std::string& path = input.path();
     const bool is_raw = is_raw_path(path);
     if (!is_raw && raw.any_given())
-        throw BadInput("'" + input.display() + "': --dims/--type/--offset/--spacing/--origin apply only to .raw input");
+        throw BadInput("'" + input.display() + "': --dims/--type/--endian/--offset/--spacing/--origin apply only to .raw input");
     VolumeInfo info;
     Volume v = input.read([&] { return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path, info); });
     // A Volume has no orientation: say so when the file's direction matrix is thrown away,

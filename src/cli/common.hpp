@@ -47,10 +47,6 @@ Command add_devices(CLI::App& app);
 Command add_demo(CLI::App& app);
 Command add_sculpt(CLI::App& app);
 
-// A number 0 or more, refused in a short message (CLI11's own range check prints the whole
-// range up to DBL_MAX).
-extern const CLI::Validator kNonNegative;
-
 // Before any OpenCL call: pin PoCL's worker threads where that is safe (pocl_threads.cpp).
 void pin_pocl_workers();
 
@@ -76,10 +72,12 @@ auto about_file(const std::string& path, F&& f) -> decltype(f()) {
 struct RawFlags {
     std::vector<std::size_t> dims;
     std::string type;
-    std::string endian = "little";
+    std::string endian;  // "" (not given: little), "little" or "big"
     std::size_t offset = 0;
     std::vector<double> spacing, origin;
-    bool any_given() const { return !dims.empty() || !type.empty() || offset != 0 || !spacing.empty() || !origin.empty(); }
+    bool any_given() const {
+        return !dims.empty() || !type.empty() || !endian.empty() || offset != 0 || !spacing.empty() || !origin.empty();
+    }
 };
 void add_raw_flags(CLI::App* sub, RawFlags& raw);
 // --largest N (N >= 1): write only the N connected pieces with the most triangles; `why` ends
@@ -87,6 +85,9 @@ void add_raw_flags(CLI::App* sub, RawFlags& raw);
 void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& why);
 
 bool is_raw_path(const std::string& path);
+
+// --device picks an OpenCL device: given with --backend cpu it would be ignored, so refused.
+void refuse_device_on_cpu(const std::string& backend, int device);
 std::string lower_extension(const std::string& path);
 
 // A readable, non-empty regular file, or BadInput naming it.

@@ -19,12 +19,12 @@ inline void refuse_empty_values(CLI::App& app) {
     for (CLI::App* sub : app.get_subcommands({})) refuse_empty_values(*sub);
 }
 
-// A whole number from lo to hi, in decimal ("010" is 10, "0x10" is refused). Give it with
-// Option::transform, not check: check() marks a validator non-modifying, so the decimal text
-// below would not reach CLI11's conversion, which reads "010" as octal 8. CLI::Range said "Value abc not in range 2 to 4096" of text
-// that is no number, and of 100.5, which is in the range; checked on the text, as a negative
-// number given for an unsigned type wraps around. An empty value is left to
-// refuse_empty_values' message.
+// A whole number from lo to hi, in decimal ("010" is 10, "0x10" is refused), checked on the
+// text, as a negative number given for an unsigned type wraps around (CLI::Range said "Value
+// abc not in range 2 to 4096" of text that is no number, and of 100.5, which is in the range).
+// Give it with Option::transform, not check: check() marks a validator non-modifying, so the
+// decimal text it hands on would not reach CLI11's conversion, which reads "010" as octal 8.
+// An empty value is left to refuse_empty_values' message.
 inline CLI::Validator whole_number_in(long long lo, long long hi) {
     return CLI::Validator(
         [lo, hi](std::string& text) {

@@ -145,9 +145,6 @@ std::string sniff_format(const std::string& head, std::size_t size, InputKind ki
 
 namespace {
 
-// A new empty temporary in TMPDIR ending in `suffix`, listed in `listed` for the signal handler
-// before any signal can end the program (none is delivered between creating and listing it);
-// BadInput on failure.
 // TMPDIR, or /tmp where it is unset or empty (as mktemp(1) takes it). Not
 // fs::temp_directory_path(): it throws a filesystem_error (an "internal error", exit 1) for a
 // TMPDIR that is empty or names no directory, where mkostemps names the problem below.
@@ -156,6 +153,9 @@ std::string temp_directory() {
     return dir && *dir ? dir : "/tmp";
 }
 
+// A new empty temporary in TMPDIR ending in `suffix`, listed in `listed` for the signal handler
+// before any signal can end the program (none is delivered between creating and listing it);
+// BadInput on failure.
 std::string make_temp_file(const std::string& suffix, voxmesh::detail::ListedTemporary& listed) {
     const voxmesh::detail::ExitSignalsHeld held;
     const std::string dir = temp_directory();

@@ -1,6 +1,6 @@
-// The voxmesh tool where the review of its command line found it wanting: a file size limit,
-// a standard output that cannot be written, TMPDIR, and the default iso of samples near the
-// largest double.
+// The voxmesh tool at the edges a review of its command line found wanting: a file size limit,
+// a standard output that cannot be written, TMPDIR, the default iso of samples near the
+// largest double, and whole numbers written with leading zeros.
 #include <catch2/catch.hpp>
 
 #ifdef VOXMESH_CLI_PATH
@@ -22,11 +22,7 @@ namespace {
 
 std::string quote(const std::string& s) { return vmtest::shell_quote(s); }
 
-std::string data_file(const std::string& name) {
-    const fs::path local = fs::path(VOXMESH_TEST_DATA) / name;
-    if (fs::exists(local)) return local.string();
-    return (fs::path("/work/shared/data") / name).string();
-}
+std::string data_file(const std::string& name) { return (fs::path(VOXMESH_TEST_DATA) / name).string(); }
 
 // `script` run by /bin/sh; its exit status, or -1 when it did not exit normally.
 int shell(const std::string& script) {
@@ -139,6 +135,36 @@ TEST_CASE("cli: whole-number options are decimal", "[cli]") {
         CHECK(r.code == 2);
         CHECK((r.err.find("is not a whole number") != std::string::npos || r.err.find("out of range") != std::string::npos));
     }
+}
+
+
+// Options that would have been ignored: --endian for a file with a header, --device where no
+// OpenCL device is used.
+TEST_CASE("cli: --endian without .raw input and --device with --backend cpu are refused", "[cli]") {
+    iotest::Scratch s;
+    const std::string head = quote(data_file("headsq.nrrd")), out = quote(s.dir + "/o.stl");
+    const vmtest::ProgramResult endian =
+        vmtest::run_program(VOXMESH_CLI_PATH, "mesh " + head + " --iso 499.5 --endian big -o " + out, s.dir);
+    CHECK(endian.code == 2);
+    CHECK(endian.err.find("--endian") != std::string::npos);
+    CHECK(endian.err.find("apply only to .raw input") != std::string::npos);
+    const vmtest::ProgramResult info = vmtest::run_program(VOXMESH_CLI_PATH, "info " + head + " --endian little", s.dir);
+    CHECK(info.code == 2);
+    for (const std::string& command :
+         {"mesh " + head + " --iso 499.5 --backend cpu --device 0 -o " + out,
+          "sculpt " + quote(data_file("torus.stl")) + " --resolution 16 --device 0 -o " + out}) {
+        const vmtest::ProgramResult r = vmtest::run_program(VOXMESH_CLI_PATH, command, s.dir);
+        INFO(command << ": " << r.err);
+        CHECK(r.code == 2);
+        CHECK(r.err.find("--device 0 picks an OpenCL device, which --backend cpu does not use") != std::string::npos);
+    }
+    CHECK(!fs::exists(s.dir + "/o.stl"));
+    // Raw input still takes --endian.
+    const std::string raw = s.file("k.raw", std::string(16, '\x01'));
+    const vmtest::ProgramResult big =
+        vmtest::run_program(VOXMESH_CLI_PATH, "info " + quote(raw) + " --dims 2 2 2 --type u16 --endian big", s.dir);
+    CHECK(big.code == 0);
+    CHECK(big.out.find("big endian") != std::string::npos);
 }
 
 #endif
