@@ -13,7 +13,9 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
+#include <fcntl.h>
 #include <sys/wait.h>
+#include <unistd.h>
 #include <vector>
 
 namespace fs = std::filesystem;
@@ -165,6 +167,56 @@ TEST_CASE("cli: --endian without .raw input and --device with --backend cpu are 
         vmtest::run_program(VOXMESH_CLI_PATH, "info " + quote(raw) + " --dims 2 2 2 --type u16 --endian big", s.dir);
     CHECK(big.code == 0);
     CHECK(big.out.find("big endian") != std::string::npos);
+}
+
+
+// A directory the output cannot be made in was found only when the mesh was written, after
+// all the work (minutes for a large volume); now before the input is read.
+TEST_CASE("cli: an output in a directory it may not write is refused before the work", "[cli]") {
+    iotest::Scratch s;
+    fs::permissions(s.dir, fs::perms::all, fs::perm_options::add);  // nobody may reach the input
+    const std::string input = s.dir + "/head.nrrd";
+    fs::copy_file(data_file("headsq.nrrd"), input);
+    fs::permissions(input, fs::perms::others_read, fs::perm_options::add);
+    const std::string ro = s.dir + "/ro";
+    fs::create_directory(ro);
+    fs::permissions(ro, fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                            fs::perms::others_read | fs::perms::others_exec);
+    const std::string out = ro + "/o.stl", err = s.dir + "/err.txt";
+    int code = -1;
+    if (::geteuid() == 0) {
+        // Root writes anything: the tool runs as nobody, for whom ro is read-only.
+        const int err_fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+        REQUIRE(err_fd >= 0);
+        const pid_t child = ::fork();
+        REQUIRE(child >= 0);
+        if (child == 0) {
+            if (::setgid(65534) != 0 || ::setuid(65534) != 0 || ::dup2(err_fd, STDERR_FILENO) < 0) ::_exit(99);
+            ::execl(VOXMESH_CLI_PATH, "voxmesh", "mesh", input.c_str(), "--iso", "499.5", "-o", out.c_str(),
+                    static_cast<char*>(nullptr));
+            ::_exit(98);
+        }
+        ::close(err_fd);
+        int status = 0;
+        REQUIRE(::waitpid(child, &status, 0) == child);
+        REQUIRE(WIFEXITED(status));
+        code = WEXITSTATUS(status);
+        if (code == 99 || code == 98) {
+            WARN("cannot run the tool as nobody here");
+            return;
+        }
+    } else {
+        fs::permissions(ro, fs::perms::owner_write, fs::perm_options::remove);
+        code = shell(quote(VOXMESH_CLI_PATH) + " mesh " + quote(input) + " --iso 499.5 -o " + quote(out) + " 2> " +
+                     quote(err));
+        fs::permissions(ro, fs::perms::owner_write, fs::perm_options::add);
+    }
+    CHECK(code == 2);
+    const std::string message = iotest::read_file(err);
+    INFO(message);
+    // check_writable's words: the write itself says "cannot create a temporary file".
+    CHECK(message.find("'" + out + "': cannot create a file in '" + ro + "' (Permission denied)") != std::string::npos);
+    CHECK(vmtest::directory_entries(ro).empty());
 }
 
 #endif

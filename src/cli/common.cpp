@@ -1,6 +1,7 @@
 #include "common.hpp"
 #include "stdin_input.hpp"
 
+#include "core/atomic_file.hpp"
 #include "core/write_to_stream.hpp"
 
 #include <algorithm>
@@ -110,6 +111,12 @@ void check_output_path(const std::string& path, const std::vector<std::string>& 
     if (dir.empty()) dir = ".";
     if (!fs::is_directory(dir, ec))
         throw BadInput("'" + path + "': output directory '" + dir.string() + "' does not exist");
+    // Refused now rather than after the work (a read-only directory or file).
+    try {
+        voxmesh::detail::check_writable(path);
+    } catch (const Error& e) {
+        throw BadInput(e.what());
+    }
 }
 
 std::ostream& report_stream(const std::string& output) { return is_stdout(output) ? std::cerr : std::cout; }

@@ -145,7 +145,18 @@ void write_into_special_file(const std::string& path, const std::string& destina
 
 }  // namespace
 
-void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
+namespace {
+
+// Where a write of `path` goes, and what is there now.
+struct Destination {
+    std::string path;               // `path` with its symbolic links followed
+    std::filesystem::path dir;      // where the temporary is made
+    bool exists = false;
+    struct stat existing {};
+};
+
+// The checks a write makes before it creates anything; throws Error naming `path`.
+Destination destination_of(const std::string& path) {
     // The kernel follows a link first, so that its own refusals hold as for `>`: with
     // fs.protected_symlinks, a link in a sticky world-writable directory (/tmp) owned by another
     // user is not followed, and resolving it here would have replaced the file it names.
@@ -155,17 +166,36 @@ void write_file_atomically(const std::string& path, const std::function<void(std
         else if (errno == EACCES) throw Error("cannot write '" + path + "': " + std::strerror(errno) +
                                               " (the system refuses to follow this symbolic link)");
     }
-    const std::string destination = followed_path(path);
-    const std::filesystem::path target(destination);
-    const std::filesystem::path dir = target_directory(destination);
-
-    struct stat existing {};
-    const bool exists = ::stat(destination.c_str(), &existing) == 0;
-    if (exists && !S_ISREG(existing.st_mode)) return write_into_special_file(path, destination, write);
+    Destination d;
+    d.path = followed_path(path);
+    d.dir = target_directory(d.path);
+    d.exists = ::stat(d.path.c_str(), &d.existing) == 0;
     // A file this process may not write is refused, as `>` refuses it, though the directory
     // would let a rename replace it.
-    if (exists && ::faccessat(AT_FDCWD, destination.c_str(), W_OK, AT_EACCESS) != 0)
+    if (d.exists && S_ISREG(d.existing.st_mode) && ::faccessat(AT_FDCWD, d.path.c_str(), W_OK, AT_EACCESS) != 0)
         throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    return d;
+}
+
+}  // namespace
+
+void check_writable(const std::string& path) {
+    const Destination d = destination_of(path);
+    if (d.exists && !S_ISREG(d.existing.st_mode)) return;  // written into, not replaced: opened then
+    if (::faccessat(AT_FDCWD, d.dir.c_str(), W_OK | X_OK, AT_EACCESS) != 0)
+        throw Error("cannot write '" + path + "': cannot create a file in '" + d.dir.string() + "' (" +
+                    std::strerror(errno) + ")" +
+                    (d.exists ? "; outputs are written beside their target and renamed over it" : ""));
+}
+
+void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write) {
+    const Destination d = destination_of(path);
+    const std::string& destination = d.path;
+    const std::filesystem::path target(destination);
+    const std::filesystem::path& dir = d.dir;
+    const struct stat& existing = d.existing;
+    const bool exists = d.exists;
+    if (exists && !S_ISREG(existing.st_mode)) return write_into_special_file(path, destination, write);
 
     std::string temp;
     // Listed while it exists; a signal after the rename unlinks a name that is gone.

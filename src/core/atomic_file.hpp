@@ -17,6 +17,12 @@ namespace voxmesh::detail {
 // less the umask.
 void write_file_atomically(const std::string& path, const std::function<void(std::FILE*)>& write);
 
+// Throws the Error write_file_atomically(path, ...) would throw before writing anything: a
+// directory or a missing one, a file or a symbolic link this process may not write through,
+// a directory it may not create the temporary in. For a program to refuse an output before
+// its work, not after.
+void check_writable(const std::string& path);
+
 // The directory a write of `path` puts its temporary in: `path`'s own, or "."; throws Error
 // (naming `path`) when `path` is a directory or that directory does not exist.
 std::filesystem::path target_directory(const std::string& path);
