@@ -244,6 +244,14 @@ template <class T>
             sums.vertices += info[j].vertices;
             sums.triangles += info[j].triangles;
             sums.cost += 24.0 * info[j].vertices + 4.0 * info[j].triangles + (info[j].empty() ? 0 : nx / 4.0);
+            if (!info[j].empty()) {
+                const WordSpan row = row_words(info[j]);
+                sums.widest_words = std::max(sums.widest_words, row.end - row.begin);
+            }
+            if (j + 1 < ny && cell_row_active(info[j], info[j + 1])) {
+                const WordSpan cells = cell_row_words(info[j], info[j + 1]);
+                sums.widest_words = std::max(sums.widest_words, cells.end - cells.begin);
+            }
         }
         std::swap(here, up);
     }
@@ -571,6 +579,11 @@ double allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangl
     return sizing.replaced() ? seconds_since(t0) : 0;
 }
 
+std::size_t spare_row_samples(const CpuChunkPlan& plan, const VolumeView& volume) {
+    if (scalar_size(volume.type) != 1 || plan.uniform || (plan.vertices == 0 && plan.triangles == 0)) return 0;
+    return std::min(volume.dims[0], 64 * plan.widest_words);
+}
+
 void trim_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles) {
     mesh.indices.resize(static_cast<std::size_t>(3 * triangles));
     mesh.positions.resize(static_cast<std::size_t>(3 * vertices));
@@ -669,6 +682,7 @@ CpuChunkPlan cpu_classify(const VolumeView& volume, const Options& options, ZRan
     const std::size_t owned_planes = range.end - range.begin;
     for (std::size_t p = 0; p < plan.meta_planes; ++p) {
         if (p == owned_planes) plan.vertices = vertices;
+        if (p < owned_planes) plan.widest_words = std::max(plan.widest_words, plan.planes[p].widest_words);
         plan.planes[p].first_vertex = vertices;
         plan.planes[p].first_triangle = triangles;
         vertices += plan.planes[p].vertices;
@@ -727,7 +741,8 @@ Mesh cpu_extract(const VolumeView& volume, const Options& options, Stats& stats,
     // Output allocation counts toward generate: it is the first write of the output.
     const auto t = Clock::now();
     Mesh mesh = std::move(storage);
-    const double grown = allocate_output(mesh, plan.vertices, plan.triangles, options.normals, threads, volume.dims[0]);
+    const double grown = allocate_output(mesh, plan.vertices, plan.triangles, options.normals, threads,
+                                        spare_row_samples(plan, volume));
     if (grown_sizing_s) *grown_sizing_s = grown;
 
     cpu_generate(plan, volume, options, threads,

@@ -43,6 +43,9 @@ struct PlaneCounts {
     std::uint64_t vertices = 0, triangles = 0;
     std::uint64_t first_vertex = 0, first_triangle = 0;
     double cost = 0;  // generate's work on the plane, an estimate to balance slabs by
+    // The most words generate walks in one of the plane's rows or cell rows (row_words,
+    // cell_row_words): what bounds a re-read row's writes past classify's counts.
+    std::size_t widest_words = 0;
 };
 
 // Classify + scan result for one z-range: per-row counts, per-plane sums and their prefix sums.
@@ -64,6 +67,7 @@ struct CpuChunkPlan {
     std::vector<PlaneCounts> planes;         // meta_planes
     std::uint64_t vertices = 0;   // owned by the range (excludes plane `end`)
     std::uint64_t triangles = 0;
+    std::size_t widest_words = 0;  // the largest of the owned planes' widest_words
     bool uniform = false;         // no sample can cross iso: nothing to generate
     double classify_seconds = 0, scan_seconds = 0;
 };
@@ -84,16 +88,22 @@ void cpu_generate(const CpuChunkPlan& plan, const VolumeView& volume, const Opti
 // Sizes the mesh's arrays (normals only when asked for). std::vector zero-fills on resize,
 // and for a large mesh that first touch of every page is a pass of its own: the arrays are
 // filled on up to `threads` workers at once.
-// Each array gets the room of one row past the counts (`row_samples`: the volume's nx; 0: none):
-// generate checks a re-read 8-bit row against classify's counts only once it is written, so
-// a volume changed during the call may write one row's vertices (3 a sample) and one cell
-// row's triangles (5 a cell) more before it throws. trim_output cuts the arrays to the counts.
+// Each array gets the room of `row_samples` samples past the counts (0: none): generate checks
+// a re-read 8-bit row against classify's counts only once it is written, so a volume changed
+// during the call may write one row's vertices (3 a sample) and one cell row's triangles (5 a
+// cell) more before it throws; only within the words classify found the row's crossings in
+// (spare_row_samples). trim_output cuts the arrays to the counts.
 // Returns the seconds it took where some array's storage was too small and was replaced (a new
 // Mesh, or a reused one whose surface grew), else 0: Hybrid leaves that out of the time it
 // compares its modes by, since it comes once where a reused mesh grows.
 double allocate_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles, bool normals, unsigned threads,
                        std::size_t row_samples);
 void trim_output(Mesh& mesh, std::uint64_t vertices, std::uint64_t triangles);
+// The spare room allocate_output needs after the CPU engine's plan: none where generate reads
+// no row again (samples of 2 bytes or more use classify's bits; nothing to generate), else the
+// widest stretch of a row generate walks, not the whole row (a 2^24-sample row of an empty u8
+// volume made 2.1 GB of spare room).
+std::size_t spare_row_samples(const CpuChunkPlan& plan, const VolumeView& volume);
 
 // Whole-volume extraction written straight into the mesh (no merge copy).
 // `storage`: a mesh whose arrays' capacity the result reuses (extract_into).
