@@ -408,3 +408,14 @@ TEST_CASE("long rows get no row-sized spare room in the mesh's arrays", "[core]"
         CHECK(mesh.positions.capacity() <= mesh.positions.size() + 3 * 3 * 64 * 4);
     }
 }
+
+// Dims whose bytes fit size_t but no memory: the list queries' plane scratch overflowed a
+// vector's max_size() and threw std::length_error, not a voxmesh::Error.
+TEST_CASE("list queries refuse dims too large for their scratch with an Error", "[core]") {
+    static const double samples[8] = {};
+    const voxmesh::VolumeView volume{samples, voxmesh::ScalarType::U8, {2, std::size_t{1} << 61, 2}};
+    CHECK_THROWS_AS(voxmesh::vertex_edges(volume, 0.5), voxmesh::OutOfMemoryError);
+    CHECK_THROWS_AS(voxmesh::triangle_cells(volume, 0.5), voxmesh::OutOfMemoryError);
+    CHECK_THROWS_AS(voxmesh::vertex_edges_into(volume, 0.5, {}), voxmesh::OutOfMemoryError);
+    CHECK_THROWS_AS(voxmesh::extract(volume, cpu_options(0.5)), voxmesh::Error);
+}

@@ -17,6 +17,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <new>
 #include <span>
 #include <string>
 #include <vector>
@@ -83,6 +84,9 @@ std::size_t list_by_slabs(const VolumeView& volume, double iso, std::size_t plan
     }
     const RowPacker<T> pack = row_packer<T>();
     const std::size_t plane_words = words_per_row(volume.dims[0]) * volume.dims[1];
+    // Two planes' bits per worker: dims no memory can hold (2 x 2^61 x 2 u8 fits size_t) asked
+    // a vector for more than max_size(), and its std::length_error escaped as no Error.
+    if (plane_words > std::vector<Word>().max_size() / 2) throw std::bad_alloc();
     // Several slabs per thread, so that a thread done early takes another.
     const unsigned slabs = slab_count(threads, planes, 4);
     std::vector<ChunkedList> found(slabs);
