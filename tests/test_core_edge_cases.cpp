@@ -401,9 +401,16 @@ TEST_CASE("long rows get no row-sized spare room in the mesh's arrays", "[core]"
     std::vector<std::uint8_t> samples(nx * 4, 0);
     for (std::size_t r = 0; r < 4; ++r) samples[r * nx + nx - 100] = 10;
     const voxmesh::VolumeView volume{samples.data(), voxmesh::ScalarType::U8, {nx, 2, 2}};
+    vmtest::RefOptions ro;
+    ro.iso = 5;
+    const vmtest::RefMesh ref = vmtest::reference_mc(vmtest::to_doubles(samples), {nx, 2, 2}, ro);
+    REQUIRE(ref.triangle_count() > 0);
     for (unsigned threads : {1u, 2u, 4u}) {
         const voxmesh::Mesh mesh = voxmesh::extract(volume, cpu_options(5, threads));
-        CHECK(mesh.triangle_count() > 0);
+        const vmtest::Comparison c = vmtest::compare_with_reference(mesh, ref);
+        INFO(c.first_problem);
+        CHECK(c.same_indices);
+        CHECK(c.max_position_error < 1e-5);
         CHECK(mesh.indices.capacity() <= mesh.indices.size() + 3 * 5 * 64 * 4);
         CHECK(mesh.positions.capacity() <= mesh.positions.size() + 3 * 3 * 64 * 4);
     }
