@@ -219,4 +219,18 @@ TEST_CASE("cli: an output in a directory it may not write is refused before the 
     CHECK(vmtest::directory_entries(ro).empty());
 }
 
+
+// JSON text is UTF-8: a file name's bytes that are not (another encoding) made json.load fail.
+TEST_CASE("cli: --json names a file whose name is not UTF-8 in valid UTF-8", "[cli]") {
+    iotest::Scratch s;
+    // 0xff and a lone continuation byte are no UTF-8; e-acute (C3 A9) and a 4-byte emoji are.
+    const std::string name = "h\xff\x80\xc3\xa9\xf0\x9f\x99\x82.nrrd";
+    fs::copy_file(data_file("headsq.nrrd"), s.dir + "/" + name);
+    const vmtest::ProgramResult r = vmtest::run_program(
+        VOXMESH_CLI_PATH, "mesh " + quote(s.dir + "/" + name) + " --iso 499.5 --json -o " + quote(s.dir + "/o.stl"), s.dir);
+    INFO(r.err);
+    CHECK(r.code == 0);
+    CHECK(r.out.find("h\\ufffd\\ufffd\xc3\xa9\xf0\x9f\x99\x82.nrrd\"") != std::string::npos);
+}
+
 #endif

@@ -235,9 +235,34 @@ std::string format_ms(double seconds) {
     return buf;
 }
 
+namespace {
+
+// The length of the well-formed UTF-8 sequence at s[i] (RFC 3629: no overlong forms, no
+// surrogates, nothing past U+10FFFF), or 0 where there is none.
+std::size_t utf8_sequence(const std::string& s, std::size_t i) {
+    const auto byte = [&](std::size_t k) { return k < s.size() ? static_cast<unsigned char>(s[k]) : 0u; };
+    const unsigned b0 = byte(i);
+    const auto tail = [&](std::size_t k) { return (byte(k) & 0xC0) == 0x80; };
+    if (b0 >= 0xC2 && b0 <= 0xDF) return tail(i + 1) ? 2 : 0;
+    if (b0 >= 0xE0 && b0 <= 0xEF) {
+        const unsigned b1 = byte(i + 1);
+        const bool ok = (b0 == 0xE0 ? b1 >= 0xA0 : true) && (b0 == 0xED ? b1 < 0xA0 : true);
+        return ok && tail(i + 1) && tail(i + 2) ? 3 : 0;
+    }
+    if (b0 >= 0xF0 && b0 <= 0xF4) {
+        const unsigned b1 = byte(i + 1);
+        const bool ok = (b0 == 0xF0 ? b1 >= 0x90 : true) && (b0 == 0xF4 ? b1 < 0x90 : true);
+        return ok && tail(i + 1) && tail(i + 2) && tail(i + 3) ? 4 : 0;
+    }
+    return 0;
+}
+
+}  // namespace
+
 std::string json_string(const std::string& s) {
     std::string out = "\"";
-    for (unsigned char c : s) {
+    for (std::size_t i = 0; i < s.size(); ++i) {
+        const auto c = static_cast<unsigned char>(s[i]);
         switch (c) {
             case '"': out += "\\\""; break;
             case '\\': out += "\\\\"; break;
@@ -249,8 +274,15 @@ std::string json_string(const std::string& s) {
                     char buf[8];
                     std::snprintf(buf, sizeof buf, "\\u%04x", c);
                     out += buf;
-                } else {
+                } else if (c < 0x80) {
                     out += char(c);
+                } else if (const std::size_t n = utf8_sequence(s, i)) {
+                    out.append(s, i, n);
+                    i += n - 1;
+                } else {
+                    // A byte of no UTF-8 sequence (a file name in another encoding): JSON text
+                    // must be UTF-8, so it becomes U+FFFD, as Python's errors="replace" reads it.
+                    out += "\\ufffd";
                 }
         }
     }
