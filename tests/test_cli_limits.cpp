@@ -233,4 +233,23 @@ TEST_CASE("cli: --json names a file whose name is not UTF-8 in valid UTF-8", "[c
     CHECK(r.out.find("h\\ufffd\\ufffd\xc3\xa9\xf0\x9f\x99\x82.nrrd\"") != std::string::npos);
 }
 
+
+// A gzip-compressed file on standard input was taken for a .nii.gz, and a .stl.gz or .nrrd.gz
+// refused as "sizeof_hdr is ..., not a NIfTI-1 file".
+TEST_CASE("cli: a compressed file on standard input that is not a NIfTI says so", "[cli]") {
+    iotest::Scratch s;
+    for (const char* name : {"torus.stl", "headsq.nrrd"}) {
+        const std::string gz = s.file(std::string(name) + ".gz", iotest::deflate_bytes(iotest::read_file(data_file(name)), true));
+        const vmtest::ProgramResult r = vmtest::run_program(VOXMESH_CLI_PATH, "info - < " + quote(gz), s.dir);
+        INFO(name << ": " << r.err);
+        CHECK(r.code == 2);
+        CHECK(r.err.find("gzip-compressed, and not a NIfTI-1 header inside") != std::string::npos);
+        CHECK(r.err.find("sizeof_hdr") == std::string::npos);
+    }
+    const vmtest::ProgramResult nifti =
+        vmtest::run_program(VOXMESH_CLI_PATH, "info - < " + quote(data_file("mri_someones_anatomy.nii.gz")), s.dir);
+    CHECK(nifti.code == 0);
+    CHECK(nifti.out.find("nifti (gzip") != std::string::npos);
+}
+
 #endif

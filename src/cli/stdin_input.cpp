@@ -2,6 +2,7 @@
 
 #include "core/exit_signals.hpp"
 
+#include "io/inflate.hpp"
 #include "io/readers.hpp"
 
 #include <algorithm>
@@ -108,6 +109,21 @@ bool copy_all(int in, const std::string& path, std::size_t& copied, bool& read_f
     return false;
 }
 
+// Whether gzip-compressed `head` (the start of a stream) inflates to a NIfTI-1 header:
+// sizeof_hdr 348 in either byte order. True where it cannot tell (the reader then says why).
+bool gzip_holds_nifti(const std::string& head) {
+    unsigned char header[4] = {};
+    try {
+        io::Inflater inflater(kStdinName, reinterpret_cast<const unsigned char*>(head.data()), head.size());
+        if (inflater.read(header, sizeof header) < sizeof header) return true;
+    } catch (const std::exception&) {
+        return true;
+    }
+    const auto le = static_cast<std::uint32_t>(header[0] | header[1] << 8 | header[2] << 16 | std::uint32_t{header[3]} << 24);
+    const auto be = static_cast<std::uint32_t>(header[3] | header[2] << 8 | header[1] << 16 | std::uint32_t{header[0]} << 24);
+    return le == 348 || be == 348;
+}
+
 std::string read_head(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     std::string head(kHeadBytes, '\0');
@@ -191,9 +207,16 @@ InputPath::InputPath(const std::string& arg, InputKind kind) : path_(arg), displ
             throw BadInput(std::string("cannot copy ") + kStdinName + " to '" + spooled + "': " + std::strerror(errno));
         }
         if (size == 0) throw BadInput(std::string("'") + kStdinName + "': is empty");
-        const std::string ext = sniff_format(read_head(spooled), size, kind);
+        const std::string head = read_head(spooled);
+        const std::string ext = sniff_format(head, size, kind);
         if (ext.empty())
             throw BadInput(std::string("'") + kStdinName + "': not " + kind_text(kind) + " by its first bytes");
+        // Of gzip-compressed files only .nii.gz is read whole; another (a .nrrd.gz, a .stl.gz)
+        // was refused as "sizeof_hdr is ..., not a NIfTI-1 file".
+        if (ext == ".nii.gz" && !gzip_holds_nifti(head))
+            throw BadInput(std::string("'") + kStdinName +
+                           "': gzip-compressed, and not a NIfTI-1 header inside (the one compressed format read "
+                           "whole); decompress it first, e.g. gunzip -c FILE | voxmesh ...");
         const std::string named = make_temp_file(ext, named_listed_);
         if (::rename(spooled.c_str(), named.c_str()) != 0) {
             const int err = errno;
