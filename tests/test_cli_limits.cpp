@@ -252,4 +252,19 @@ TEST_CASE("cli: a compressed file on standard input that is not a NIfTI says so"
     CHECK(nifti.out.find("nifti (gzip") != std::string::npos);
 }
 
+
+// The library's advice named its API ("use Backend::Cpu, Backend::Auto"), not the options.
+TEST_CASE("cli: advice about backends names the options", "[cli]") {
+    iotest::Scratch s;
+    const vmtest::ProgramResult r =
+        vmtest::run_program(VOXMESH_CLI_PATH,
+                            "mesh " + quote(data_file("headsq.nrrd")) + " --iso 499.5 --backend opencl -o " +
+                                quote(s.dir + "/o.stl"),
+                            s.dir, "OCL_ICD_VENDORS=" + quote(s.dir + "/no-vendors"));
+    INFO(r.err);
+    CHECK(r.code == 2);
+    CHECK(r.err.find("Backend::") == std::string::npos);
+    CHECK((r.err.find("--backend cpu") != std::string::npos || r.err.find("the cpu backend") != std::string::npos));
+}
+
 #endif

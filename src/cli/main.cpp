@@ -11,6 +11,8 @@
 #include <exception>
 #include <iostream>
 #include <new>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -24,6 +26,19 @@ int report_written(int code) {
     if (!failed) return code;
     std::cerr << "voxmesh: error: cannot write standard output: " << std::strerror(errno) << "\n";
     return code == voxmesh::cli::kExitOk ? voxmesh::cli::kExitBadInput : code;
+}
+
+// The library's advice names its API ("use Backend::Cpu", "list_devices()"); here the
+// options and commands that do the same.
+std::string in_cli_words(std::string message) {
+    static const std::pair<const char*, const char*> kWords[] = {
+        {"Backend::Cpu", "--backend cpu"},       {"Backend::Auto", "--backend auto"},
+        {"Backend::OpenCL", "--backend opencl"}, {"Backend::Hybrid", "--backend hybrid"},
+        {"list_devices()", "voxmesh devices"},   {"Options::devices", "--device"}};
+    for (const auto& [api, cli] : kWords)
+        for (std::size_t at = message.find(api); at != std::string::npos; at = message.find(api, at + std::strlen(cli)))
+            message.replace(at, std::strlen(api), cli);
+    return message;
 }
 
 }  // namespace
@@ -69,7 +84,7 @@ int main(int argc, char** argv) {
         std::cerr << "voxmesh: error: " << e.what() << "\n";
         return kExitInternal;
     } catch (const voxmesh::Error& e) {
-        std::cerr << "voxmesh: error: " << e.what() << "\n";
+        std::cerr << "voxmesh: error: " << in_cli_words(e.what()) << "\n";
         return kExitBadInput;
     } catch (const std::bad_alloc&) {
         std::cerr << "voxmesh: internal error: out of memory\n";
