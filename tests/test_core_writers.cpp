@@ -3,6 +3,8 @@
 
 #include "support/mesh_checks.hpp"
 
+#include "core/atomic_file.hpp"
+
 #include <voxmesh/voxmesh.hpp>
 
 #include <charconv>
@@ -749,6 +751,56 @@ TEST_CASE("write_mesh: a FIFO or a device is written into, a file it may not wri
             else CHECK(WEXITSTATUS(status) == 0);
             CHECK(read_all(path) == "previous mesh");
         }
+    }
+    // Found by a review: the rename over another user's file in a sticky directory (/tmp)
+    // failed only after the work; check_writable, which the CLI runs first, did not see it.
+    SECTION("another user's writable file in a sticky directory is refused before anything is written") {
+        const std::string sticky = dir.file("sticky");
+        REQUIRE(fs::create_directory(sticky));
+        fs::permissions(dir.path(), fs::perms::all);
+        fs::permissions(sticky, fs::perms::all | fs::perms::sticky_bit);
+        const std::string path = sticky + "/theirs.stl";
+        { std::ofstream(path) << "previous mesh"; }
+        fs::permissions(path, fs::perms::all & ~(fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec));
+        if (geteuid() != 0) {
+            WARN("not root: cannot act as another user");
+        } else {
+            // As nobody: the file (root's, 0666) is writable, the directory too, but only its
+            // owner may rename over it. Exit 0: both refused with the reason, file untouched.
+            const pid_t child = ::fork();
+            REQUIRE(child >= 0);
+            if (child == 0) {
+                if (::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(3);
+                if (::access(sticky.c_str(), W_OK | X_OK) != 0) ::_exit(3);
+                const std::string expected_message = "cannot write '" + path +
+                                                     "': it belongs to another user in the sticky directory '" +
+                                                     sticky + "'";
+                int refused = 0;
+                try {
+                    voxmesh::detail::check_writable(path);
+                } catch (const voxmesh::Error& e) {
+                    refused += std::string(e.what()).rfind(expected_message, 0) == 0;
+                }
+                try {
+                    voxmesh::write_mesh(path, mesh);
+                } catch (const voxmesh::Error& e) {
+                    refused += std::string(e.what()).rfind(expected_message, 0) == 0;
+                }
+                std::size_t entries = 0;
+                for ([[maybe_unused]] const auto& entry : fs::directory_iterator(sticky)) ++entries;
+                ::_exit(refused == 2 && read_all(path) == "previous mesh" && entries == 1 ? 0 : 2);
+            }
+            int status = 0;
+            REQUIRE(::waitpid(child, &status, 0) == child);
+            REQUIRE(WIFEXITED(status));
+            if (WEXITSTATUS(status) == 3) WARN("cannot run as nobody here");
+            else CHECK(WEXITSTATUS(status) == 0);
+        }
+        CHECK(read_all(path) == "previous mesh");
+        // Its owner replaces it.
+        voxmesh::detail::check_writable(path);
+        voxmesh::write_mesh(path, mesh);
+        CHECK(read_all(path) == expected);
     }
     SECTION("a writable file in a directory it may not write: the message says what was refused") {
         if (geteuid() == 0) {

@@ -331,6 +331,16 @@ TEST_CASE("nrrd: encodings, byte orders, detached headers", "[io][nrrd]") {
                   n);
         CHECK_THROWS_WITH(read_volume(s.file("a.nrrd", kHeader343 + "encoding: raw\nline skip: 2\n\none line\n")),
                           Contains("a.nrrd") && Contains("before the 2 lines"));
+        // Found by a review: lines end at "\r\n" and a lone "\r" too, as teem reads them; also
+        // where the "\r" is the last byte of a 64 KiB chunk read.
+        check_i16(read_volume(s.file("a.nrrd", kHeader343 + "encoding: raw\nline skip: 3\n\nmac\rdos\r\nunix\n" +
+                                                   i16_samples(n, false))),
+                  n);
+        const std::string long_line(65535, 'x');
+        for (const std::string end : {"\r", "\r\n", "\n"}) {
+            s.file("d.raw", long_line + end + i16_samples(n, false));
+            check_i16(read_volume(s.file("d.nhdr", kHeader343 + "encoding: raw\nline skip: 1\ndata file: d.raw\n")), n);
+        }
     }
     SECTION("4-D with a trailing size-1 axis is 3-D") {
         const std::string header =

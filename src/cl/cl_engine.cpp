@@ -1225,14 +1225,16 @@ Mesh Engine::run(Stats& stats) {
     check_vertex_count(vertices);
     Mesh mesh = std::move(storage_);
     // Spare room only for what the CPU engine generates (a device's results are copied at the
-    // sizes it counted), and as its plans say (spare_row_samples). A device's piece that
-    // Hybrid's CPU worker takes over is planned only then, after this: a whole row for it.
+    // sizes it counted), and as its plans say (spare_row_samples). A device's piece the CPU
+    // engine may generate after all is planned only then, after this: a whole row for it.
+    // Hybrid's CPU worker takes pieces over, and with either backend a device that runs out of
+    // memory generating a piece hands it to the CPU engine (generate_pieces).
     std::size_t spare_samples = 0;
-    const bool may_take_over = hybrid_ && scalar_size(volume_.type) == 1 && (vertices > 0 || triangles > 0);
+    const bool cpu_may_generate = scalar_size(volume_.type) == 1 && (vertices > 0 || triangles > 0);
     for (const auto& chunk : results_)
         for (const Piece& p : chunk)
             spare_samples = std::max(spare_samples, p.on_cpu ? spare_row_samples(p.plan, volume_)
-                                                            : may_take_over ? nx_ : std::size_t{0});
+                                                            : cpu_may_generate ? nx_ : std::size_t{0});
     // Every worker waits for the mesh: in Hybrid the cores the CPU worker leaves help fill it.
     const double grown = allocate_output(mesh, vertices, triangles, options_.normals,
                                          hybrid_ ? threads_ + copy_threads() : threads_, spare_samples);

@@ -90,7 +90,7 @@ int run_mesh(const MeshArgs& a) {
     }
     if (a.iso_option->count() && !std::isfinite(a.iso))
         throw BadInput("--iso is " + format_double(a.iso) + "; give a finite value");
-    refuse_device_on_cpu(a.backend, a.device);
+    refuse_device_on_cpu(a.backend, a.device, "give --backend opencl, hybrid or auto");
     VolumeInfo info;
     const Volume volume = load_volume(a.input, a.raw, a.threads, &info);
     // Named here: extract() would say the same without the file.

@@ -45,7 +45,7 @@ int run_sculpt(const SculptArgs& a) {
         dabs = strokes.read([&] { return read_stroke_script(strokes.path()); });
     }
 
-    refuse_device_on_cpu(a.backend, a.device);
+    refuse_device_on_cpu(a.backend, a.device, "it is sculpt's default: give --backend opencl or auto");
     SculptOptions options;
     options.threads = a.threads;
     options.backend = parse_backend(a.backend);

@@ -33,10 +33,10 @@ ScalarType parse_scalar(const std::string& name) {
 
 }  // namespace
 
-void refuse_device_on_cpu(const std::string& backend, int device) {
+void refuse_device_on_cpu(const std::string& backend, int device, const std::string& advice) {
     if (backend == "cpu" && device >= 0)
-        throw BadInput("--device " + std::to_string(device) +
-                       " picks an OpenCL device, which --backend cpu does not use");
+        throw BadInput("--device " + std::to_string(device) + " picks an OpenCL device, which the cpu backend does not use; " +
+                       advice);
 }
 
 void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& why) {

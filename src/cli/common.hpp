@@ -86,8 +86,9 @@ void add_largest_option(CLI::App* sub, std::size_t& largest, const std::string& 
 
 bool is_raw_path(const std::string& path);
 
-// --device picks an OpenCL device: given with --backend cpu it would be ignored, so refused.
-void refuse_device_on_cpu(const std::string& backend, int device);
+// --device picks an OpenCL device: with the cpu backend it would be ignored, so refused;
+// `advice` ends the message (which backends to give instead).
+void refuse_device_on_cpu(const std::string& backend, int device, const std::string& advice);
 std::string lower_extension(const std::string& path);
 
 // A readable, non-empty regular file, or BadInput naming it.

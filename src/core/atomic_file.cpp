@@ -174,6 +174,15 @@ Destination destination_of(const std::string& path) {
     // would let a rename replace it.
     if (d.exists && S_ISREG(d.existing.st_mode) && ::faccessat(AT_FDCWD, d.path.c_str(), W_OK, AT_EACCESS) != 0)
         throw Error("cannot write '" + path + "': " + std::strerror(errno));
+    // In a sticky directory (/tmp) only the file's or the directory's owner may rename over
+    // it (root too, by CAP_FOWNER, which this does not ask the kernel about: it only refuses
+    // earlier what the rename would refuse after the work).
+    struct stat dir {};
+    if (d.exists && S_ISREG(d.existing.st_mode) && ::stat(d.dir.c_str(), &dir) == 0 && (dir.st_mode & S_ISVTX) &&
+        ::geteuid() != 0 && d.existing.st_uid != ::geteuid() && dir.st_uid != ::geteuid())
+        throw Error("cannot write '" + path + "': it belongs to another user in the sticky directory '" +
+                    d.dir.string() + "', where only its owner may replace it (outputs are written beside their "
+                    "target and renamed over it)");
     return d;
 }
 

@@ -116,24 +116,39 @@ std::size_t space_dimension_of(const std::string& path, const std::string& space
     return it->second;
 }
 
-// Offset just past `lines` newlines from `offset` in the file holding the samples (the
-// header's own file for attached data, as teem reads on after the blank line); errors name
-// the header too.
+// Offset just past `lines` lines from `offset` in the file holding the samples (the header's
+// own file for attached data, as teem reads on after the blank line). A line ends at "\n",
+// "\r\n" or a lone "\r", as teem's airOneLine reads it. Errors name the header too.
 std::size_t skip_lines(const InputFile& header, const SampleLayout& layout, std::size_t lines, std::size_t offset) {
     std::optional<InputFile> detached;
     const InputFile& data = open_data(header, layout, detached);
     std::size_t left = lines;
-    while (left > 0) {
+    bool after_cr = false;  // the last line ended with '\r' at a chunk's end: a '\n' may follow
+    for (;;) {
         const std::string chunk = data.read(offset, 1 << 16);
-        if (chunk.empty())
+        if (chunk.empty()) {
+            if (left == 0) return offset;
             fail(data.path(), "file ends before the " + std::to_string(lines) + " lines 'line skip' asks to skip" +
                                   data_file_note(header.path(), layout));
+        }
         std::size_t i = 0;
-        for (; i < chunk.size() && left > 0; ++i)
-            if (chunk[i] == '\n') --left;
+        if (after_cr) {
+            after_cr = false;
+            if (chunk[0] == '\n') i = 1;
+            if (left == 0) return offset + i;
+        }
+        for (; i < chunk.size() && left > 0; ++i) {
+            if (chunk[i] == '\n') {
+                --left;
+            } else if (chunk[i] == '\r') {
+                --left;
+                if (i + 1 == chunk.size()) after_cr = true;
+                else if (chunk[i + 1] == '\n') ++i;
+            }
+        }
         offset += i;
+        if (left == 0 && !after_cr) return offset;
     }
-    return offset;
 }
 
 }  // namespace
