@@ -17,6 +17,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <limits>
 #include <random>
@@ -59,6 +60,23 @@ T load(const std::string& bytes, std::size_t at) {
     REQUIRE(at + sizeof(T) <= bytes.size());
     std::memcpy(&v, bytes.data() + at, sizeof(T));
     return v;
+}
+
+// Runs `body` in a child as user and group nobody (65534) that may reach `dir` (W_OK | X_OK);
+// its result as the child's exit code, and CHECKs it is 0 (WARNs where nobody is not possible).
+void check_as_nobody(const std::string& dir, const std::function<bool()>& body) {
+    const pid_t child = ::fork();
+    REQUIRE(child >= 0);
+    if (child == 0) {
+        if (::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(3);
+        if (::access(dir.c_str(), W_OK | X_OK) != 0) ::_exit(3);
+        ::_exit(body() ? 0 : 2);
+    }
+    int status = 0;
+    REQUIRE(::waitpid(child, &status, 0) == child);
+    REQUIRE(WIFEXITED(status));
+    if (WEXITSTATUS(status) == 3) WARN("cannot run as nobody here");
+    else CHECK(WEXITSTATUS(status) == 0);
 }
 
 bool no_temp_files(const vmtest::TempDir& dir) {
@@ -729,26 +747,17 @@ TEST_CASE("write_mesh: a FIFO or a device is written into, a file it may not wri
             CHECK(read_all(path) == "previous mesh");
         } else {
             // Root writes anything: a child as nobody tries a root-owned 0644 file in a
-            // directory it may write (exit 0 refused and untouched, 3 cannot reach it).
+            // directory it may write: refused, named and untouched.
             fs::permissions(dir.path(), fs::perms::all);
-            const pid_t child = ::fork();
-            REQUIRE(child >= 0);
-            if (child == 0) {
-                if (::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(3);
-                if (::access(dir.path().c_str(), W_OK | X_OK) != 0) ::_exit(3);
+            check_as_nobody(dir.path(), [&] {
                 try {
                     voxmesh::write_mesh(path, mesh);
-                    ::_exit(1);
+                    return false;
                 } catch (const voxmesh::Error& e) {
                     const bool named = std::string(e.what()) == "cannot write '" + path + "': Permission denied";
-                    ::_exit(named && read_all(path) == "previous mesh" ? 0 : 2);
+                    return named && read_all(path) == "previous mesh";
                 }
-            }
-            int status = 0;
-            REQUIRE(::waitpid(child, &status, 0) == child);
-            REQUIRE(WIFEXITED(status));
-            if (WEXITSTATUS(status) == 3) WARN("cannot run as nobody here");
-            else CHECK(WEXITSTATUS(status) == 0);
+            });
             CHECK(read_all(path) == "previous mesh");
         }
     }
@@ -766,12 +775,8 @@ TEST_CASE("write_mesh: a FIFO or a device is written into, a file it may not wri
             WARN("not root: cannot act as another user");
         } else {
             // As nobody: the file (root's, 0666) is writable, the directory too, but only its
-            // owner may rename over it. Exit 0: both refused with the reason, file untouched.
-            const pid_t child = ::fork();
-            REQUIRE(child >= 0);
-            if (child == 0) {
-                if (::setgid(65534) != 0 || ::setuid(65534) != 0) ::_exit(3);
-                if (::access(sticky.c_str(), W_OK | X_OK) != 0) ::_exit(3);
+            // owner may rename over it. Both refused with the reason, the file untouched.
+            check_as_nobody(sticky, [&] {
                 const std::string expected_message = "cannot write '" + path +
                                                      "': it belongs to another user in the sticky directory '" +
                                                      sticky + "'";
@@ -788,13 +793,8 @@ TEST_CASE("write_mesh: a FIFO or a device is written into, a file it may not wri
                 }
                 std::size_t entries = 0;
                 for ([[maybe_unused]] const auto& entry : fs::directory_iterator(sticky)) ++entries;
-                ::_exit(refused == 2 && read_all(path) == "previous mesh" && entries == 1 ? 0 : 2);
-            }
-            int status = 0;
-            REQUIRE(::waitpid(child, &status, 0) == child);
-            REQUIRE(WIFEXITED(status));
-            if (WEXITSTATUS(status) == 3) WARN("cannot run as nobody here");
-            else CHECK(WEXITSTATUS(status) == 0);
+                return refused == 2 && read_all(path) == "previous mesh" && entries == 1;
+            });
         }
         CHECK(read_all(path) == "previous mesh");
         // Its owner replaces it.
