@@ -269,4 +269,21 @@ TEST_CASE("cli: advice about backends names the options", "[cli]") {
     CHECK((r.err.find("--backend cpu") != std::string::npos || r.err.find("the cpu backend") != std::string::npos));
 }
 
+
+// A VOXMESH_ISA other than portable (a typo such as "portble") ran the AVX2 code without a word.
+TEST_CASE("cli: an unknown VOXMESH_ISA is named, portable in any case is not", "[cli]") {
+    iotest::Scratch s;
+    const std::string args = "mesh " + quote(data_file("headsq.nrrd")) + " --iso 499.5 --backend cpu -o " + quote(s.dir + "/o.stl");
+    const vmtest::ProgramResult typo = vmtest::run_program(VOXMESH_CLI_PATH, args, s.dir, "VOXMESH_ISA=portble");
+    CHECK(typo.code == 0);
+    CHECK(typo.err.find("VOXMESH_ISA='portble' is not 'portable' or 'native'; ignored") != std::string::npos);
+    for (const char* fine : {"PORTABLE", "portable", "native", ""}) {
+        const vmtest::ProgramResult r =
+            vmtest::run_program(VOXMESH_CLI_PATH, args, s.dir, "VOXMESH_ISA=" + quote(fine));
+        INFO(fine);
+        CHECK(r.code == 0);
+        CHECK(r.err.find("VOXMESH_ISA") == std::string::npos);
+    }
+}
+
 #endif

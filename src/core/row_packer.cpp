@@ -1,11 +1,13 @@
 #include "row_packer.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
-#include <string_view>
+#include <string>
 #include <type_traits>
 
 #ifdef VOXMESH_X86_DISPATCH
@@ -36,9 +38,21 @@ Word pack_tail(const T* values, std::size_t n, T threshold, bool& bad) {
     return w;
 }
 
+// VOXMESH_ISA: "portable" (any case) forces the portable code; unset, empty or "native" leaves
+// the choice to the processor. Another value (a typo) is named once on stderr rather than
+// silently timing the AVX2 code as if it were the portable one.
 bool portable_forced() {
-    const char* isa = std::getenv("VOXMESH_ISA");
-    return isa && std::string_view(isa) == "portable";
+    static const bool forced = [] {
+        const char* isa = std::getenv("VOXMESH_ISA");
+        if (!isa) return false;
+        std::string value(isa);
+        std::transform(value.begin(), value.end(), value.begin(), [](unsigned char c) { return std::tolower(c); });
+        if (value == "portable") return true;
+        if (!value.empty() && value != "native")
+            std::fprintf(stderr, "voxmesh: warning: VOXMESH_ISA='%s' is not 'portable' or 'native'; ignored\n", isa);
+        return false;
+    }();
+    return forced;
 }
 
 }  // namespace
