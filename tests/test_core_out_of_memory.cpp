@@ -26,6 +26,7 @@
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -94,11 +95,12 @@ void take_up_freed_memory() {
     // a new thread takes a free one: each thread takes up its arena's until VmData grows, and
     // stays until the last is done so that the next one takes another arena.
     std::vector<std::thread> holders;
+    std::deque<std::promise<void>> took_up;  // kept until the joins: set_value may still be returning
     std::promise<void> release;
     const std::shared_future<void> released = release.get_future().share();
     for (int t = 0; t < 16 && shrunk_heap_bytes() > kLeft; ++t) {
-        std::promise<void> done;
-        std::future<void> took_up = done.get_future();
+        std::promise<void>& done = took_up.emplace_back();
+        std::future<void> done_future = done.get_future();
         holders.emplace_back([&done, released] {
             const std::size_t charged = data_bytes();
             for (int step = 0; step < 1024 && data_bytes() == charged; ++step)  // 64 MB at most: a heap
@@ -106,7 +108,7 @@ void take_up_freed_memory() {
             done.set_value();
             released.wait();
         });
-        took_up.wait();
+        done_future.wait();
     }
     release.set_value();
     for (std::thread& holder : holders) holder.join();
