@@ -131,6 +131,7 @@ int main(int argc, char** argv) {
     // No comma list: a file's name may hold a comma. Several files: --input a.nrrd b.nrrd.
     app.add_option("--input", inputs, "volume files (NRRD, MetaImage, NIfTI; names taken whole, commas and all); loading is not timed");
     app.add_option("--iso", iso, "iso value (default: the field's, or voxmesh_iso in a file written by --write-volume)")
+        ->transform(voxmesh::cli::decimal_number())
         ->check([](const std::string& text) {  // NaN stands for "not given" below: refuse it here
             const double value = std::strtod(text.c_str(), nullptr);
             return std::isfinite(value) ? std::string() : "--iso must be a finite number, not '" + text + "'";
@@ -159,6 +160,7 @@ int main(int argc, char** argv) {
     app.add_option("--pause", settings.pause_ms,
                    "milliseconds to sleep before each run (each dab with --sculpt), as a program meshing once a frame "
                    "(its worker threads then wake from a sleep)")
+        ->transform(voxmesh::cli::decimal_number())
         ->check(CLI::Range(0.0, 10000.0))
         ->check([](const std::string& text) {  // CLI::Range lets NaN through
             return std::isnan(std::strtod(text.c_str(), nullptr)) ? "--pause must be a number, not '" + text + "'"

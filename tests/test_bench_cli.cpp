@@ -374,6 +374,9 @@ TEST_CASE("bench: bad arguments fail with a message", "[bench][errors]") {
         {"--repeat 1.5", "--repeat: '1.5' is not a whole number"},
         {"--threads 1,two", "--threads: 'two' is not a whole number"},
         {"--pause nan", "--pause must be a number"},
+        // strtold took hex: --iso 0x10 ran at 16.
+        {"--iso 0x10", "--iso: '0x10' is not a decimal number"},
+        {"--pause 0x10", "--pause: '0x10' is not a decimal number"},
         {"--backends opencl --devices 0,,1", "an empty entry"},
         {"--backends opencl --devices 0+0", "each device once"},
         {"--backends opencl --devices 7", "no combination could run here"},  // exited 0

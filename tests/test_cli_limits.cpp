@@ -139,6 +139,36 @@ TEST_CASE("cli: whole-number options are decimal", "[cli]") {
     }
 }
 
+// Real numbers too: CLI11 converts them with strtold, which took hex (--iso 0x10 ran at 16),
+// leading blanks, and an exponent past the range as inf.
+TEST_CASE("cli: real-number options are decimal", "[cli]") {
+    iotest::Scratch s;
+    const std::string raw = s.file("k.raw", std::string(1000, '\x01'));
+    const std::string out = quote(s.dir + "/o.stl");
+    const std::string head = quote(data_file("headsq.nrrd"));
+    for (const char* bad : {"--iso 0x10", "--iso ' 5'", "--iso 1e400", "--iso +-1"}) {
+        const vmtest::ProgramResult r = vmtest::run_program(VOXMESH_CLI_PATH, "mesh " + head + " -o " + out + " " + bad, s.dir);
+        INFO(bad << ": " << r.err);
+        CHECK(r.code == 2);
+        CHECK((r.err.find("is not a decimal number") != std::string::npos || r.err.find("out of range") != std::string::npos));
+    }
+    for (const char* bad : {"--spacing 0x1 1 1", "--origin 0 0 0x1p3"}) {
+        const vmtest::ProgramResult r =
+            vmtest::run_program(VOXMESH_CLI_PATH, "info " + quote(raw) + " --dims 10 10 10 --type u8 " + bad, s.dir);
+        INFO(bad << ": " << r.err);
+        CHECK(r.code == 2);
+        CHECK(r.err.find("is not a decimal number") != std::string::npos);
+    }
+    const vmtest::ProgramResult plus =
+        vmtest::run_program(VOXMESH_CLI_PATH, "mesh " + head + " --backend cpu --iso +499.5 -o " + out, s.dir);
+    CHECK(plus.code == 0);
+    CHECK(plus.out.find("iso 499.5") != std::string::npos);
+    const vmtest::ProgramResult spaced = vmtest::run_program(
+        VOXMESH_CLI_PATH, "info " + quote(raw) + " --dims 10 10 10 --type u8 --spacing 0.5 2e0 1 --origin -1 1e-400 3", s.dir);
+    CHECK(spaced.code == 0);
+    CHECK(spaced.out.find("0.5 2 1") != std::string::npos);
+    CHECK(spaced.out.find("-1 0 3") != std::string::npos);  // an exponent below the range is 0, as strtod reads it
+}
 
 // Options that would have been ignored: --endian for a file with a header, --device where no
 // OpenCL device is used.

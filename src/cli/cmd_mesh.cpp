@@ -165,7 +165,8 @@ Command add_mesh(CLI::App& app) {
     sub->add_option("-o,--output", a->output, "mesh file: .stl (binary), .ply (binary) or .obj; -: standard output (with --format)")
         ->required();
     add_mesh_format_option(sub, a->format);
-    a->iso_option = sub->add_option("--iso", a->iso, "iso value (default: midpoint of the value range)");
+    a->iso_option = sub->add_option("--iso", a->iso, "iso value (default: midpoint of the value range)")
+                        ->transform(decimal_number());
     sub->add_option("--backend", a->backend, "auto, cpu, opencl or hybrid (default auto)")
         ->check(CLI::IsMember({"auto", "cpu", "opencl", "hybrid"}));
     sub->add_option("--threads", a->threads, "CPU worker threads (default: every CPU this process may use)")

@@ -54,9 +54,13 @@ void add_raw_flags(CLI::App* sub, RawFlags& raw) {
         ->check(CLI::IsMember({"little", "big"}))
         ->group(group);
     sub->add_option("--offset", raw.offset, "bytes to skip before the first sample")->transform(size)->group(group);
-    sub->add_option("--spacing", raw.spacing, "sample spacing SX SY SZ (default 1 1 1; a negative one runs its axis down from the origin)")->expected(3)->group(group);
+    sub->add_option("--spacing", raw.spacing, "sample spacing SX SY SZ (default 1 1 1; a negative one runs its axis down from the origin)")
+        ->expected(3)
+        ->transform(decimal_number())
+        ->group(group);
     sub->add_option("--origin", raw.origin, "position of the first sample OX OY OZ (default 0 0 0)")
         ->expected(3)
+        ->transform(decimal_number())
         ->group(group);
 }
 

@@ -4,7 +4,10 @@
 #include <CLI/CLI.hpp>
 
 #include <charconv>
+#include <cmath>
+#include <cstdlib>
 #include <string>
+#include <system_error>
 
 namespace voxmesh::cli {
 
@@ -42,6 +45,34 @@ inline CLI::Validator whole_number_in(long long lo, long long hi) {
             return std::string();
         },
         "INT in [" + std::to_string(lo) + " - " + std::to_string(hi) + "]");
+}
+
+// A real number in decimal ("1.5", "-2e3", "+4"; "inf" and "nan" are left to the option's own
+// finiteness check, which names the option). CLI11 converts with strtold, which also takes hex
+// ("--iso 0x10" ran at 16, a value nobody wrote) and leading blanks, and turns an overflowing
+// exponent into inf without a word. Give it with Option::transform: the value is handed on in
+// round-trip decimal so CLI11's conversion reads the number checked here.
+inline CLI::Validator decimal_number() {
+    return CLI::Validator(
+        [](std::string& text) {
+            if (text.empty()) return std::string();
+            const char* begin = text.data();
+            const char* end = text.data() + text.size();
+            if (*begin == '+' && end - begin > 1 && begin[1] != '-' && begin[1] != '+') ++begin;  // from_chars takes no '+'
+            double value = 0;
+            const auto [ptr, ec] = std::from_chars(begin, end, value, std::chars_format::general);
+            if (ptr != end || (ec != std::errc() && ec != std::errc::result_out_of_range))
+                return "'" + text + "' is not a decimal number";
+            if (ec == std::errc::result_out_of_range) {  // from_chars says so of 1e-400 as of 1e400
+                value = std::strtod(std::string(begin, end).c_str(), nullptr);  // 0 or a denormal, or inf
+                if (std::isinf(value)) return text + " is out of range of a double";
+            }
+            char buffer[64];
+            const auto written = std::to_chars(buffer, buffer + sizeof buffer, value);
+            text.assign(buffer, written.ptr);
+            return std::string();
+        },
+        "NUMBER");
 }
 
 }  // namespace voxmesh::cli
