@@ -19,3 +19,16 @@ set_tests_properties(voxmesh_opencl_fallback PROPERTIES
 # deliberately broken kernel of the build-failure test.
 # The [opencl] tests skip with a visible WARN when no OpenCL device exists. PoCL caches
 # compiled kernels (~/.cache/pocl); the first run of every kernel variant compiles (~1 s each).
+
+# voxmesh_opencl_faults: the [.clfault] test with tests/cl_fault_layer loaded into the ICD
+# loader (OPENCL_LAYERS, ocl-icd 2.3+), which fails chosen kernel launches and buffer
+# allocations as a device out of memory would: PoCL on the host never does.
+if(VOXMESH_WITH_OPENCL)
+  add_library(voxmesh_cl_fault_layer MODULE ${CMAKE_CURRENT_SOURCE_DIR}/cl_fault_layer/cl_fault_layer.cpp)
+  target_include_directories(voxmesh_cl_fault_layer PRIVATE ${OpenCL_INCLUDE_DIRS})
+  target_link_libraries(voxmesh_cl_fault_layer PRIVATE voxmesh_warnings)
+  add_dependencies(voxmesh_tests voxmesh_cl_fault_layer)
+  add_test(NAME voxmesh_opencl_faults COMMAND voxmesh_tests "[clfault]")
+  set_tests_properties(voxmesh_opencl_faults PROPERTIES
+    ENVIRONMENT "OPENCL_LAYERS=$<TARGET_FILE:voxmesh_cl_fault_layer>;${VOXMESH_TEST_ENV}")
+endif()
