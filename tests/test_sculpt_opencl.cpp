@@ -7,6 +7,9 @@
 #include <voxmesh/sculpt.hpp>
 
 #include "support/child_process.hpp"
+#ifdef VOXMESH_HAS_OPENCL
+#include "support/cl_fault.hpp"
+#endif
 #include "support/sculpt_fields.hpp"
 
 #include "sculpt/device_blocks.hpp"
@@ -349,3 +352,61 @@ TEST_CASE("sculpt: a Sculpt on OpenCL in a forked child re-meshes on the CPU", "
     CHECK(sculpt->backend() == Backend::OpenCL);
     CHECK(warnings.empty());
 }
+
+#ifdef VOXMESH_HAS_OPENCL
+// Run by ctest as voxmesh_opencl_faults, with the fault layer loaded (tests/opencl.cmake): an
+// OpenCL error in update(), out of memory or not, drops the device with a warning naming it;
+// that update() and the later ones re-mesh on the CPU and give what the device would have.
+TEST_CASE("sculpt OpenCL: a device that fails in update() hands the sculpt to the CPU", "[.clfault]") {
+    const vmtest::FaultLayer layer = vmtest::fault_layer();
+    REQUIRE(layer.loaded());
+    REQUIRE(have_device());
+    const vmtest::ClearFaults clear{layer};
+    voxmesh::detail::sculpt::DeviceBlockTuning tuning;
+    tuning.batch_samples = 600;  // several batches: the failing one comes after others were stored
+    voxmesh::detail::sculpt::set_device_block_tuning(tuning);
+    Worst worst;
+    try {
+        const struct {
+            const char* kernel;
+            int error;
+            const char* named;
+        } faults[] = {{"block_vertices", CL_OUT_OF_RESOURCES, "CL_OUT_OF_RESOURCES"},
+                      {"block_triangles", CL_INVALID_COMMAND_QUEUE, "CL_INVALID_COMMAND_QUEUE"},
+                      {"block_classify", CL_MEM_OBJECT_ALLOCATION_FAILURE, "CL_MEM_OBJECT_ALLOCATION_FAILURE"}};
+        const TypeSetup& ts = kTypes[1];  // u8
+        const Dims d{29, 23, 26};
+        for (const auto& fault : faults) {
+            INFO(fault.kernel);
+            Sculpt cpu = make(ts, d, 5, Backend::Cpu);
+            SculptOptions o = cpu.options();
+            o.backend = Backend::OpenCL;
+            std::vector<std::string> warnings;
+            o.log = [&](const std::string& w) { warnings.push_back(w); };
+            Sculpt cl = Sculpt::from_function(d, ts.type, balls(d, ts.scale, ts.offset), o);
+            REQUIRE(cl.backend() == Backend::OpenCL);
+            cpu.update();
+            cl.update();
+            for (Sculpt* s : {&cpu, &cl}) s->add({9, 11, 13}, 6, 2);  // over several blocks
+            const voxmesh::UpdateResult want = cpu.update();
+            layer.set(fault.kernel, fault.error, 0, 2, 1);  // the third launch: batches before it were stored
+            const voxmesh::UpdateResult got = cl.update();
+            CHECK(layer.given() == 1);
+            layer.clear();
+            CHECK(got.changed == want.changed);
+            CHECK(cl.backend() == Backend::Cpu);
+            REQUIRE(warnings.size() == 1);
+            CHECK_THAT(warnings[0], Catch::Contains(fault.named) && Catch::Contains("re-meshes on the CPU"));
+            require_same_blocks(cpu, cl, Tolerance{}, worst);
+            for (Sculpt* s : {&cpu, &cl}) s->subtract({14, 12, 12}, 5, 2);
+            CHECK(cpu.update().changed == cl.update().changed);
+            require_same_blocks(cpu, cl, Tolerance{}, worst);
+            require_mesh_equals_extract(cl, false, Tolerance{}, worst);
+        }
+    } catch (...) {
+        voxmesh::detail::sculpt::set_device_block_tuning({});
+        throw;
+    }
+    voxmesh::detail::sculpt::set_device_block_tuning({});
+}
+#endif  // VOXMESH_HAS_OPENCL

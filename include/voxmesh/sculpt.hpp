@@ -152,8 +152,10 @@ public:
 
     // ---- meshing
     // Re-meshes dirty blocks in parallel. Out of memory is an Error, and the blocks stay dirty
-    // for the next update(). In a child forked after its OpenCL device was opened, the CPU
-    // re-meshes instead (with a warning): the device is the parent's runtime's.
+    // for the next update(). An OpenCL error (the device's memory running out included) drops
+    // the device with a warning through `log` naming it: this update() and the later ones
+    // re-mesh on the CPU, and backend() says Cpu. In a child forked after its OpenCL device was
+    // opened, the CPU re-meshes instead (with a warning): the device is the parent's runtime's.
     UpdateResult update();
     bool dirty() const;                   // edits not yet meshed
     std::size_t block_count() const;

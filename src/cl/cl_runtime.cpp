@@ -503,6 +503,19 @@ std::string error_name(cl_int code) {
         case CL_INVALID_WORK_GROUP_SIZE: name = "CL_INVALID_WORK_GROUP_SIZE"; break;
         case CL_INVALID_GLOBAL_WORK_SIZE: name = "CL_INVALID_GLOBAL_WORK_SIZE"; break;
         case CL_INVALID_OPERATION: name = "CL_INVALID_OPERATION"; break;
+        // What a failing or reset device gives at any call (seen from GPU drivers).
+        case CL_MAP_FAILURE: name = "CL_MAP_FAILURE"; break;
+        case CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST: name = "CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST"; break;
+        case CL_INVALID_DEVICE: name = "CL_INVALID_DEVICE"; break;
+        case CL_INVALID_CONTEXT: name = "CL_INVALID_CONTEXT"; break;
+        case CL_INVALID_COMMAND_QUEUE: name = "CL_INVALID_COMMAND_QUEUE"; break;
+        case CL_INVALID_HOST_PTR: name = "CL_INVALID_HOST_PTR"; break;
+        case CL_INVALID_MEM_OBJECT: name = "CL_INVALID_MEM_OBJECT"; break;
+        case CL_INVALID_PROGRAM_EXECUTABLE: name = "CL_INVALID_PROGRAM_EXECUTABLE"; break;
+        case CL_INVALID_KERNEL: name = "CL_INVALID_KERNEL"; break;
+        case CL_INVALID_WORK_ITEM_SIZE: name = "CL_INVALID_WORK_ITEM_SIZE"; break;
+        case CL_INVALID_EVENT_WAIT_LIST: name = "CL_INVALID_EVENT_WAIT_LIST"; break;
+        case CL_INVALID_EVENT: name = "CL_INVALID_EVENT"; break;
         default: break;
     }
     return std::string(name ? name : "OpenCL error") + " (" + std::to_string(code) + ")";

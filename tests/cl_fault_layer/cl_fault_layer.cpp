@@ -22,11 +22,16 @@ std::mutex g_mutex;
 std::string g_kernel;              // kernel whose launches fail ("" = none)
 cl_int g_kernel_error = CL_SUCCESS;
 std::size_t g_buffer_over = 0;     // buffers larger than this fail (0 = none)
+unsigned long long g_skip = 0;     // matching calls still to let through before the first fault
 long long g_left = 0;              // faults still to give; negative = no end
 unsigned long long g_given = 0;    // faults given since the last voxmesh_cl_fault_set
 
-bool take_fault() {  // g_mutex held
+bool take_fault() {  // g_mutex held; called for each matching call
     if (g_left == 0) return false;
+    if (g_skip > 0) {
+        --g_skip;
+        return false;
+    }
     if (g_left > 0) --g_left;
     ++g_given;
     return true;
@@ -63,14 +68,15 @@ cl_int CL_API_CALL enqueue_kernel(cl_command_queue queue, cl_kernel kernel, cl_u
 }  // namespace
 
 // Launches of `kernel` fail with `kernel_error`, buffers over `buffer_over` bytes with
-// CL_MEM_OBJECT_ALLOCATION_FAILURE; `times` faults in all (negative: no end). Empty and 0 turn
-// either off. Clears the count of faults given.
+// CL_MEM_OBJECT_ALLOCATION_FAILURE: `times` faults in all (negative: no end) after `skip`
+// matching calls went through. Empty and 0 turn either off. Clears the count of faults given.
 LAYER_EXPORT void voxmesh_cl_fault_set(const char* kernel, int kernel_error, unsigned long long buffer_over,
-                                       long long times) {
+                                       unsigned long long skip, long long times) {
     std::lock_guard<std::mutex> lock(g_mutex);
     g_kernel = kernel ? kernel : "";
     g_kernel_error = kernel_error;
     g_buffer_over = buffer_over;
+    g_skip = skip;
     g_left = times;
     g_given = 0;
 }
