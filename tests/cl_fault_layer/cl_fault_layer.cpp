@@ -19,7 +19,7 @@ _cl_icd_dispatch g_dispatch{};
 const _cl_icd_dispatch* g_next = nullptr;
 
 std::mutex g_mutex;
-std::string g_kernel;              // kernel whose launches fail ("" = none)
+std::string g_kernel;              // kernel whose launches fail, or a transfer call's name ("" = none)
 cl_int g_kernel_error = CL_SUCCESS;
 std::size_t g_buffer_over = 0;     // buffers larger than this fail (0 = none)
 unsigned long long g_skip = 0;     // matching calls still to let through before the first fault
@@ -65,9 +65,44 @@ cl_int CL_API_CALL enqueue_kernel(cl_command_queue queue, cl_kernel kernel, cl_u
     return g_next->clEnqueueNDRangeKernel(queue, kernel, dims, offset, global, local, waits, wait_list, event);
 }
 
+// A transfer by the name it has in the API: clEnqueueReadBuffer, clEnqueueWriteBuffer,
+// clEnqueueCopyBuffer, clEnqueueMapBuffer.
+bool transfer_fails(const char* api) {
+    std::lock_guard<std::mutex> lock(g_mutex);
+    return g_kernel == api && take_fault();
+}
+
+cl_int CL_API_CALL read_buffer(cl_command_queue queue, cl_mem buffer, cl_bool blocking, size_t offset, size_t size,
+                               void* ptr, cl_uint waits, const cl_event* wait_list, cl_event* event) {
+    if (transfer_fails("clEnqueueReadBuffer")) return g_kernel_error;
+    return g_next->clEnqueueReadBuffer(queue, buffer, blocking, offset, size, ptr, waits, wait_list, event);
+}
+
+cl_int CL_API_CALL write_buffer(cl_command_queue queue, cl_mem buffer, cl_bool blocking, size_t offset, size_t size,
+                                const void* ptr, cl_uint waits, const cl_event* wait_list, cl_event* event) {
+    if (transfer_fails("clEnqueueWriteBuffer")) return g_kernel_error;
+    return g_next->clEnqueueWriteBuffer(queue, buffer, blocking, offset, size, ptr, waits, wait_list, event);
+}
+
+cl_int CL_API_CALL copy_buffer(cl_command_queue queue, cl_mem from, cl_mem to, size_t from_offset, size_t to_offset,
+                               size_t size, cl_uint waits, const cl_event* wait_list, cl_event* event) {
+    if (transfer_fails("clEnqueueCopyBuffer")) return g_kernel_error;
+    return g_next->clEnqueueCopyBuffer(queue, from, to, from_offset, to_offset, size, waits, wait_list, event);
+}
+
+void* CL_API_CALL map_buffer(cl_command_queue queue, cl_mem buffer, cl_bool blocking, cl_map_flags flags,
+                             size_t offset, size_t size, cl_uint waits, const cl_event* wait_list, cl_event* event,
+                             cl_int* errcode_ret) {
+    if (transfer_fails("clEnqueueMapBuffer")) {
+        if (errcode_ret) *errcode_ret = g_kernel_error;
+        return nullptr;
+    }
+    return g_next->clEnqueueMapBuffer(queue, buffer, blocking, flags, offset, size, waits, wait_list, event, errcode_ret);
+}
+
 }  // namespace
 
-// Launches of `kernel` fail with `kernel_error`, buffers over `buffer_over` bytes with
+// Launches of `kernel` (or calls of the transfer of that name) fail with `kernel_error`, buffers over `buffer_over` bytes with
 // CL_MEM_OBJECT_ALLOCATION_FAILURE: `times` faults in all (negative: no end) after `skip`
 // matching calls went through. Empty and 0 turn either off. Clears the count of faults given.
 LAYER_EXPORT void voxmesh_cl_fault_set(const char* kernel, int kernel_error, unsigned long long buffer_over,
@@ -106,6 +141,10 @@ LAYER_EXPORT cl_int CL_API_CALL clInitLayer(cl_uint num_entries, const _cl_icd_d
     g_next = target_dispatch;
     g_dispatch.clCreateBuffer = &create_buffer;
     g_dispatch.clEnqueueNDRangeKernel = &enqueue_kernel;
+    g_dispatch.clEnqueueReadBuffer = &read_buffer;
+    g_dispatch.clEnqueueWriteBuffer = &write_buffer;
+    g_dispatch.clEnqueueCopyBuffer = &copy_buffer;
+    g_dispatch.clEnqueueMapBuffer = &map_buffer;
     *layer_dispatch_ret = &g_dispatch;
     *num_entries_ret = ours;
     return CL_SUCCESS;

@@ -11,7 +11,8 @@
 namespace vmtest {
 
 struct FaultLayer {
-    // Launches of `kernel` fail with `error`, buffers over `buffer_over` bytes as out of
+    // Launches of `kernel` (or calls of clEnqueueReadBuffer, clEnqueueWriteBuffer,
+    // clEnqueueCopyBuffer, clEnqueueMapBuffer, named so) fail with `error`, buffers over `buffer_over` bytes as out of
     // memory: `times` faults (negative: no end) after `skip` matching calls went through.
     void (*set)(const char* kernel, int error, unsigned long long buffer_over, unsigned long long skip,
                 long long times) = nullptr;
