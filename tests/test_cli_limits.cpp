@@ -5,6 +5,8 @@
 
 #ifdef VOXMESH_CLI_PATH
 
+#include <voxmesh/voxmesh.hpp>
+
 #include "support/io_scratch.hpp"
 #include "support/mesh_checks.hpp"
 #include "support/run_program.hpp"
@@ -67,6 +69,29 @@ TEST_CASE("cli: a file size limit fails the write, names it and leaves no tempor
     CHECK(code == 2);
     CHECK(iotest::read_file(s.dir + "/err.txt").find("File too large") != std::string::npos);
     CHECK(stdin_copies(tmp).empty());
+}
+
+// PoCL writes the kernels it compiles to files; under the limit its LLVM called exit(1) after
+// "LLVM ERROR: IO failure on output stream" (or failed the build), and voxmesh said nothing.
+// A cache directory of its own makes PoCL compile afresh.
+TEST_CASE("cli: a file size limit that stops the OpenCL kernel compiler is named", "[cli]") {
+#ifdef VOXMESH_HAS_OPENCL
+    if (voxmesh::list_devices().empty()) {
+        WARN("no OpenCL device: SKIPPED");
+        return;
+    }
+    iotest::Scratch s;
+    fs::create_directories(s.dir + "/pocl");
+    const int code = shell("ulimit -f 100; POCL_CACHE_DIR=" + quote(s.dir + "/pocl") + " " + quote(VOXMESH_CLI_PATH) +
+                           " mesh " + quote(data_file("headsq.nrrd")) + " --iso 499.5 --backend opencl -o " +
+                           quote(s.dir + "/o.stl") + " > /dev/null 2> " + quote(s.dir + "/err.txt"));
+    const std::string err = iotest::read_file(s.dir + "/err.txt");
+    INFO(err);
+    CHECK((code == 1 || code == 2));
+    CHECK(err.find("voxmesh: error: ") != std::string::npos);
+    CHECK(err.find("a file size limit (ulimit -f) is set") != std::string::npos);
+    CHECK(!fs::exists(s.dir + "/o.stl"));
+#endif
 }
 
 // info's report and mesh --json are the output: lost to a full disk they exited 0.

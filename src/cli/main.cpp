@@ -4,8 +4,10 @@
 #include "common.hpp"
 #include "core/exit_signals.hpp"
 
+#include <atomic>
 #include <cerrno>
 #include <csignal>
+#include <cstdlib>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -14,8 +16,36 @@
 #include <string>
 #include <utility>
 #include <vector>
+#include <sys/resource.h>
 
 namespace {
+
+bool file_size_limited() {
+    rlimit limit{};
+    return getrlimit(RLIMIT_FSIZE, &limit) == 0 && limit.rlim_cur != RLIM_INFINITY;
+}
+
+// PoCL compiles kernels into files; under a file size limit its LLVM can fail that write and
+// end the process with exit(1) ("LLVM ERROR: IO failure on output stream"), or fail the build.
+const char* const kFileSizeLimitHint =
+    "a file size limit (ulimit -f) is set, and the OpenCL runtime writes the kernels it compiles to files: raise "
+    "the limit or use --backend cpu";
+
+// Set while a command runs: a library that calls exit() then (PoCL's LLVM does, after printing
+// its own message) leaves the process without a word from voxmesh or its temporaries removed.
+std::atomic<bool> g_command_running{false};
+
+void on_exit_during_command() {
+    if (!g_command_running.load()) return;
+    voxmesh::remove_partial_outputs();
+    std::fprintf(stderr, "voxmesh: error: a library ended the program during the work (its message is above)%s%s\n",
+                 file_size_limited() ? "; " : "", file_size_limited() ? kFileSizeLimitHint : "");
+}
+
+struct CommandRunning {
+    CommandRunning() { g_command_running = true; }
+    ~CommandRunning() { g_command_running = false; }
+};
 
 // A command's exit code, unless what it printed on standard output (info's report, mesh's
 // --json) could not all be written (a full disk, a closed descriptor): then an error, as the
@@ -72,7 +102,9 @@ int main(int argc, char** argv) {
         return code == 0 ? kExitOk : kExitBadInput;
     }
 
+    std::atexit(on_exit_during_command);
     try {
+        const CommandRunning running;
         for (const Command& c : commands)
             if (c.sub->parsed()) return report_written(c.run());
         std::cerr << "voxmesh: no subcommand given (see voxmesh --help)\n";
@@ -84,7 +116,10 @@ int main(int argc, char** argv) {
         std::cerr << "voxmesh: error: " << e.what() << "\n";
         return kExitInternal;
     } catch (const voxmesh::Error& e) {
-        std::cerr << "voxmesh: error: " << in_cli_words(e.what()) << "\n";
+        std::string message = in_cli_words(e.what());
+        if (message.find("OpenCL program build failed") != std::string::npos && file_size_limited())
+            message += std::string("; ") + kFileSizeLimitHint;
+        std::cerr << "voxmesh: error: " << message << "\n";
         return kExitBadInput;
     } catch (const std::bad_alloc&) {
         std::cerr << "voxmesh: internal error: out of memory\n";
