@@ -31,4 +31,8 @@ if(VOXMESH_WITH_OPENCL)
   add_test(NAME voxmesh_opencl_faults COMMAND voxmesh_tests "[clfault]")
   set_tests_properties(voxmesh_opencl_faults PROPERTIES
     ENVIRONMENT "OPENCL_LAYERS=$<TARGET_FILE:voxmesh_cl_fault_layer>;${VOXMESH_TEST_ENV}")
+  # The randomized [stress] cases again, each failing one drawn OpenCL call as out of memory.
+  add_test(NAME voxmesh_opencl_faults_stress COMMAND voxmesh_tests "[stress]")
+  set_tests_properties(voxmesh_opencl_faults_stress PROPERTIES
+    ENVIRONMENT "OPENCL_LAYERS=$<TARGET_FILE:voxmesh_cl_fault_layer>;VOXMESH_STRESS_ITERATIONS=150;${VOXMESH_TEST_ENV}")
 endif()

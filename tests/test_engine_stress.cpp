@@ -9,6 +9,9 @@
 //     t (as test_opencl.cpp's range test notes): the index buffer only.
 // VOXMESH_STRESS_SEED and VOXMESH_STRESS_ITERATIONS override the seed and the case count;
 // VOXMESH_STRESS_SPLIT=0 leaves out the cases on split devices (see draw_case).
+// Under ctest's voxmesh_opencl_faults_stress the fault layer (tests/cl_fault_layer) is loaded:
+// each case then also fails one OpenCL call as a device out of memory would, drawn apart from
+// the case (the same seed draws the same case with or without it), and the mesh must not change.
 // Case i draws everything from seed + i, so a failure's case seed replays that case alone:
 //   VOXMESH_STRESS_SEED=<case seed> VOXMESH_STRESS_ITERATIONS=1 voxmesh_tests "[stress]"
 // (its settings replay; the timing of its schedule may not).
@@ -16,6 +19,9 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include "support/mesh_checks.hpp"
+#ifdef VOXMESH_HAS_OPENCL
+#include "support/cl_fault.hpp"
+#endif
 
 #include "core/opencl_hook.hpp"
 
@@ -216,6 +222,40 @@ Case draw_case(std::uint64_t seed, bool allow_split) {
     return c;
 }
 
+#ifdef VOXMESH_HAS_OPENCL
+// One OpenCL call a case fails as out of memory: a kernel's launch or a transfer (after `skip`
+// such calls went through; `times` of them, negative for all), or buffers over some size.
+struct Fault {
+    const char* call = "";
+    int error = CL_MEM_OBJECT_ALLOCATION_FAILURE;
+    unsigned long long buffer_over = 0, skip = 0;
+    long long times = 0;
+
+    std::string describe() const {
+        std::ostringstream s;
+        s << "  fault: " << (*call ? call : "buffers over ") << (*call ? "" : std::to_string(buffer_over)) << " fails ("
+          << error << ") after " << skip << " calls, " << (times < 0 ? std::string("every time") : std::to_string(times) + " times");
+        return s.str();
+    }
+};
+
+Fault draw_fault(std::uint64_t seed) {
+    static const char* const kCalls[] = {"classify_pack",       "classify_rows",        "classify_repack",
+                                         "generate_vertices",   "generate_triangles",   "clEnqueueWriteBuffer",
+                                         "clEnqueueCopyBuffer", "clEnqueueReadBuffer",  "clEnqueueMapBuffer",
+                                         ""};
+    static const int kErrors[] = {CL_MEM_OBJECT_ALLOCATION_FAILURE, CL_OUT_OF_RESOURCES, CL_OUT_OF_HOST_MEMORY};
+    Draw d(seed ^ 0x5eedfau);  // apart from draw_case's sequence
+    Fault f;
+    f.call = kCalls[d.between(0, std::size(kCalls) - 1)];
+    f.error = kErrors[d.between(0, std::size(kErrors) - 1)];
+    if (!*f.call) f.buffer_over = d.between(200, 40000);
+    f.skip = d.between(0, 3);
+    f.times = d.chance(0.25) ? -1 : static_cast<long long>(d.between(1, 3));
+    return f;
+}
+#endif
+
 // "" when `got` is `want` as promised, else the first difference. bitwise: every float bit
 // equal; else positions within pos_tol and normals within 1e-3; indices_only: the index
 // buffer and the array sizes alone.
@@ -292,14 +332,24 @@ TEST_CASE("Every engine gives the one-thread CPU mesh under random volumes, opti
     const std::uint64_t iterations = env_number("VOXMESH_STRESS_ITERATIONS", kDefaultIterations);
     const bool allow_split = env_number("VOXMESH_STRESS_SPLIT", 1) != 0;
     const bool opencl = !list_devices().empty();
+#ifdef VOXMESH_HAS_OPENCL
+    const vmtest::FaultLayer faults = vmtest::fault_layer();
+    const vmtest::ClearFaults clear_faults{faults};
+    if (faults.loaded()) WARN("the fault layer is loaded: every case fails an OpenCL call as out of memory");
+#endif
     if (!opencl) WARN("no OpenCL device found: the OpenCL and Hybrid comparisons of this [stress] test are SKIPPED");
     Mesh leftover;  // storage reused by extract_into, dirty from earlier runs
+    std::size_t runs_faulted = 0;  // OpenCL and Hybrid runs the fault layer failed a call of
     std::size_t failed_cases = 0;
     double slowest_s = 0;
     std::string slowest;
     for (std::uint64_t i = 0; i < iterations && failed_cases < 5; ++i) {
         const Case c = draw_case(seed + i, allow_split);
-        const std::string description = c.describe();
+        std::string description = c.describe();
+#ifdef VOXMESH_HAS_OPENCL
+        const Fault fault = draw_fault(seed + i);
+        if (faults.loaded()) description += "\n" + fault.describe();
+#endif
         INFO(description);
         const auto started = std::chrono::steady_clock::now();
         const VolumeView view = c.view();
@@ -313,7 +363,15 @@ TEST_CASE("Every engine gives the one-thread CPU mesh under random volumes, opti
             Stats stats;
             std::string problem;
             try {
+#ifdef VOXMESH_HAS_OPENCL
+                if (faults.loaded() && backend != Backend::Cpu)
+                    faults.set(fault.call, fault.error, fault.buffer_over, fault.skip, fault.times);
+                const vmtest::ClearFaults clear{faults};
+#endif
                 extract_into(view, o, got, stats);
+#ifdef VOXMESH_HAS_OPENCL
+                if (faults.loaded() && faults.given() > 0) ++runs_faulted;
+#endif
                 problem = difference(want, got, bitwise, indices_only, pos_tol);
                 // The engine really ran (an iso no sample can cross is answered by the CPU
                 // engine alone: cl_engine.cpp), or the comparison would be vacuous.
@@ -378,6 +436,13 @@ TEST_CASE("Every engine gives the one-thread CPU mesh under random volumes, opti
         }
         if (failed) ++failed_cases;
     }
+#ifdef VOXMESH_HAS_OPENCL
+    // Most drawn faults meet a call they fail (not all: a Hybrid run may leave the device nothing).
+    if (faults.loaded() && opencl) {
+        WARN("the fault layer failed a call in " << runs_faulted << " of " << 2 * iterations << " OpenCL and Hybrid runs");
+        CHECK(runs_faulted >= iterations / 2);
+    }
+#endif
     // Not asserted (speed is measured in bench/): a case that stalls shows here.
     if (slowest_s > 3) WARN("the slowest case took " << slowest_s << " s:\n" << slowest);
 }

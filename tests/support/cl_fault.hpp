@@ -19,7 +19,9 @@ struct FaultLayer {
     unsigned long long (*given)() = nullptr;  // faults given since the last set
 
     bool loaded() const { return set != nullptr && given != nullptr; }
-    void clear() const { set("", 0, 0, 0, 0); }
+    void clear() const {
+        if (loaded()) set("", 0, 0, 0, 0);
+    }
 };
 
 // Null functions where the layer is not loaded.
