@@ -63,15 +63,15 @@ inline real axis_diff(__global const voxel* data, uint idx, uint pos, uint n, ui
     const voxel hi = data[pos + 1 < n ? idx + stride : idx];
     const voxel lo = data[pos > 0 ? idx - stride : idx];
     const real step = (pos > 0 && pos + 1 < n) ? (real)0.5 : (real)1.0;
-    return DIFF(hi, lo) * step * inv;
+    return DIFF(hi, lo) * (step * inv);  // one rounding, as the CPU's (hi - lo) * (0.5 / spacing)
 }
 
 // Central differences at data index idx away from the border, divided by spacing.
 inline void central_gradient(__global const voxel* data, uint idx, uint stride_y, uint stride_z, real ix, real iy,
                              real iz, real* g) {
-    g[0] = DIFF(data[idx + 1], data[idx - 1]) * (real)0.5 * ix;
-    g[1] = DIFF(data[idx + stride_y], data[idx - stride_y]) * (real)0.5 * iy;
-    g[2] = DIFF(data[idx + stride_z], data[idx - stride_z]) * (real)0.5 * iz;
+    g[0] = DIFF(data[idx + 1], data[idx - 1]) * ((real)0.5 * ix);
+    g[1] = DIFF(data[idx + stride_y], data[idx - stride_y]) * ((real)0.5 * iy);
+    g[2] = DIFF(data[idx + stride_z], data[idx - stride_z]) * ((real)0.5 * iz);
 }
 
 // The same, one-sided where (x, y, z) lies on the volume's border.

@@ -357,8 +357,8 @@ __kernel void generate_vertices(__global const voxel* data, __global const uint*
             const uint x = 32 * q + b;
             const uint axes = (m.x >> b & 1u) | (m.y >> b & 1u) << 1 | (m.z >> b & 1u) << 2;
             sample_vertices(data, row_sample + x, x, j, z, axes, nx, plane, nx, ny, nz, thr, iso, iso_int, iso_frac, ox,
-                            oy, oz, sx, sy, sz, ix, iy, iz, inside_below, want_normals, positions + 3 * id,
-                            normals + 3 * id);
+                            oy, oz, sx, sy, sz, ix, iy, iz, inside_below, want_normals, positions + 3 * (ulong)id,
+                            normals + 3 * (ulong)id);  // 3 * id wraps in uint past 1431655765 vertices
             id += popcount(axes);
         }
     }
@@ -396,8 +396,9 @@ __kernel void generate_triangles(__global const uint* bits, const uint nx, const
         word_base[k] = wbase + rk * words;
         row_first[k] = vertex_offset + vbase[rk];
     }
-    __global uint* out = indices + 3 * t;
-    __global const uint* const out_end = out + 3 * scanned_count(tbase, r, rows, tend);  // as row_end above
+    // Offsets in ulong: 3 * t wraps in uint past 1431655765 triangles (a piece may hold more).
+    __global uint* out = indices + 3 * (ulong)t;
+    __global const uint* const out_end = out + 3 * (ulong)scanned_count(tbase, r, rows, tend);  // as row_end above
     const uint group = word_group(words);
     for (ulong g = cell_groups[r]; g; g &= g - 1) {
         const uint first = lowest_bit64(g) * group;

@@ -22,6 +22,8 @@
 #include <thread>
 #include <vector>
 
+#include <sys/mman.h>
+
 #ifdef VOXMESH_HAS_OPENCL
 #include "support/cl_fault.hpp"
 #endif
@@ -312,6 +314,61 @@ TEST_CASE("normals of gradients near the ends of the range are unit, on the CPU 
         check_normals(run(v, o, Backend::Cpu));
         check_normals(run(v, o, Backend::OpenCL));
     }
+}
+
+// Found by a review: the kernels took a gradient as (hi - lo) * 0.5 * (1 / spacing), two
+// roundings, where the CPU takes (hi - lo) * (0.5 / spacing), one. They differ where hi - lo is
+// subnormal (f64 samples near 1e-310) and the spacing is not 1: normals turned by up to 90
+// degrees on a device with fp64, whose normals are to be the CPU's bit for bit.
+TEST_CASE("OpenCL normals of subnormal gradients with non-unit spacing are the CPU's", "[opencl]") {
+    if (!have_device() || !list_devices()[0].fp64) return;
+    // Samples a few multiples of the smallest subnormal: central differences in z are odd
+    // multiples of it, which halving before the spacing's factor rounds.
+    const double dm = std::numeric_limits<double>::denorm_min();
+    Grid g{{5, 5, 5}, {0.5, 0.5, 0.5}};
+    std::vector<double> f64(g.size());
+    for (std::size_t z = 0; z < 5; ++z)
+        for (std::size_t y = 0; y < 5; ++y)
+            for (std::size_t x = 0; x < 5; ++x) f64[x + 5 * (y + 5 * z)] = dm * double(4 * x + z * (z + 1) / 2);
+    const VolumeView v = view_of(f64.data(), ScalarType::F64, g);
+    Options o;
+    o.iso = 9 * dm;
+    const Mesh cpu = run(v, o, Backend::Cpu);
+    REQUIRE(cpu.vertex_count() == 35);
+    const Mesh cl = run(v, o, Backend::OpenCL);
+    REQUIRE(cl.indices == cpu.indices);
+    CHECK(cl.positions == cpu.positions);
+    CHECK(cl.normals == cpu.normals);  // the same operations in double (25 of 35 differed by 4 degrees)
+}
+
+// Found by a review: the kernels count a chunk's vertices and triangles in 32 bits (the scans),
+// and the host took any chunk of up to 2^31 samples: one with more than 2^32 - 1 triangles or
+// vertices (a dense surface in 860 M cells) wrapped its counts and came out short, silently.
+// A chunk is now cut until no surface can overflow them: 1024^3 samples asked for as one chunk
+// (5.4 G triangles at most) run as smaller ones.
+TEST_CASE("OpenCL cuts a chunk whose triangles could overflow the kernels' 32-bit counts", "[opencl][large]") {
+    if (!have_device()) return;
+    const std::size_t n = 1024, bytes = n * n * n;
+    void* p = mmap(nullptr, bytes, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    REQUIRE(p != MAP_FAILED);  // read as zeros, never written: costs no memory
+    VolumeView v;
+    v.data = p;
+    v.type = ScalarType::U8;
+    v.dims = {n, n, n};
+    Options o;
+    o.iso = 0.5;
+    o.normals = false;
+    o.chunk_planes = n;
+    o.devices = {0};
+    Stats stats;
+    const Mesh m = run(v, o, Backend::OpenCL, &stats);
+    munmap(p, bytes);
+    CHECK(m.triangle_count() == 0);
+    CHECK(stats.backend == Backend::OpenCL);
+    const bool cut = std::any_of(stats.warnings.begin(), stats.warnings.end(), [](const std::string& w) {
+        return w.find("1024-plane chunk does not fit") != std::string::npos;
+    });
+    CHECK(cut);
 }
 
 // Found by a review: without fp64 the kernels took iso as a float, so an iso between two

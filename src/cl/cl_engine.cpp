@@ -116,6 +116,13 @@ struct Measured {
 // The kernels index samples with uint: a chunk's samples stay below 2^31.
 constexpr std::size_t kMaxChunkSamples = std::size_t(1) << 31;
 
+// The scans count a chunk's vertices and triangles in 32 bits (uint): whatever its surface, a
+// chunk may hold at most 2^32 - 1 of either, at 3 vertices per sample of its meta rows and 5
+// triangles per cell (the case table's most). Past that the totals wrapped, and the mesh came
+// out with other counts than the CPU engine's, silently.
+constexpr std::uint64_t kMaxChunkCount = std::numeric_limits<std::uint32_t>::max();
+constexpr std::uint64_t kMaxVerticesPerSample = 3, kMaxTrianglesPerCell = 5;
+
 // Thrown inside a worker when a chunk does not fit the device: cut it smaller.
 struct TooBig {};
 
@@ -254,6 +261,10 @@ private:
     std::size_t working_bytes(const DeviceJob& job, const ChunkShape& s) const;
     std::size_t fixed_bytes(const DeviceJob& job, const ChunkShape& s) const;
     bool fits(const DeviceJob& job, const ChunkShape& s) const;
+    bool counts_fit(const ChunkShape& s) const {
+        return std::uint64_t{s.rows} * nx_ * kMaxVerticesPerSample <= kMaxChunkCount &&
+               std::uint64_t{s.cell_rows} * (nx_ - 1) * kMaxTrianglesPerCell <= kMaxChunkCount;
+    }
     std::vector<ZRange> make_chunks(const std::vector<DeviceJob>& jobs) const;
     // Phase 1: count.
     void device_count_worker(DeviceJob& job, unsigned worker);
@@ -455,7 +466,8 @@ std::size_t Engine::fixed_bytes(const DeviceJob& job, const ChunkShape& s) const
 // leave at least as much again for vertices and triangles.
 bool Engine::fits(const DeviceJob& job, const ChunkShape& s) const {
     const std::size_t max_allocation = job.device->info.max_allocation;
-    return s.data_samples <= kMaxChunkSamples && s.data_samples * scalar_size(job.device_type) <= max_allocation &&
+    return s.data_samples <= kMaxChunkSamples && counts_fit(s) &&
+           s.data_samples * scalar_size(job.device_type) <= max_allocation &&
            s.bit_words * 4 <= max_allocation && s.rows * s.words * job.word_id_bytes <= max_allocation &&
            2 * fixed_bytes(job, s) <= job.limit;
 }
@@ -711,7 +723,8 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
     const DeviceInfo& info = d.info;
     if (!fits(job, s)) {
         if (s.planes > 1) throw TooBig{};
-        if (s.data_samples > kMaxChunkSamples || s.data_samples * scalar_size(job.device_type) > info.max_allocation ||
+        if (s.data_samples > kMaxChunkSamples || !counts_fit(s) ||
+            s.data_samples * scalar_size(job.device_type) > info.max_allocation ||
             fixed_bytes(job, s) > job.limit)
             throw TooBig{};
     }
@@ -835,7 +848,7 @@ void Engine::count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Pi
         }
         if (too_big && planes > 1) {
             warn("a " + std::to_string(planes) + "-plane chunk does not fit OpenCL device '" + job.device->info.name +
-                 "' (out of memory, max allocation or memory budget); using smaller chunks");
+                 "' (out of memory, max allocation, memory budget or 32-bit counts); using smaller chunks");
             const ZRange a{range.begin, range.begin + planes / 2}, b{range.begin + planes / 2, range.end};
             count(job, worker, a, out);
             count(job, worker, b, out);
