@@ -35,7 +35,7 @@ if(TARGET voxmesh_c)
       foreach(_script python python_skimage)
         add_test(NAME voxmesh_${_script} COMMAND ${VOXMESH_TEST_PYTHON} ${CMAKE_CURRENT_SOURCE_DIR}/test_${_script}.py)
         set_tests_properties(voxmesh_${_script} PROPERTIES SKIP_RETURN_CODE 77 ENVIRONMENT
-          "PYTHONPATH=${CMAKE_BINARY_DIR}/python;VOXMESH_TEST_DATA=${CMAKE_CURRENT_SOURCE_DIR}/data;VOXMESH_TEST_SCRATCH=${_capi_scratch};VOXMESH_CLI=$<$<TARGET_EXISTS:voxmesh_cli>:$<TARGET_FILE:voxmesh_cli>>")
+          "PYTHONPATH=${PROJECT_BINARY_DIR}/python;VOXMESH_TEST_DATA=${CMAKE_CURRENT_SOURCE_DIR}/data;VOXMESH_TEST_SCRATCH=${_capi_scratch};VOXMESH_CLI=$<$<TARGET_EXISTS:voxmesh_cli>:$<TARGET_FILE:voxmesh_cli>>")
       endforeach()
     endif()
   endif()
