@@ -356,7 +356,8 @@ TEST_CASE("bench: repeated list entries run once, and a floor not measured is sh
 TEST_CASE("bench: bad arguments fail with a message", "[bench][errors]") {
     Scratch s;
     const std::vector<std::pair<std::string, std::string>> bad = {
-        {"--sizes 1", "at least 2 samples"},
+        {"--sizes 1", "at least 8 samples"},
+        {"--sizes 4", "at least 8 samples"},
         {"--field nope", "unknown field 'nope'"},
         {"--type f16", "unknown type 'f16'"},
         {"--backends gpu", "unknown backend 'gpu'"},

@@ -202,3 +202,45 @@ TEST_CASE("analyze_topology and the pieces give the same on any number of worker
     }
 }
 
+
+TEST_CASE("analyze_topology: a repeated corner is no edge, and the one edge of a sliver counts once", "[core][components]") {
+    Mesh tet;  // closed: euler 2
+    tet.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    tet.indices = {0, 2, 1, 0, 1, 3, 1, 2, 3, 2, 0, 3};
+    REQUIRE(analyze_topology(tet).closed());
+
+    // A welded sliver (0, 0, 1) on the tetrahedron's edge {0, 1}: that edge is now in three
+    // triangles; there is no edge {0, 0}. It used to count {0, 1} twice more and {0, 0} as a
+    // boundary edge.
+    Mesh sliver = tet;
+    sliver.indices.insert(sliver.indices.end(), {0, 0, 1});
+    MeshTopology t = analyze_topology(sliver);
+    CHECK(t.boundary_edges == 0);
+    CHECK(t.nonmanifold_edges == 1);
+    CHECK(t.euler == 4 - 6 + 5);
+
+    // A point-triangle (2, 2, 2) has no edge at all: the mesh stays closed (it used to read
+    // as an edge {2, 2} in three triangles).
+    Mesh point = tet;
+    point.indices.insert(point.indices.end(), {2, 2, 2});
+    t = analyze_topology(point);
+    CHECK(t.boundary_edges == 0);
+    CHECK(t.nonmanifold_edges == 0);
+    CHECK(t.euler == 4 - 6 + 5);
+    CHECK(t.components == 1);
+
+    // A lone sliver: one edge, in one triangle.
+    Mesh lone;
+    lone.positions = {0, 0, 0, 1, 0, 0};
+    lone.indices = {1, 0, 1};
+    t = analyze_topology(lone);
+    CHECK(t.boundary_edges == 1);
+    CHECK(t.nonmanifold_edges == 0);
+    CHECK(t.euler == 2 - 1 + 1);
+    for (unsigned workers : {2u, 3u}) {
+        const MeshTopology split = detail::topology_with_workers(sliver, workers);
+        CHECK(split.boundary_edges == 0);
+        CHECK(split.nonmanifold_edges == 1);
+        CHECK(split.euler == 3);
+    }
+}

@@ -241,7 +241,9 @@ std::vector<unsigned char> write_mesh_to_memory(const Mesh& mesh, const std::str
 // copy of standard input is listed among them).
 void remove_partial_outputs() noexcept;
 
-// Topology summary: closed means every edge is in exactly two triangles.
+// Topology summary: closed means every edge is in exactly two triangles. An edge joins two
+// different vertices: a triangle with a repeated corner (a, a, b) has the one edge {a, b} (it
+// still counts in F), and one with three equal corners has none.
 struct MeshTopology {
     std::size_t boundary_edges = 0;      // edges in one triangle
     std::size_t nonmanifold_edges = 0;   // edges in three or more

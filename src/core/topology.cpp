@@ -55,10 +55,16 @@ MeshTopology topology_with_workers(const Mesh& mesh, unsigned workers) {
         const std::size_t begin = mine.begin, span = mine.end - mine.begin;
         for (std::size_t i = 0; i < side_count; i += 3) {
             const std::uint32_t c[3] = {corners[i], corners[i + 1], corners[i + 2]};
+            // A triangle with a repeated corner (a, a, b) has one edge, {a, b}, though two of
+            // its sides name it; a side from a corner to itself is no edge.
+            const bool degenerate = c[0] == c[1] || c[1] == c[2] || c[0] == c[2];
+            bool filed = false;
             for (std::size_t k = 0; k < 3; ++k) {
                 const std::uint32_t a = c[k], b = c[(k + 1) % 3], lo = std::min(a, b);
-                if (lo - begin < span) side(lo, std::max(a, b));
                 if (a - begin < span) corner(a);
+                if (a == b || (degenerate && filed)) continue;
+                filed = true;
+                if (lo - begin < span) side(lo, std::max(a, b));
             }
         }
     };
@@ -69,10 +75,11 @@ MeshTopology topology_with_workers(const Mesh& mesh, unsigned workers) {
     std::size_t* const list_end = static_cast<std::size_t*>(list_end_block.get());
     std::vector<std::uint8_t> used(vertices, 0);  // bytes: workers mark their own vertices only
     detail::run_workers(workers, [&](unsigned w) {
-        owned(w, [&](std::uint32_t lo, std::uint32_t) { ++list_end[lo + 1]; }, [](std::uint32_t) {});
+        owned(w, [&](std::uint32_t lo, std::uint32_t) { ++list_end[std::size_t{lo} + 1]; }, [](std::uint32_t) {});
     });
     for (std::size_t v = 0; v < vertices; ++v) list_end[v + 1] += list_end[v];  // list_end[v]: where v's list starts
-    // Every entry is written below (120 MB for 10 M triangles).
+    // Every entry up to list_end[vertices] is written below (120 MB for 10 M triangles; fewer
+    // when triangles repeat a corner).
     const auto higher_block = allocate_zeroed(side_count * sizeof(std::uint32_t));
     std::uint32_t* const higher = static_cast<std::uint32_t*>(higher_block.get());
     detail::run_workers(workers, [&](unsigned w) {

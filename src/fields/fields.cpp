@@ -367,7 +367,12 @@ FieldVolume make_field_unchecked(Field field, std::size_t n, ScalarType type, st
 }  // namespace
 
 FieldVolume make_field(Field field, std::size_t n, ScalarType type, std::uint32_t seed) {
-    if (n < 2) throw Error("a built-in field needs at least 2 samples per axis (got " + std::to_string(n) + ")");
+    // Below 8 samples the iso can miss every sample: the sphere (radius 0.4 n) lies between the
+    // samples at n = 2, the gyroid's 4 periods alias to 0 at n = 2 and 4, and seeded blobs can
+    // fall between them up to n = 6.
+    if (n < kMinFieldSize)
+        throw Error("a built-in field needs at least " + std::to_string(kMinFieldSize) + " samples per axis (got " +
+                    std::to_string(n) + ")");
     if (n > (std::size_t(1) << 20)) throw Error("built-in field size " + std::to_string(n) + " is too large");
     // Volume::allocate names the volume's bytes itself; this is for the generators' own memory.
     return detail::out_of_memory_as_error(

@@ -27,12 +27,16 @@ Topology topology(const voxmesh::Mesh& mesh) {
     for (std::size_t f = 0; f < mesh.triangle_count(); ++f) {
         const std::uint32_t v[3] = {mesh.indices[3 * f], mesh.indices[3 * f + 1], mesh.indices[3 * f + 2]};
         if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) ++t.degenerate_triangles;
+        std::uint64_t edges[3];  // this triangle's edges: distinct pairs of distinct corners
+        std::size_t edge_count = 0;
         for (int k = 0; k < 3; ++k) {
             const std::uint64_t a = v[k], b = v[(k + 1) % 3];
             if (a < used.size()) used[a] = 1;
             directed.push_back(a << 32 | b);
-            undirected.push_back(std::min(a, b) << 32 | std::max(a, b));
+            const std::uint64_t key = std::min(a, b) << 32 | std::max(a, b);
+            if (a != b && std::find(edges, edges + edge_count, key) == edges + edge_count) edges[edge_count++] = key;
         }
+        undirected.insert(undirected.end(), edges, edges + edge_count);
     }
     auto runs = [](std::vector<std::uint64_t>& keys, auto&& visit) {
         std::sort(keys.begin(), keys.end());
