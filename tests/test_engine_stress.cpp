@@ -339,7 +339,9 @@ TEST_CASE("Every engine gives the one-thread CPU mesh under random volumes, opti
 #endif
     if (!opencl) WARN("no OpenCL device found: the OpenCL and Hybrid comparisons of this [stress] test are SKIPPED");
     Mesh leftover;  // storage reused by extract_into, dirty from earlier runs
+#ifdef VOXMESH_HAS_OPENCL
     std::size_t runs_faulted = 0;  // OpenCL and Hybrid runs the fault layer failed a call of
+#endif
     std::size_t failed_cases = 0;
     double slowest_s = 0;
     std::string slowest;
