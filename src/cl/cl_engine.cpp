@@ -415,6 +415,13 @@ void Engine::prepare(DeviceJob& job) {
     if (job.cpu_only)
         warn("OpenCL device '" + info.name + "' has no fp64 and iso " + std::to_string(options_.iso) +
              " is outside the float range; its chunks run on the CPU engine");
+    // The kernels take nz and a chunk's first plane as 32-bit (nx and ny are bounded by a chunk's
+    // 2^31 samples). Not reachable in practice (the CPU engine's row state alone is 130 GB).
+    if (nz_ > std::numeric_limits<cl_uint>::max() && !job.cpu_only) {
+        job.cpu_only = true;
+        warn("the volume has more z-planes than OpenCL device '" + info.name +
+             "' is given in 32 bits; its chunks run on the CPU engine");
+    }
     std::size_t limit = info.global_memory / 2;
     if (options_.memory_budget > 0) limit = std::min(limit, options_.memory_budget);
     job.limit = limit;
