@@ -180,6 +180,16 @@ void run_sequence(const TypeSetup& ts, Dims d, std::size_t block, std::uint32_t 
     require_mesh_equals_extract(cl, false, tol, worst);
 }
 
+// The device mesher's test tuning while it lives, the defaults back however the test ends.
+struct TuningScope {
+    explicit TuningScope(const voxmesh::detail::sculpt::DeviceBlockTuning& tuning) {
+        voxmesh::detail::sculpt::set_device_block_tuning(tuning);
+    }
+    ~TuningScope() { voxmesh::detail::sculpt::set_device_block_tuning({}); }
+    TuningScope(const TuningScope&) = delete;
+    TuningScope& operator=(const TuningScope&) = delete;
+};
+
 }  // namespace
 
 TEST_CASE("sculpt OpenCL: random edit sequences give the CPU's block meshes and extract's mesh", "[sculpt][opencl]") {
@@ -205,19 +215,13 @@ TEST_CASE("sculpt OpenCL: float vertex math (devices without fp64) stays within 
     if (!have_device()) return;
     voxmesh::detail::sculpt::DeviceBlockTuning tuning;
     tuning.no_fp64 = true;
-    voxmesh::detail::sculpt::set_device_block_tuning(tuning);
+    const TuningScope tuning_scope(tuning);
     Worst worst;
-    try {
-        std::uint32_t seed = 101;
-        for (const TypeSetup& ts : kTypes) {
-            INFO(voxmesh::scalar_name(ts.type));
-            run_sequence(ts, {25, 27, 22}, 7, seed++, 6, Tolerance{4}, worst);
-        }
-    } catch (...) {
-        voxmesh::detail::sculpt::set_device_block_tuning({});
-        throw;
+    std::uint32_t seed = 101;
+    for (const TypeSetup& ts : kTypes) {
+        INFO(voxmesh::scalar_name(ts.type));
+        run_sequence(ts, {25, 27, 22}, 7, seed++, 6, Tolerance{4}, worst);
     }
-    voxmesh::detail::sculpt::set_device_block_tuning({});
     INFO("worst position ulps " << worst.position_ulps << ", worst normal difference " << worst.normal);
     CHECK(worst.position_ulps <= 4);  // PoCL: 1 ulp, normals within 1 epsilon
 }
@@ -226,49 +230,43 @@ TEST_CASE("sculpt OpenCL: spacing, origin, inside_below, normals off and many sm
     if (!have_device()) return;
     voxmesh::detail::sculpt::DeviceBlockTuning tuning;
     tuning.batch_samples = 600;  // a few blocks per batch: every update runs several batches
-    voxmesh::detail::sculpt::set_device_block_tuning(tuning);
+    const TuningScope tuning_scope(tuning);
     Worst worst;
-    try {
-        const Dims d{24, 21, 19};
-        for (bool inside_below : {false, true}) {
-            for (bool normals : {true, false}) {
-                INFO("inside_below " << inside_below << " normals " << normals);
-                SculptOptions o;
-                o.block_size = 6;
-                o.inside_below = inside_below;
-                o.normals = normals;
-                o.iso = 0.25;
-                const auto field = balls(d, 1, 0);
-                std::vector<float> samples(d[0] * d[1] * d[2]);
-                for (std::size_t i = 0; i < samples.size(); ++i)
-                    samples[i] = float(field(double(i % d[0]), double(i / d[0] % d[1]), double(i / (d[0] * d[1]))));
-                voxmesh::VolumeView v;
-                v.data = samples.data();
-                v.dims = d;
-                v.spacing = {0.5, 0.75, 1.25};
-                v.origin = {-3, 2, 7.5};
-                Sculpt cpu(v, o);
-                o.backend = Backend::OpenCL;
-                Sculpt cl(v, o);
-                REQUIRE(cl.backend() == Backend::OpenCL);
-                cpu.update();
-                cl.update();
-                require_same_blocks(cpu, cl, Tolerance{}, worst);
-                for (Sculpt* s : {&cpu, &cl}) {
-                    s->add({5, 6, 7}, 4, 1.5);
-                    s->subtract({12, 12, 12}, 5, 2);  // a block corner
-                    s->set_region({20, -3, 15}, {30, 4, 30}, -1);  // clipped at three faces
-                    s->update();
-                }
-                require_same_blocks(cpu, cl, Tolerance{}, worst);
-                require_mesh_equals_extract(cl, false, Tolerance{}, worst);
+    const Dims d{24, 21, 19};
+    for (bool inside_below : {false, true}) {
+        for (bool normals : {true, false}) {
+            INFO("inside_below " << inside_below << " normals " << normals);
+            SculptOptions o;
+            o.block_size = 6;
+            o.inside_below = inside_below;
+            o.normals = normals;
+            o.iso = 0.25;
+            const auto field = balls(d, 1, 0);
+            std::vector<float> samples(d[0] * d[1] * d[2]);
+            for (std::size_t i = 0; i < samples.size(); ++i)
+                samples[i] = float(field(double(i % d[0]), double(i / d[0] % d[1]), double(i / (d[0] * d[1]))));
+            voxmesh::VolumeView v;
+            v.data = samples.data();
+            v.dims = d;
+            v.spacing = {0.5, 0.75, 1.25};
+            v.origin = {-3, 2, 7.5};
+            Sculpt cpu(v, o);
+            o.backend = Backend::OpenCL;
+            Sculpt cl(v, o);
+            REQUIRE(cl.backend() == Backend::OpenCL);
+            cpu.update();
+            cl.update();
+            require_same_blocks(cpu, cl, Tolerance{}, worst);
+            for (Sculpt* s : {&cpu, &cl}) {
+                s->add({5, 6, 7}, 4, 1.5);
+                s->subtract({12, 12, 12}, 5, 2);  // a block corner
+                s->set_region({20, -3, 15}, {30, 4, 30}, -1);  // clipped at three faces
+                s->update();
             }
+            require_same_blocks(cpu, cl, Tolerance{}, worst);
+            require_mesh_equals_extract(cl, false, Tolerance{}, worst);
         }
-    } catch (...) {
-        voxmesh::detail::sculpt::set_device_block_tuning({});
-        throw;
     }
-    voxmesh::detail::sculpt::set_device_block_tuning({});
 }
 
 TEST_CASE("sculpt OpenCL: the device path is chosen, named and checked", "[sculpt][opencl]") {
@@ -358,55 +356,50 @@ TEST_CASE("sculpt: a Sculpt on OpenCL in a forked child re-meshes on the CPU", "
 // OpenCL error in update(), out of memory or not, drops the device with a warning naming it;
 // that update() and the later ones re-mesh on the CPU and give what the device would have.
 TEST_CASE("sculpt OpenCL: a device that fails in update() hands the sculpt to the CPU", "[.clfault]") {
+    if (!vmtest::fault_layer_named()) return;  // run by name without the layer: skipped, with a warning
     const vmtest::FaultLayer layer = vmtest::fault_layer();
     REQUIRE(layer.loaded());
     REQUIRE(have_device());
     const vmtest::ClearFaults clear{layer};
     voxmesh::detail::sculpt::DeviceBlockTuning tuning;
     tuning.batch_samples = 600;  // several batches: the failing one comes after others were stored
-    voxmesh::detail::sculpt::set_device_block_tuning(tuning);
+    const TuningScope tuning_scope(tuning);
     Worst worst;
-    try {
-        const struct {
-            const char* kernel;
-            int error;
-            const char* named;
-        } faults[] = {{"block_vertices", CL_OUT_OF_RESOURCES, "CL_OUT_OF_RESOURCES"},
-                      {"block_triangles", CL_INVALID_COMMAND_QUEUE, "CL_INVALID_COMMAND_QUEUE"},
-                      {"block_classify", CL_MEM_OBJECT_ALLOCATION_FAILURE, "CL_MEM_OBJECT_ALLOCATION_FAILURE"}};
-        const TypeSetup& ts = kTypes[1];  // u8
-        const Dims d{29, 23, 26};
-        for (const auto& fault : faults) {
-            INFO(fault.kernel);
-            Sculpt cpu = make(ts, d, 5, Backend::Cpu);
-            SculptOptions o = cpu.options();
-            o.backend = Backend::OpenCL;
-            std::vector<std::string> warnings;
-            o.log = [&](const std::string& w) { warnings.push_back(w); };
-            Sculpt cl = Sculpt::from_function(d, ts.type, balls(d, ts.scale, ts.offset), o);
-            REQUIRE(cl.backend() == Backend::OpenCL);
-            cpu.update();
-            cl.update();
-            for (Sculpt* s : {&cpu, &cl}) s->add({9, 11, 13}, 6, 2);  // over several blocks
-            const voxmesh::UpdateResult want = cpu.update();
-            layer.set(fault.kernel, fault.error, 0, 2, 1);  // the third launch: batches before it were stored
-            const voxmesh::UpdateResult got = cl.update();
-            CHECK(layer.given() == 1);
-            layer.clear();
-            CHECK(got.changed == want.changed);
-            CHECK(cl.backend() == Backend::Cpu);
-            REQUIRE(warnings.size() == 1);
-            CHECK_THAT(warnings[0], Catch::Contains(fault.named) && Catch::Contains("re-meshes on the CPU"));
-            require_same_blocks(cpu, cl, Tolerance{}, worst);
-            for (Sculpt* s : {&cpu, &cl}) s->subtract({14, 12, 12}, 5, 2);
-            CHECK(cpu.update().changed == cl.update().changed);
-            require_same_blocks(cpu, cl, Tolerance{}, worst);
-            require_mesh_equals_extract(cl, false, Tolerance{}, worst);
-        }
-    } catch (...) {
-        voxmesh::detail::sculpt::set_device_block_tuning({});
-        throw;
+    const struct {
+        const char* kernel;
+        int error;
+        const char* named;
+    } faults[] = {{"block_vertices", CL_OUT_OF_RESOURCES, "CL_OUT_OF_RESOURCES"},
+                  {"block_triangles", CL_INVALID_COMMAND_QUEUE, "CL_INVALID_COMMAND_QUEUE"},
+                  {"block_classify", CL_MEM_OBJECT_ALLOCATION_FAILURE, "CL_MEM_OBJECT_ALLOCATION_FAILURE"}};
+    const TypeSetup& ts = kTypes[1];  // u8
+    const Dims d{29, 23, 26};
+    for (const auto& fault : faults) {
+        INFO(fault.kernel);
+        Sculpt cpu = make(ts, d, 5, Backend::Cpu);
+        SculptOptions o = cpu.options();
+        o.backend = Backend::OpenCL;
+        std::vector<std::string> warnings;
+        o.log = [&](const std::string& w) { warnings.push_back(w); };
+        Sculpt cl = Sculpt::from_function(d, ts.type, balls(d, ts.scale, ts.offset), o);
+        REQUIRE(cl.backend() == Backend::OpenCL);
+        cpu.update();
+        cl.update();
+        for (Sculpt* s : {&cpu, &cl}) s->add({9, 11, 13}, 6, 2);  // over several blocks
+        const voxmesh::UpdateResult want = cpu.update();
+        layer.set(fault.kernel, fault.error, 0, 2, 1);  // the third launch: batches before it were stored
+        const voxmesh::UpdateResult got = cl.update();
+        CHECK(layer.given() == 1);
+        layer.clear();
+        CHECK(got.changed == want.changed);
+        CHECK(cl.backend() == Backend::Cpu);
+        REQUIRE(warnings.size() == 1);
+        CHECK_THAT(warnings[0], Catch::Contains(fault.named) && Catch::Contains("re-meshes on the CPU"));
+        require_same_blocks(cpu, cl, Tolerance{}, worst);
+        for (Sculpt* s : {&cpu, &cl}) s->subtract({14, 12, 12}, 5, 2);
+        CHECK(cpu.update().changed == cl.update().changed);
+        require_same_blocks(cpu, cl, Tolerance{}, worst);
+        require_mesh_equals_extract(cl, false, Tolerance{}, worst);
     }
-    voxmesh::detail::sculpt::set_device_block_tuning({});
 }
 #endif  // VOXMESH_HAS_OPENCL

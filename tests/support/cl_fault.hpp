@@ -2,6 +2,7 @@
 // test voxmesh_opencl_faults: the [.clfault] tests say through it which OpenCL calls fail.
 #pragma once
 
+#include <catch2/catch.hpp>
 #include <voxmesh/voxmesh.hpp>
 
 #include <CL/cl.h>  // the error codes to give
@@ -23,6 +24,14 @@ struct FaultLayer {
         if (loaded()) set("", 0, 0, 0, 0);
     }
 };
+
+// Whether OPENCL_LAYERS names a layer; else a warning that the calling test is skipped (it runs
+// under ctest's voxmesh_opencl_faults; by name, a hidden test runs without the layer).
+inline bool fault_layer_named() {
+    if (std::getenv("OPENCL_LAYERS") != nullptr) return true;
+    WARN("this test needs the fault layer (ctest runs it as voxmesh_opencl_faults): SKIPPED");
+    return false;
+}
 
 // Null functions where the layer is not loaded.
 inline FaultLayer fault_layer() {
