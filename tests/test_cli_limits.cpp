@@ -195,6 +195,27 @@ TEST_CASE("cli: real-number options are decimal", "[cli]") {
     CHECK(spaced.out.find("-1 0 3") != std::string::npos);  // an exponent below the range is 0, as strtod reads it
 }
 
+// Found by a review: the decimal check handed CLI11 the shortest form of the double it read,
+// which CLI11's strtold-then-double reads as the next double for about 1 in 10^4 values:
+// --iso 6.4496454125996075e-280 (or its shortest form) missed a sample of exactly that value.
+TEST_CASE("cli: a decimal real number reaches the command as the double it names", "[cli]") {
+    iotest::Scratch s;
+    const double d = 6.4496454125996075e-280;  // shortest form 6.449645412599608e-280
+    std::string samples(27 * sizeof(double), '\0');
+    std::memcpy(&samples[13 * sizeof(double)], &d, sizeof d);  // the centre sample, inside at iso d
+    const std::string raw = s.file("d.raw", samples);
+    for (const char* iso : {"6.4496454125996075e-280", "6.449645412599608e-280"}) {
+        const vmtest::ProgramResult r = vmtest::run_program(
+            VOXMESH_CLI_PATH,
+            "mesh " + quote(raw) + " --dims 3 3 3 --type f64 --backend cpu --json --iso " + iso + " -o " +
+                quote(s.dir + "/o.stl"),
+            s.dir);
+        INFO(iso << ": " << r.err << r.out);
+        CHECK(r.code == 0);
+        CHECK(r.out.find("\"triangles\": 8") != std::string::npos);
+    }
+}
+
 // Options that would have been ignored: --endian for a file with a header, --device where no
 // OpenCL device is used.
 TEST_CASE("cli: --endian without .raw input and --device with --backend cpu are refused", "[cli]") {

@@ -371,6 +371,33 @@ TEST_CASE("OpenCL cuts a chunk whose triangles could overflow the kernels' 32-bi
     CHECK(cut);
 }
 
+// Found by a review: a one-plane chunk cut for its 32-bit counts alone (27000^2 samples a plane,
+// two planes: 1.4 GB, which the device holds) ran on the CPU with a warning blaming memory.
+TEST_CASE("OpenCL names the 32-bit counts when even one plane cannot be meshed on the device", "[opencl][large]") {
+    if (!have_device()) return;
+    const std::size_t n = 27000, bytes = n * n * 2;
+    void* p = mmap(nullptr, bytes, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+    REQUIRE(p != MAP_FAILED);
+    VolumeView v;
+    v.data = p;
+    v.type = ScalarType::U8;
+    v.dims = {n, n, 2};
+    Options o;
+    o.iso = 0.5;
+    o.normals = false;
+    o.devices = {0};
+    Stats stats;
+    const Mesh m = run(v, o, Backend::OpenCL, &stats);
+    munmap(p, bytes);
+    CHECK(m.triangle_count() == 0);
+    const auto said = [&](const char* text) {
+        return std::any_of(stats.warnings.begin(), stats.warnings.end(),
+                           [&](const std::string& w) { return w.find(text) != std::string::npos; });
+    };
+    CHECK(said("cannot hold even one z-plane of this volume within the kernels' 32-bit vertex and triangle counts"));
+    CHECK(!said("memory limits"));
+}
+
 // Found by a review: without fp64 the kernels took iso as a float, so an iso between two
 // adjacent floats (1 + 2^-24, between 1 and its next float) was rounded onto one of them and a
 // vertex moved by half a cell. What rounding left is now added back.

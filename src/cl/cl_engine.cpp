@@ -861,8 +861,12 @@ void Engine::count(DeviceJob& job, unsigned worker, ZRange range, std::vector<Pi
             count(job, worker, b, out);
             return;
         }
+        // A plane of more than ~716 M samples may hold more vertices than the scans' 32-bit
+        // counts: say so, not memory (the device may have plenty).
+        const bool counts = !counts_fit(shape(range));
         warn("OpenCL device '" + job.device->info.name + "' cannot hold even one z-plane of this volume within " +
-             "its memory limits; those chunks run on the CPU engine");
+             (counts ? "the kernels' 32-bit vertex and triangle counts" : "its memory limits") +
+             "; those chunks run on the CPU engine");
     }
     const auto t0 = Clock::now();
     out.push_back(count_on_cpu(range, worker, 1));

@@ -67,8 +67,17 @@ inline CLI::Validator decimal_number() {
                 value = std::strtod(std::string(begin, end).c_str(), nullptr);  // 0 or a denormal, or inf
                 if (std::isinf(value)) return text + " is out of range of a double";
             }
+            // CLI11 reads the text with strtold and rounds that to double: rounding twice, it
+            // turns about 1 in 10^4 shortest forms into the next double (6.449645412599608e-280,
+            // the shortest form of 6.4496454125996075e-280, came back as ...6085e-280). 17
+            // significant digits lie far enough from a rounding midpoint to survive it.
             char buffer[64];
-            const auto written = std::to_chars(buffer, buffer + sizeof buffer, value);
+            auto written = std::to_chars(buffer, buffer + sizeof buffer - 1, value);
+            *written.ptr = '\0';
+            if (std::isfinite(value) && static_cast<double>(std::strtold(buffer, nullptr)) != value) {
+                written = std::to_chars(buffer, buffer + sizeof buffer - 1, value, std::chars_format::scientific, 16);
+                *written.ptr = '\0';
+            }
             text.assign(buffer, written.ptr);
             return std::string();
         },
