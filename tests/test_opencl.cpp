@@ -9,6 +9,7 @@
 #include "support/child_process.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -133,6 +134,33 @@ void compare(const VolumeView& v, const Options& o) {
     CHECK(stats.backend == Backend::OpenCL);
     require_same(cpu, cl, v);
 }
+
+bool has_warning(const Stats& stats, const std::string& text) {
+    for (const std::string& w : stats.warnings)
+        if (w.find(text) != std::string::npos) return true;
+    return false;
+}
+
+// A u8 volume of zeros in the shared zero page, never written: a large one costs no memory.
+class ZeroVolume {
+public:
+    explicit ZeroVolume(std::array<std::size_t, 3> dims) : bytes_(dims[0] * dims[1] * dims[2]) {
+        data_ = mmap(nullptr, bytes_, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
+        REQUIRE(data_ != MAP_FAILED);
+        view_.data = data_;
+        view_.type = ScalarType::U8;
+        view_.dims = dims;
+    }
+    ~ZeroVolume() { munmap(data_, bytes_); }
+    ZeroVolume(const ZeroVolume&) = delete;
+    ZeroVolume& operator=(const ZeroVolume&) = delete;
+    const VolumeView& view() const { return view_; }
+
+private:
+    std::size_t bytes_;
+    void* data_ = nullptr;
+    VolumeView view_;
+};
 
 }  // namespace
 
@@ -348,54 +376,35 @@ TEST_CASE("OpenCL normals of subnormal gradients with non-unit spacing are the C
 // (5.4 G triangles at most) run as smaller ones.
 TEST_CASE("OpenCL cuts a chunk whose triangles could overflow the kernels' 32-bit counts", "[opencl][large]") {
     if (!have_device()) return;
-    const std::size_t n = 1024, bytes = n * n * n;
-    void* p = mmap(nullptr, bytes, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
-    REQUIRE(p != MAP_FAILED);  // read as zeros, never written: costs no memory
-    VolumeView v;
-    v.data = p;
-    v.type = ScalarType::U8;
-    v.dims = {n, n, n};
+    const std::size_t n = 1024;
+    const ZeroVolume zeros({n, n, n});
     Options o;
     o.iso = 0.5;
     o.normals = false;
     o.chunk_planes = n;
     o.devices = {0};
     Stats stats;
-    const Mesh m = run(v, o, Backend::OpenCL, &stats);
-    munmap(p, bytes);
+    const Mesh m = run(zeros.view(), o, Backend::OpenCL, &stats);
     CHECK(m.triangle_count() == 0);
     CHECK(stats.backend == Backend::OpenCL);
-    const bool cut = std::any_of(stats.warnings.begin(), stats.warnings.end(), [](const std::string& w) {
-        return w.find("1024-plane chunk does not fit") != std::string::npos;
-    });
-    CHECK(cut);
+    CHECK(has_warning(stats, "1024-plane chunk does not fit"));
 }
 
 // Found by a review: a one-plane chunk cut for its 32-bit counts alone (27000^2 samples a plane,
 // two planes: 1.4 GB, which the device holds) ran on the CPU with a warning blaming memory.
 TEST_CASE("OpenCL names the 32-bit counts when even one plane cannot be meshed on the device", "[opencl][large]") {
     if (!have_device()) return;
-    const std::size_t n = 27000, bytes = n * n * 2;
-    void* p = mmap(nullptr, bytes, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
-    REQUIRE(p != MAP_FAILED);
-    VolumeView v;
-    v.data = p;
-    v.type = ScalarType::U8;
-    v.dims = {n, n, 2};
+    const std::size_t n = 27000;
+    const ZeroVolume zeros({n, n, 2});
     Options o;
     o.iso = 0.5;
     o.normals = false;
     o.devices = {0};
     Stats stats;
-    const Mesh m = run(v, o, Backend::OpenCL, &stats);
-    munmap(p, bytes);
+    const Mesh m = run(zeros.view(), o, Backend::OpenCL, &stats);
     CHECK(m.triangle_count() == 0);
-    const auto said = [&](const char* text) {
-        return std::any_of(stats.warnings.begin(), stats.warnings.end(),
-                           [&](const std::string& w) { return w.find(text) != std::string::npos; });
-    };
-    CHECK(said("cannot hold even one z-plane of this volume within the kernels' 32-bit vertex and triangle counts"));
-    CHECK(!said("memory limits"));
+    CHECK(has_warning(stats, "cannot hold even one z-plane of this volume within the kernels' 32-bit vertex and triangle counts"));
+    CHECK(!has_warning(stats, "memory limits"));
 }
 
 // Found by a review: without fp64 the kernels took iso as a float, so an iso between two
@@ -1304,16 +1313,6 @@ TEST_CASE("threads forking at once leave the device registry usable", "[opencl]"
 #endif
 
 #ifdef VOXMESH_HAS_OPENCL
-namespace {
-
-bool has_warning(const Stats& stats, const std::string& text) {
-    for (const std::string& w : stats.warnings)
-        if (w.find(text) != std::string::npos) return true;
-    return false;
-}
-
-}  // namespace
-
 // Run by ctest as voxmesh_opencl_faults, with the fault layer loaded (tests/opencl.cmake):
 // a device that runs out of memory counting or generating hands its chunks to the CPU engine
 // (or cuts them smaller) and the mesh is the same; any other OpenCL error ends the call with

@@ -38,8 +38,9 @@ std::atomic<bool> g_command_running{false};
 void on_exit_during_command() {
     if (!g_command_running.load()) return;
     voxmesh::remove_partial_outputs();
+    const bool limited = file_size_limited();
     std::fprintf(stderr, "voxmesh: error: a library ended the program during the work (its message is above)%s%s\n",
-                 file_size_limited() ? "; " : "", file_size_limited() ? kFileSizeLimitHint : "");
+                 limited ? "; " : "", limited ? kFileSizeLimitHint : "");
 }
 
 struct CommandRunning {
