@@ -118,7 +118,10 @@ VERTEX_INLINE inline void sample_vertices(__global const voxel* data, const uint
         const uint stride = axis == 0 ? 1u : axis == 1 ? stride_y : stride_z;
         const uint idx1 = idx + stride;
         const voxel v1 = data[idx1];
-        const real t = EDGE_T(v0, v1);
+        const real t0 = EDGE_T(v0, v1);
+        // On the edge, NaN to 0, as the CPU engine's on_edge: only samples written to since
+        // classify (zero-copy host memory) give another t.
+        const real t = t0 >= 0 ? (t0 <= 1 ? t0 : (real)1) : (real)0;
         position[0] = (float)(ox + ((real)x + (axis == 0 ? t : (real)0)) * sx);
         position[1] = (float)(oy + ((real)y + (axis == 1 ? t : (real)0)) * sy);
         position[2] = (float)(oz + ((real)z + (axis == 2 ? t : (real)0)) * sz);

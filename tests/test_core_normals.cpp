@@ -11,6 +11,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <utility>
 #include <vector>
 
 using voxmesh::detail::NormalBatch;
@@ -53,6 +54,44 @@ TEST_CASE("batched normals are normalised exactly as one at a time", "[core]") {
         for (std::size_t v = 0; v < count; ++v) {
             const double len = std::hypot(got[3 * v], got[3 * v + 1], got[3 * v + 2]);
             CHECK(std::fabs(len - 1) < 1e-6);
+        }
+    }
+}
+
+// Samples written to between classify and generate (a data race, for which the API promises a
+// mix of old and new samples) can hand generate an edge that no longer crosses iso: both ends
+// on iso (t = 0 / 0), equal off iso (t = +-inf), or crossing the other way (t outside [0, 1]).
+// Its vertex stays finite and on its edge.
+TEST_CASE("a vertex on an edge whose samples changed since classify stays finite and on its edge", "[core]") {
+    const std::uint16_t iso = 1000;
+    for (const auto& [a, b] : std::vector<std::pair<std::uint16_t, std::uint16_t>>{
+             {1000, 1000}, {999, 999}, {1001, 1001}, {990, 980}, {990, 995}, {1010, 1020}, {0, 65535}}) {
+        INFO(a << " -> " << b);
+        // Sample (1, 1, 1) holds a, its +x, +y and +z neighbours b, the rest a.
+        const std::size_t n = 4;
+        std::vector<std::uint16_t> samples(n * n * n, a);
+        samples[2 + n * 1 + n * n * 1] = b;
+        samples[1 + n * 2 + n * n * 1] = b;
+        samples[1 + n * 1 + n * n * 2] = b;
+        voxmesh::VolumeView v;
+        v.data = samples.data();
+        v.type = voxmesh::ScalarType::U16;
+        v.dims = {n, n, n};
+        v.spacing = {0.5, 2, 3};
+        v.origin = {-1, 10, 100};
+        const voxmesh::detail::EdgeVertex<std::uint16_t> vertex(v, iso, false);
+        float position[9], normal[9];
+        vertex.sample(1, 1, 1, 7u, position, normal);
+        for (unsigned axis = 0; axis < 3; ++axis) {
+            INFO("axis " << axis);
+            for (unsigned d = 0; d < 3; ++d) {
+                const float c = position[3 * axis + d];
+                REQUIRE(std::isfinite(c));
+                REQUIRE(std::isfinite(normal[3 * axis + d]));
+                const double first = v.origin[d] + 1 * v.spacing[d], last = v.origin[d] + (d == axis ? 2 : 1) * v.spacing[d];
+                CHECK(c >= first);
+                CHECK(c <= last);
+            }
         }
     }
 }

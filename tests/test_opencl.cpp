@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <future>
 #include <limits>
 #include <memory>
@@ -800,6 +801,56 @@ TEST_CASE("Hybrid: a volume changed before a piece is taken over is the volume-c
     require_same(run(v, Options{}, Backend::Cpu), run(v, o, Backend::Hybrid), v);
 }
 
+// Runs f(recounted) before each piece a device counted is generated, for a scope
+// (detail::opencl_before_generate).
+struct BeforeGenerate {
+    explicit BeforeGenerate(std::function<void(bool)> f) { detail::opencl_before_generate(std::move(f)); }
+    ~BeforeGenerate() { detail::opencl_before_generate({}); }
+    BeforeGenerate(const BeforeGenerate&) = delete;
+    BeforeGenerate& operator=(const BeforeGenerate&) = delete;
+};
+
+// Samples written to between classify and generate (a data race, for which the API promises a
+// mix of old and new samples) can leave a crossed edge with both ends on iso: t = 0 / 0. A
+// device reading the caller's samples in place kept that NaN in the vertex's position; t is
+// kept on the edge now, as on the CPU engine (edge_vertex.hpp).
+TEST_CASE("OpenCL: an edge whose samples changed since classify keeps its vertex finite and on the edge", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{24, 20, 18}};
+    const std::vector<float> field = sphere(g);
+    std::vector<float> f32 = field;
+    const std::vector<std::uint16_t> u16_field = to_type<std::uint16_t>(field, 1000, 2000);
+    std::vector<std::uint16_t> u16 = u16_field;
+    const std::vector<std::pair<VolumeView, double>> volumes = {{view_of(f32.data(), ScalarType::F32, g), 0.0},
+                                                                {view_of(u16.data(), ScalarType::U16, g), 2000.0}};
+    for (const auto& [volume, iso] : volumes) {
+        INFO(scalar_name(volume.type));
+        std::copy(field.begin(), field.end(), f32.begin());  // in place: the views keep pointing there
+        std::copy(u16_field.begin(), u16_field.end(), u16.begin());
+        Options o;
+        o.iso = iso;
+        o.devices = {0};
+        const Mesh before = run(volume, o, Backend::Cpu);
+        REQUIRE(!before.positions.empty());
+        int generated = 0;
+        const BeforeGenerate every_sample_on_iso([&](bool) {
+            ++generated;
+            std::fill(f32.begin(), f32.end(), 0.f);
+            std::fill(u16.begin(), u16.end(), std::uint16_t{2000});
+        });
+        const Mesh after = run(volume, o, Backend::OpenCL);  // the device reads the samples in place
+        CHECK(generated >= 1);
+        REQUIRE(after.positions.size() == before.positions.size());
+        REQUIRE(after.indices == before.indices);
+        // t = 0: every vertex on the sample its edge starts at, a grid point.
+        std::size_t off_grid = 0;
+        for (const float c : after.positions)
+            if (!std::isfinite(c) || c != std::round(c)) ++off_grid;
+        CHECK(off_grid == 0);
+        for (const float c : after.normals) REQUIRE(std::isfinite(c));
+    }
+}
+
 #endif  // VOXMESH_HAS_OPENCL
 
 // Found by a review: a chunk cut in halves to fit a device counts where it starts, so when only
@@ -1394,6 +1445,53 @@ TEST_CASE("the OpenCL engine recovers from a device out of memory, and names oth
                 require_same(cpu, run(volume, o, Backend::OpenCL), volume);
             }
         }
+    }
+    detail::opencl_pretend_discrete(false);
+}
+#endif  // VOXMESH_HAS_OPENCL
+
+#ifdef VOXMESH_HAS_OPENCL
+// Found by a review (forty-sixth session): a device that runs out of memory generating hands
+// its piece to the CPU engine, which counts it again and generates it. For 8-bit samples the
+// CPU's generate packs rows again and checks a row's vertices once written, so a row the
+// caller's thread changed after that count writes past the counts first: into the row of
+// spare room every device piece of an 8-bit volume gets. Without it, past the mesh (ASan).
+TEST_CASE("a device's piece the CPU engine generates after a write stays within the mesh", "[.clfault]") {
+    if (!vmtest::fault_layer_named()) return;
+    const vmtest::FaultLayer layer = vmtest::fault_layer();
+    REQUIRE(layer.loaded());
+    REQUIRE(!list_devices().empty());
+    const vmtest::ClearFaults clear{layer};
+
+    Grid g{{64, 24, 20}};
+    auto original = to_type<std::uint8_t>(sphere(g), 100, 100);  // 47..135
+    // The last row of the last plane, outside but for its last sample (generate reads only rows
+    // with crossings), becomes a comb of nx - 1 crossed x-edges.
+    const std::size_t last_row = g.size() - g.dims[0];
+    original.back() = 255;
+    std::vector<std::uint8_t> u8 = original;
+    const VolumeView volume = view_of(u8.data(), ScalarType::U8, g);
+    for (const bool discrete : {false, true}) {
+        INFO((discrete ? "discrete" : "host memory"));
+        detail::opencl_pretend_discrete(discrete);
+        Options o;
+        o.iso = 100.5;
+        o.devices = {0};
+        o.chunk_planes = g.dims[2];  // one piece: the one with the last row
+        int recounted = 0;
+        {
+            const BeforeGenerate comb([&](bool on_cpu) {
+                if (!on_cpu || recounted++ > 0) return;
+                for (std::size_t x = 0; x < g.dims[0]; ++x) u8[last_row + x] = x % 2 ? 255 : 0;
+            });
+            release_scratch_memory();
+            layer.set("generate_vertices", CL_OUT_OF_RESOURCES, 0, 0, -1);
+            CHECK_THROWS_WITH(run(volume, o, Backend::OpenCL), Catch::Contains("changed while it was being meshed"));
+            layer.clear();
+        }
+        CHECK(recounted == 1);
+        u8 = original;
+        require_same(run(volume, o, Backend::Cpu), run(volume, o, Backend::OpenCL), volume);
     }
     detail::opencl_pretend_discrete(false);
 }

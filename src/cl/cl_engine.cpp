@@ -80,6 +80,16 @@ std::atomic<bool> g_hybrid_split_only{false};
 std::mutex g_before_take_over_mutex;
 std::function<void()> g_before_take_over;
 
+// Test hook: run before a device's piece is generated, on the device (false) or on the CPU
+// engine after it counted the piece again (true).
+std::mutex g_before_generate_mutex;
+std::function<void(bool)> g_before_generate;
+
+void before_generate(bool recounted) {
+    std::lock_guard<std::mutex> lock(g_before_generate_mutex);
+    if (g_before_generate) g_before_generate(recounted);
+}
+
 // Sleeps `times` × the hook's seconds (a chunk count for per-chunk hooks); nothing when unset.
 void pretend_slow(const std::atomic<double>& seconds, std::size_t times = 1) {
     if (const double s = seconds; s > 0)
@@ -936,6 +946,7 @@ void Engine::generate_on_device(DeviceJob& job, Piece& piece, Mesh& mesh) {
     const ChunkShape s = shape(piece.range);
     const auto u = [](std::size_t v) { return static_cast<cl_uint>(v); };
     pretend_slow(g_slow_generate_s);
+    before_generate(false);
     EventLog log;
     run_on_queue(d, [&] {
         const cl::Buffer data = samples_on_device(job, piece, s, log);
@@ -1007,6 +1018,7 @@ void Engine::generate_counted_on_cpu(const Piece& counted, unsigned worker, unsi
     // wrote to the volume between the two counts (reported as "internal error" before).
     if (cpu.vertices != counted.vertices || cpu.triangles != counted.triangles)
         throw_volume_changed(counted.range.begin);
+    before_generate(true);
     cpu.first_vertex = counted.first_vertex;
     cpu.first_triangle = counted.first_triangle;
     generate_on_cpu(cpu, mesh);
@@ -1361,6 +1373,11 @@ void opencl_hybrid_split_only(bool split_only) { g_hybrid_split_only = split_onl
 void opencl_before_take_over(std::function<void()> f) {
     std::lock_guard<std::mutex> lock(g_before_take_over_mutex);
     g_before_take_over = std::move(f);
+}
+
+void opencl_before_generate(std::function<void(bool)> f) {
+    std::lock_guard<std::mutex> lock(g_before_generate_mutex);
+    g_before_generate = std::move(f);
 }
 
 void opencl_pretend_slow(double count_s, double generate_s, double cpu_count_s, double cpu_start_s) {

@@ -155,7 +155,7 @@ public:
             if (!(axes >> axis & 1)) continue;
             const std::size_t idx1 = idx0 + stride_[axis];
             const double v1 = static_cast<double>(data_[idx1]);
-            const double t = edge_t(v0, v1);
+            const double t = on_edge(edge_t(v0, v1));
             if (normal) {
                 double g1[3];
                 if (interior) {
@@ -190,6 +190,11 @@ private:
             return (iso_ - v0) / (v1 - v0);
         }
     }
+
+    // t kept on the edge (-0 kept), NaN to 0: only a volume written to since classify (the API
+    // allows a mix of old and new samples) gives another t, e.g. 0 / 0 where both ends became
+    // iso, and its vertex stays finite and on its edge. The same bits for every other t.
+    static double on_edge(double t) { return t >= 0 ? (t <= 1 ? t : 1.0) : 0.0; }
 
     // 1 <= p and p + 1 <= n - 2: p and its +1 neighbour both have two neighbours along the axis.
     static bool away_from_border(std::size_t p, std::size_t n) { return p >= 1 && p + 3 <= n; }

@@ -62,6 +62,10 @@ void opencl_hybrid_split_only(bool split_only);
 // Runs `f` (empty: nothing) in Hybrid's CPU worker just before it counts again a piece a device
 // counted, to take it over: a test changes the volume there, as a caller's thread could.
 void opencl_before_take_over(std::function<void()> f);
+// Runs `f(recounted)` (empty: nothing) before a piece a device counted is generated: on the
+// device (false), or on the CPU engine after it counted the piece again (true: a take-over, or
+// a device out of memory), so that a test changes the volume between the passes there.
+void opencl_before_generate(std::function<void(bool recounted)> f);
 // Runs f holding the device registry's lock, as a thread inside devices() would; with
 // `as_discovery`, as one caught discovering (the device list half built).
 void opencl_with_registry_locked(bool as_discovery, const std::function<void()>& f);
