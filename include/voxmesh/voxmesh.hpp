@@ -143,7 +143,8 @@ struct Stats {
 // it), and each still returns the canonical mesh.
 // The samples are read more than once: keep them unchanged until the call returns. Written to
 // meanwhile (a data race), a call may throw Error ("the volume's samples changed while it was
-// being meshed") or mesh a mix of old and new samples; it never writes past the mesh.
+// being meshed") or mesh a mix of old and new samples (each vertex finite, on its edge); it
+// never writes past the mesh.
 // In a child forked after the parent used OpenCL, the parent's devices are not listed (their
 // runtime's threads stayed in the parent): Auto meshes on the CPU, OpenCL throws an Error.
 // The child may fork while other threads are inside calls; its own calls still work.
