@@ -23,6 +23,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <cstdlib>
@@ -338,6 +339,68 @@ TEST_CASE("out of memory is an Error from Sculpt::update, which can be retried, 
         check_out_of_memory_is_error([&] { (void)sculpt.mesh(); },
                                      "sculpt: out of memory welding the blocks' meshes into one");
     }
+}
+
+// Found by a review: update() cleared each block's dirty flag while it listed the changed blocks,
+// and a list that ran out of memory half-way left flags cleared for blocks still in the dirty
+// list; the next edit of one of them listed it twice (re-meshed twice, on two workers at once).
+TEST_CASE("an update that runs out of memory listing the changed blocks leaves every block dirty once",
+          "[sculpt][memory]") {
+    voxmesh::SculptOptions options;
+    options.threads = 1;
+    options.backend = voxmesh::Backend::Cpu;
+    options.iso = 128;
+    options.block_size = 2;  // 50^3 blocks, nearly all crossed by the surface
+    voxmesh::Sculpt sculpt = voxmesh::Sculpt::from_function(
+        {101, 101, 101}, voxmesh::ScalarType::U8,
+        [](double x, double y, double z) { return 128 + 100 * std::sin(1.7 * x) * std::sin(1.3 * y) * std::sin(1.1 * z); },
+        options);
+    sculpt.update();
+    if (!cap_can_be_tight()) return;
+    // Every block re-meshed as it was needs no new memory: only the list of changed blocks
+    // (1 MB) grows, past the cap.
+    check_out_of_memory_is_error(
+        [&] {
+            sculpt.invalidate_all();
+            try {
+                sculpt.update();
+            } catch (const voxmesh::Error&) {
+                lift_cap();
+                sculpt.set_region({0, 0, 0}, {0, 0, 0}, 255 - static_cast<const std::uint8_t*>(sculpt.view().data)[0]);
+                const voxmesh::UpdateResult retried = sculpt.update();
+                if (retried.remeshed != sculpt.block_count())
+                    throw voxmesh::Error("the retried update re-meshed " + std::to_string(retried.remeshed) + " of " +
+                                         std::to_string(sculpt.block_count()) + " blocks");
+                if (std::adjacent_find(retried.changed.begin(), retried.changed.end()) != retried.changed.end())
+                    throw voxmesh::Error("a block listed twice as changed");
+                throw;
+            }
+        },
+        "sculpt: out of memory re-meshing 125000 blocks", std::size_t{256} << 10);
+}
+
+// Found by a review: the smooth brush's two plane buffers (16 bytes a sample of the x-y extent
+// it smooths, 32 MB here for a 4 MB volume) let std::bad_alloc out of Sculpt::smooth.
+TEST_CASE("out of memory is an Error from the smooth brush and changes nothing", "[sculpt][memory]") {
+    voxmesh::SculptOptions options;
+    options.threads = 1;
+    options.backend = voxmesh::Backend::Cpu;
+    options.iso = 100;
+    voxmesh::Sculpt sculpt = voxmesh::Sculpt::from_function(
+        {2048, 1024, 2}, voxmesh::ScalarType::U8, [](double x, double y, double) { return (x + y) / 16; }, options);
+    sculpt.update();
+    if (!cap_can_be_tight()) return;
+    check_out_of_memory_is_error(
+        [&] {
+            try {
+                sculpt.smooth({1024, 512, 0}, 1e6, 1);
+            } catch (const voxmesh::Error&) {
+                lift_cap();
+                if (sculpt.dirty()) throw voxmesh::Error("dirty after a smooth that ran out of memory");
+                throw;
+            }
+        },
+        "sculpt: out of memory for the smooth brush's planes of 2097152 samples");
 }
 
 TEST_CASE("out of memory is an Error naming the file from the volume readers", "[io][memory]") {

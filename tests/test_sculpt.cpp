@@ -335,6 +335,9 @@ TEST_CASE("sculpt: edits outside the volume are clipped", "[sculpt]") {
     REQUIRE_THROWS_AS(s.add({1, 2, 3}, INFINITY, 1), voxmesh::Error);
     REQUIRE_THROWS_AS(s.subtract({1, 2, 3}, 2, NAN), voxmesh::Error);
     REQUIRE_THROWS_AS(s.set_region({0, 0, 0}, {1, 1, 1}, INFINITY), voxmesh::Error);
+    // An op that is none of the four (a cast integer) is refused, not applied as Add.
+    REQUIRE_THROWS_WITH(s.apply(Dab{static_cast<BrushOp>(7), {1, 2, 3}, 2, 1}), Catch::Contains("unknown brush op 7"));
+    REQUIRE_FALSE(s.dirty());
 }
 
 TEST_CASE("sculpt: integer volumes clamp, floats stay finite", "[sculpt]") {

@@ -4,6 +4,7 @@
 #include <voxmesh/sculpt.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -135,6 +136,9 @@ TEST_CASE("sculpt strokes: the built-in path winds over the sphere model", "[scu
     REQUIRE_THROWS_WITH(voxmesh::builtin_stroke_path(10, {64, 1, 64}), Catch::Contains("at least 2 samples"));
     for (const auto& d : voxmesh::builtin_stroke_path(10, {5, 5, 5}))  // small but valid: inside the volume
         for (double c : d.dab.center) CHECK((c >= 0 && c <= 4));
+    // Found by a review: counts no vector can hold let std::length_error out, not an Error.
+    REQUIRE_THROWS_AS(voxmesh::builtin_stroke_path(SIZE_MAX, {64, 64, 64}), voxmesh::Error);
+    REQUIRE_THROWS_AS(voxmesh::make_sculpt_sphere(SIZE_MAX / 2), voxmesh::Error);
 
     const auto s = voxmesh::summarize_latencies({5, 1, 4, 2, 3});
     CHECK(s.p50 == 3);

@@ -133,6 +133,7 @@ public:
     // from_mesh(read_stl(path)); read_mesh (io.hpp) also reads .ply and .obj models.
     static Sculpt from_stl(const std::string& path, std::size_t resolution, const SculptOptions& options = {});
 
+    // A moved-from Sculpt may only be assigned to or destroyed.
     Sculpt(Sculpt&&) noexcept;
     Sculpt& operator=(Sculpt&&) noexcept;
     Sculpt(const Sculpt&) = delete;

@@ -249,8 +249,16 @@ struct Sculpt::Impl {
             py = {box[1].lo > 0 ? box[1].lo - 1 : 0, std::min(box[1].hi + 1, n[1] - 1)};
             pnx = px.hi - px.lo + 1;
             const std::size_t size = pnx * (py.hi - py.lo + 1);
-            plane_prev.resize(size);
-            plane_cur.resize(size);
+            // The brush's only allocation, made before any sample changes: out of memory is an
+            // Error like everywhere else (it let std::bad_alloc out of smooth()).
+            detail::out_of_memory_as_error(
+                [&] {
+                    return "sculpt: out of memory for the smooth brush's planes of " + std::to_string(size) + " samples";
+                },
+                [&] {
+                    plane_prev.resize(size);
+                    plane_cur.resize(size);
+                });
         }
         auto load_plane = [&](std::vector<double>& plane, std::size_t z) {
             std::size_t i = 0;
@@ -335,6 +343,9 @@ struct Sculpt::Impl {
     }
 
     void apply(const Dab& dab, Units units) {
+        if (dab.op != BrushOp::Add && dab.op != BrushOp::Subtract && dab.op != BrushOp::Smooth && dab.op != BrushOp::Set)
+            throw Error("sculpt: unknown brush op " + std::to_string(static_cast<int>(dab.op)) +
+                        " (expected BrushOp::Add, Subtract, Smooth or Set)");
         for (double v : dab.center) check_finite(v, "brush centre");
         check_finite(dab.radius, "brush radius");
         check_finite(dab.strength, "brush strength");
@@ -445,6 +456,10 @@ struct Sculpt::Impl {
         UpdateResult result;
         const std::size_t jobs = dirty_list.size();
         if (jobs > 0) {
+            // Before any dirty flag is cleared below: a push_back that ran out of memory there
+            // left blocks still in the dirty list with their flags cleared, and the next edit
+            // listed them twice.
+            result.changed.reserve(jobs);
             drop_device_left_in_parent();
             if (!device || no_surface || !remesh_on_device()) remesh_on_cpu();
             for (std::size_t i = 0; i < jobs; ++i) {

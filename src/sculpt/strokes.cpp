@@ -166,6 +166,9 @@ SphereModel sphere_model(std::array<std::size_t, 3> dims) {
 
 Sculpt make_sculpt_sphere(std::size_t n, const SculptOptions& options) {
     if (n < 8) throw Error("sculpt: the sphere model needs n >= 8, got " + std::to_string(n));
+    // Before the table of n sines: an n whose volume cannot exist is that Error, not the
+    // table's std::length_error or std::bad_alloc.
+    checked_volume_bytes({n, n, n}, ScalarType::F32);
     const SphereModel m = sphere_model({n, n, n});
     const double k = 5 / m.radius, bump = 0.03 * m.radius;
     // The bumps are separable: sin(k dx) sin(k dy) sin(k dz) from one table per axis.
@@ -195,7 +198,12 @@ std::vector<ScriptDab> builtin_stroke_path(std::size_t n_dabs, std::array<std::s
                     detail::dims_text(dims));
     const SphereModel m = sphere_model(dims);
     const double pi = std::numbers::pi;
-    std::vector<ScriptDab> dabs(n_dabs);
+    // A count no vector can hold is an Error too (it let std::length_error out).
+    if (n_dabs > std::vector<ScriptDab>().max_size())
+        throw OutOfMemoryError("sculpt: " + std::to_string(n_dabs) + " dabs are more than memory can hold");
+    auto dabs = detail::out_of_memory_as_error(
+        [&] { return "sculpt: out of memory for a stroke path of " + std::to_string(n_dabs) + " dabs"; },
+        [&] { return std::vector<ScriptDab>(n_dabs); });
     for (std::size_t i = 0; i < n_dabs; ++i) {
         const double t = n_dabs > 1 ? static_cast<double>(i) / static_cast<double>(n_dabs - 1) : 0.0;
         // Three turns of a spiral from near one pole to near the other, on the surface.
