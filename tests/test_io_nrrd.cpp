@@ -242,6 +242,24 @@ TEST_CASE("nrrd: key/values read back exactly, or write_nrrd refuses them", "[io
     CHECK_FALSE(std::filesystem::exists(s.dir + "/bad.nrrd"));
 }
 
+// Found by a review: NRRD key/values are escaped ("\\n" a line break, "\\\\" a backslash, as
+// teem's airUnescape reads them); backslashes were written and read as they were, so teem read
+// "C:\\new" as "C:", a line break and "ew", and a teem-written backslash came back doubled.
+TEST_CASE("nrrd: key/values are escaped as teem writes and reads them", "[io][nrrd]") {
+    Scratch s;
+    std::vector<std::uint8_t> samples(8, 1);
+    const VolumeView view{samples.data(), ScalarType::U8, {2, 2, 2}};
+    const std::string path = s.dir + "/kv.nrrd";
+    const std::map<std::string, std::string> kv{{"source", "C:\\new\\n"}, {"back\\slash", "\\"}};
+    write_nrrd(path, view, kv);
+    const std::string text = iotest::read_file(path);
+    CHECK_THAT(text, Contains("\nsource:=C:\\\\new\\\\n\n") && Contains("\nback\\\\slash:=\\\\\n"));
+    CHECK(read_volume_info(path).key_values == kv);
+    const std::string teem = "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n"
+                             "note:=line 1\\nline 2 in C:\\\\dir, \\t kept\n\n" + std::string(8, '\1');
+    CHECK(read_volume_info(s.file("teem.nrrd", teem)).key_values.at("note") == "line 1\nline 2 in C:\\dir, \\t kept");
+}
+
 TEST_CASE("nrrd: recorded_iso reads voxmesh_iso as one finite number, or refuses it naming the file", "[io][nrrd]") {
     VolumeInfo info;
     CHECK_FALSE(recorded_iso(info, "a.nrrd").has_value());  // no key: none recorded
@@ -390,6 +408,54 @@ TEST_CASE("nrrd: axis mins and maxs place the samples, type and endian in any ca
         CHECK(info.flipped == std::array<bool, 3>{false, false, true});
         CHECK(v.origin[2] == 1);  // samples at 9, 7, ..., 1: the minimum corner
     }
+}
+
+// Found by a review: teem reads "spacedirections", "spaceorigin", "axismins", "centerings" and
+// its other joined spellings as the fields they name; they were ignored, so the volume came out
+// at spacing 1 and origin 0 with no error.
+TEST_CASE("nrrd: teem's joined field spellings are the fields they name", "[io][nrrd]") {
+    Scratch s;
+    const std::size_t n = 3 * 4 * 5;
+    const std::string head = "NRRD0004\ntype: short\ndimension: 3\nsizes: 3 4 5\nendian: little\nencoding: raw\n";
+    SECTION("spacedimension, spacedirections, spaceorigin") {
+        const Volume v = read_volume(s.file("a.nrrd", head + "spacedimension: 3\n"
+                                                           "spacedirections: (2,0,0) (0,3,0) (0,0,4)\n"
+                                                           "SpaceOrigin: (5,6,7)\n\n" + i16_samples(n, false)));
+        check_i16(v, n);
+        CHECK(v.spacing == std::array<double, 3>{2, 3, 4});
+        CHECK(v.origin == std::array<double, 3>{5, 6, 7});
+    }
+    SECTION("axismins, axismaxs, centerings") {
+        const Volume v = read_volume(s.file("a.nrrd", head + "axismins: 10 20 30\naxismaxs: 12 26 38\n"
+                                                           "centerings: node node node\n\n" + i16_samples(n, false)));
+        CHECK(v.spacing == std::array<double, 3>{1, 2, 2});
+        CHECK(v.origin == std::array<double, 3>{10, 20, 30});
+    }
+    SECTION("a field given in both spellings appears twice") {
+        CHECK_THROWS_WITH(read_volume(s.file("a.nrrd", head + "space dimension: 3\nspaceorigin: (0,0,0)\n"
+                                                              "space origin: (0,0,0)\n\n" + i16_samples(n, false))),
+                          Contains("a.nrrd") && Contains("'space origin' appears twice"));
+    }
+}
+
+// Found by a review: teem refuses a spacing only on an axis that has a direction vector, and
+// "nan" is no spacing; such headers were refused whole as contradictory.
+TEST_CASE("nrrd: spacings of nan beside space directions are no spacings, as in teem", "[io][nrrd]") {
+    Scratch s;
+    const std::size_t n = 3 * 4 * 5;
+    const std::string head = "NRRD0004\ntype: short\ndimension: 3\nsizes: 3 4 5\nendian: little\nencoding: raw\n";
+    const std::string directed = "space dimension: 3\nspace directions: (2,0,0) (0,3,0) (0,0,4)\n";
+    const std::string samples = i16_samples(n, false);
+    const Volume v = read_volume(s.file("a.nrrd", head + directed + "spacings: nan nan NaN\n\n" + samples));
+    check_i16(v, n);
+    CHECK(v.spacing == std::array<double, 3>{2, 3, 4});
+    const std::string four = "NRRD0004\ntype: short\ndimension: 4\nsizes: 1 3 4 5\nendian: little\nencoding: raw\n"
+                             "space dimension: 3\nspace directions: none (2,0,0) (0,3,0) (0,0,4)\n";
+    const Volume w = read_volume(s.file("a.nrrd", four + "spacings: 1 nan nan nan\n\n" + samples));
+    check_i16(w, n);
+    CHECK(w.spacing == std::array<double, 3>{2, 3, 4});
+    CHECK_THROWS_WITH(read_volume(s.file("a.nrrd", head + directed + "spacings: nan 3 nan\n\n" + samples)),
+                      Contains("a.nrrd") && Contains("axis 1 has both") && Contains("contradictory"));
 }
 
 TEST_CASE("nrrd: axes of a kind that is not spatial are refused, or dropped where of size 1", "[io][nrrd]") {

@@ -206,6 +206,24 @@ TEST_CASE("vtk: the header may vary as VTK's reader allows", "[io][vtk]") {
     for (int i = 0; i < 8; ++i) CHECK(static_cast<const std::int32_t*>(v.data)[i] == i + 1);
 }
 
+// Found by a review: LOOKUP_TABLE was looked for only at the start of the next line, so one
+// indented, or after a line of blanks (VTK's reader reads words, so both are fine there), was
+// read as the first samples: silently in BINARY, where the file may hold more than the volume.
+TEST_CASE("vtk: an indented LOOKUP_TABLE line is skipped, not read as samples", "[io][vtk]") {
+    Scratch s;
+    const std::string head = "# vtk DataFile Version 3.0\nt\nBINARY\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n"
+                             "SPACING 1 1 1\nORIGIN 0 0 0\nPOINT_DATA 8\nSCALARS s unsigned_char 1\n";
+    for (const std::string lut : {"  LOOKUP_TABLE default\n", " \nLOOKUP_TABLE default\n", "\tlookup_table t\n"}) {
+        INFO(lut);
+        const Volume v = read_volume(s.file("lut.vtk", head + lut + "\x01\x02\x03\x04\x05\x06\x07\x08\n"));
+        for (std::size_t i = 0; i < 8; ++i) CHECK(static_cast<const std::uint8_t*>(v.data)[i] == i + 1);
+    }
+    std::string ascii = head + "  LOOKUP_TABLE default\n1 2 3 4 5 6 7 8\n";
+    ascii.replace(ascii.find("BINARY"), 6, "ASCII");
+    const Volume v = read_volume(s.file("lut.vtk", ascii));
+    for (std::size_t i = 0; i < 8; ++i) CHECK(static_cast<const std::uint8_t*>(v.data)[i] == i + 1);
+}
+
 // Found by a review: a leading '+' was accepted only for float samples; VTK's reader takes it
 // for every type.
 TEST_CASE("vtk: ASCII samples may start with '+' whatever their type", "[io][vtk]") {

@@ -96,7 +96,7 @@ struct VolumeInfo {
     // Stored-to-physical value mapping (NIfTI scl_slope/scl_inter); 1 and 0 elsewhere.
     double value_scale = 1;
     double value_offset = 0;
-    // NRRD "key:=value" lines (e.g. what write_nrrd was given); empty for other formats.
+    // NRRD "key:=value" lines, unescaped (e.g. what write_nrrd was given); empty for other formats.
     std::map<std::string, std::string> key_values;
 };
 
@@ -136,9 +136,10 @@ Volume read_raw(const std::string& path, const RawLayout& layout, VolumeInfo& in
 // directions` / `space origin` with `space dimension: 3`), through a temporary file renamed
 // into place (through a symbolic link, keeping a replaced file's permission bits, as
 // write_mesh).
-// `key_values` become "key:=value" lines that read back exactly: a key is non-empty, does not
-// start with '#' and holds no ":=" or ": ", neither holds '\r' or '\n', and the header stays
-// within the 1 MiB the reader reads (an Error otherwise).
+// `key_values` become "key:=value" lines that read back exactly (a backslash is doubled, as
+// NRRD escapes it; read_volume takes a backslash-n and a doubled backslash back as teem does):
+// a key is non-empty, does not start with '#' and holds no ":=" or ": ", neither holds '\r' or
+// '\n', and the header stays within the 1 MiB the reader reads (an Error otherwise).
 // Refused (Error): an empty volume, spacing zero or not finite, an origin not finite, and
 // samples placed beyond the float range, which read_volume would refuse to read back.
 void write_nrrd(const std::string& path, const VolumeView& volume,

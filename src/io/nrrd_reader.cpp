@@ -104,6 +104,20 @@ std::vector<std::vector<double>> parse_vectors(const std::string& path, const ch
     return out;
 }
 
+// A key or value of a "key:=value" line as teem reads it (airUnescape): a backslash-n is a line
+// break and a doubled backslash one backslash; any other backslash stays as it is.
+std::string unescaped(std::string_view text) {
+    std::string out;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        if (text[i] == '\\' && i + 1 < text.size() && (text[i + 1] == '\\' || text[i + 1] == 'n')) {
+            out += text[++i] == 'n' ? '\n' : '\\';
+            continue;
+        }
+        out += text[i];
+    }
+    return out;
+}
+
 std::size_t space_dimension_of(const std::string& path, const std::string& space) {
     static const std::map<std::string, std::size_t> kSpaces = {
         {"right-anterior-superior", 3}, {"ras", 3}, {"left-anterior-superior", 3}, {"las", 3},
@@ -176,14 +190,21 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
         const std::size_t sep = line.find(": ");
         const std::size_t kv = line.find(":=");
         if (kv != std::string_view::npos && (sep == std::string_view::npos || kv < sep)) {  // key/value pair
-            key_values[std::string(line.substr(0, kv))] = std::string(line.substr(kv + 2));
+            key_values[unescaped(line.substr(0, kv))] = unescaped(line.substr(kv + 2));
             continue;
         }
         if (sep == std::string_view::npos)
             fail(path, "header line " + std::to_string(line_number) + " is not 'field: value'");
         std::string name = lower(trim(line.substr(0, sep)));
-        for (const char* joined : {"data file", "line skip", "byte skip"})  // both spellings are legal
-            if (name == std::string(joined).erase(std::string(joined).find(' '), 1)) name = joined;
+        // teem's other spellings (_nrrdFieldStrEqv): read as the same field, or "spacedirections"
+        // and the rest were ignored, leaving the volume at spacing 1 and origin 0.
+        static const std::map<std::string, std::string> kAliases = {
+            {"datafile", "data file"}, {"lineskip", "line skip"}, {"byteskip", "byte skip"},
+            {"spacedimension", "space dimension"}, {"spacedirections", "space directions"},
+            {"spaceorigin", "space origin"}, {"axismins", "axis mins"}, {"axismaxs", "axis maxs"},
+            {"centerings", "centers"}, {"blocksize", "block size"}, {"oldmin", "old min"}, {"oldmax", "old max"},
+            {"sampleunits", "sample units"}, {"spaceunits", "space units"}, {"measurementframe", "measurement frame"}};
+        if (const auto alias = kAliases.find(name); alias != kAliases.end()) name = alias->second;
         if (!fields.emplace(name, std::string(trim(line.substr(sep + 2)))).second)
             fail(path, "header field '" + name + "' appears twice");
         if (name == "data file") {
@@ -275,7 +296,6 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
     }
 
     const std::string* spacings = optional("spacings");
-    if (spacings && directions) fail(path, "header has both 'spacings' and 'space directions' (contradictory)");
     std::array<std::vector<double>, 3> axes;  // spatial axes' directions; empty without them
     // Per-axis numbers, "nan" where an axis has none (teem writes "nan" for unknown values).
     auto per_axis = [&](const char* field) {
@@ -290,6 +310,13 @@ VolumeHeader read_nrrd_header(const InputFile& file) {
         return values;
     };
     const std::vector<double> spacing_values = per_axis("spacings");
+    // As teem checks it: an axis with a direction vector may not also have a spacing, but "nan"
+    // is none ("spacings: 1 nan nan nan" beside "space directions: none (..) (..) (..)").
+    if (directions && spacings)
+        for (std::size_t a = 0; a < dimension; ++a)
+            if (!vectors[a].empty() && !std::isnan(spacing_values[a]))
+                fail(path, "axis " + std::to_string(a) +
+                               " has both a spacing in 'spacings' and a vector in 'space directions' (contradictory)");
     if (spacings) {
         for (std::size_t k = 0; k < 3; ++k) {
             const double value = spacing_values[spatial[k]];

@@ -29,6 +29,17 @@ const char* nrrd_type(ScalarType type) {
     throw Error("unknown scalar type");
 }
 
+// A key or value with its backslashes doubled, as teem writes them: NRRD readers take a
+// backslash-n for a line break and a doubled backslash for one backslash.
+std::string escaped(const std::string& text) {
+    std::string out;
+    for (const char c : text) {
+        if (c == '\\') out += '\\';
+        out += c;
+    }
+    return out;
+}
+
 // What write_nrrd writes for `volume` (its header, then the samples), after its checks (Error
 // naming `name`), and how many bytes that is.
 struct NrrdOutput {
@@ -77,7 +88,7 @@ NrrdOutput checked_nrrd(const VolumeView& volume, const std::map<std::string, st
             key.find(": ") != std::string::npos || line_break(key) || line_break(value))
             refuse("key/value '" + key + "' cannot be written as a NRRD 'key:=value' line (a key must be non-empty, "
                    "not start with '#', and hold no ':=' or ': '; neither may hold a line break)");
-        header += key + ":=" + value + "\n";
+        header += escaped(key) + ":=" + escaped(value) + "\n";
     }
     header += "\n";
 

@@ -94,12 +94,13 @@ public:
     }
 
 private:
-    // The OBJ statements (the spec's, free-form geometry's included) other than v, vn, vt, f.
+    // The OBJ statements (the spec's, free-form geometry's and the general "call" and "csh"
+    // included) other than v, vn, vt, f.
     static bool is_obj_keyword(std::string_view k) {
         static constexpr std::string_view kKnown[] = {
             "o", "g", "s", "usemtl", "mtllib", "l", "p", "vp", "mg", "cstype", "deg", "bmat", "step", "curv",
             "curv2", "surf", "parm", "trim", "hole", "scrv", "sp", "end", "con", "bevel", "c_interp", "d_interp",
-            "lod", "maplib", "usemap", "shadow_obj", "trace_obj", "ctech", "stech"};
+            "lod", "maplib", "usemap", "shadow_obj", "trace_obj", "ctech", "stech", "call", "csh"};
         return std::find(std::begin(kKnown), std::end(kKnown), k) != std::end(kKnown);
     }
     std::string unknown_;  // the first statement that is not OBJ's, as shown in errors

@@ -62,9 +62,11 @@ public:
     }
     // Where the line after the last one read starts: the data, after the header.
     std::size_t position() const { return pos_; }
+    // Past blanks of any kind, as words() reads the line: an indented "  LOOKUP_TABLE default"
+    // (or one after a line of spaces) was taken for the first samples, silently in BINARY.
     bool next_starts_with(std::string_view keyword) const {
         std::size_t at = pos_;
-        while (at < text_.size() && (text_[at] == '\n' || text_[at] == '\r')) ++at;
+        while (at < text_.size() && trim(text_.substr(at, 1)).empty()) ++at;
         return lower(text_.substr(at, keyword.size())) == lower(keyword);
     }
 
