@@ -29,9 +29,11 @@
 // its position and meshes land where the file says, unmirrored. VolumeInfo::flipped says
 // which axes. A negative spacing (NRRD `spacings`, MetaImage ElementSpacing,
 // RawLayout::spacing) runs its axis the other way and is flipped alike; the sign of NIfTI's
-// pixdim[1..3] is ignored, as nifti1_io does. The rest of a direction (an oblique axis's
-// off-axis part, a rotation, an axis permutation, which is never flipped) is dropped: the axis
-// keeps its spacing (the direction's length) and the origin as written, apart from the flip,
+// pixdim[1..3] is ignored, its magnitude being the spacing (nifti1_io's qform takes a pixdim
+// <= 0 as 1 and nibabel refuses a negative one; a zero or NaN pixdim, where used, is an error
+// here). The rest of a direction (an oblique axis's off-axis part, a rotation, an axis
+// permutation, which is never flipped) is dropped: the axis keeps its spacing (the
+// direction's length) and the origin as written, apart from the flip,
 // and VolumeInfo::rotation_dropped says so.
 //
 // NIfTI scl_slope / scl_inter are NOT applied: the samples keep their stored type and
