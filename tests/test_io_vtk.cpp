@@ -108,6 +108,18 @@ TEST_CASE("vtk: files written by VTK read with their geometry and every sample",
             for (std::size_t i = 0; i < 256; ++i) REQUIRE(static_cast<const std::uint8_t*>(v.data)[i] == i);
         }
     }
+    // Found by a review: the dataset's field data, which VTK writes before the geometry, was
+    // refused ("FIELD before POINT_DATA is not supported").
+    SECTION("short after the dataset's field data (numbers, strings, ids, longs, bits)") {
+        for (const char* name : {"i16_field_data_ascii.vtk", "i16_field_data_binary.vtk", "i16_field_data_binary_v42.vtk"}) {
+            INFO(name);
+            const Volume v = read_volume(corpus(name));
+            CHECK(v.type == ScalarType::I16);
+            CHECK(v.spacing == std::array<double, 3>{0.5, 1, 2});
+            CHECK(v.origin == std::array<double, 3>{-1, 2, 3});
+            check_samples<std::int16_t>(v, {4, 3, 2}, {false, false, false});
+        }
+    }
     SECTION("signed char, ASCII") {
         const Volume v = read_volume(corpus("i8_ascii.vtk"));
         CHECK(v.type == ScalarType::I8);
@@ -180,6 +192,19 @@ TEST_CASE("vtk: bad headers and data are errors naming the file", "[io][vtk][err
     CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n"
                         "CELL_DATA 1\n"),
                Contains("CELL_DATA before POINT_DATA is not supported"));
+    // The dataset's field data: its counts, its values, and what the header read can hold.
+    const std::string field = "# vtk DataFile Version 3.0\nt\nBINARY\nDATASET STRUCTURED_POINTS\nFIELD FieldData 1\n";
+    CHECK_THAT(error_of(field + "TIME 1 1 double\n\x3f\xe0\n"), Contains("ends inside a FIELD array (truncated)"));
+    CHECK_THAT(error_of(field + "TIME 1 100000 double\n"), Contains("ends inside the dataset's FIELD array"));
+    CHECK_THAT(error_of(field + "TIME 1 100000 double\n" + std::string(70000, '\0')),
+               Contains("the dataset's FIELD array runs past the first 65536 bytes"));
+    CHECK_THAT(error_of(field + "NOTE 1 1 string\n\x82"), Contains("ends inside a FIELD string"));
+    CHECK_THAT(error_of(field + "NOTE 1 1 string\n\x7f\xff\xff\xff"), Contains("ends inside a FIELD string"));
+    CHECK_THAT(error_of(field + "TIME 1 1 long_double\n\x3f\n"), Contains("unsupported VTK data type 'long_double'"));
+    CHECK_THAT(error_of(field + "TIME 1 double\n"), Contains("'name components tuples type'"));
+    CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nFIELD FieldData 1\n"
+                        "TIME 1 2 double\n0.5 1 2\n"),
+               Contains("FIELD array 'TIME' has more values than its 2"));
     CHECK_THAT(error_of("# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n"
                         "SPACING 1 0 1\nPOINT_DATA 8\nSCALARS v short\n" + numbers),
                Contains("spacing must be finite and non-zero"));

@@ -63,6 +63,21 @@ def main():
     signed = image((4, 2, 1), vtk.VTK_SIGNED_CHAR, np.int8, values=[-128, -100, -1, 0, 1, 5, 100, 127],
                    spacing=(1, 1, 1), origin=(0, 0, 0), name="s")
     write(signed, "i8_ascii.vtk", binary=False)
+    # Field data (written before the geometry): a time, a cycle, strings (one empty, one with a
+    # space, one of 70 bytes: a 2-byte length in BINARY), ids (32-bit), 64-bit ints and bits.
+    with_field = image((4, 3, 2), vtk.VTK_SHORT, np.int16)
+    for cls, name, values in ((vtk.vtkDoubleArray, "TIME", [0.5]), (vtk.vtkIntArray, "CYCLE", [7]),
+                              (vtk.vtkStringArray, "NOTE", ["", "hello world", "x" * 70]),
+                              (vtk.vtkIdTypeArray, "IDS", [5, 1, 1]), (vtk.vtkLongArray, "LONG", [2, 3]),
+                              (vtk.vtkBitArray, "BITS", [1, 0, 1, 1, 0, 0, 1, 0, 1])):
+        array = cls()
+        array.SetName(name)
+        for value in values:
+            array.InsertNextValue(value)
+        with_field.GetFieldData().AddArray(array)
+    write(with_field, "i16_field_data_ascii.vtk", binary=False)
+    write(with_field, "i16_field_data_binary.vtk")
+    write(with_field, "i16_field_data_binary_v42.vtk", version=42)
 
 
 if __name__ == "__main__":

@@ -2,13 +2,16 @@
 // 1.0 to 5.1): DATASET STRUCTURED_POINTS with DIMENSIONS, SPACING (or ASPECT_RATIO) and ORIGIN,
 // then POINT_DATA whose first array is the volume: SCALARS with one component, COLOR_SCALARS
 // with one (how VTK writes unsigned char: bytes in BINARY, 0..1 in ASCII), or the first array
-// of a FIELD. BINARY data is big-endian; ASCII data is numbers as text. Arrays after that one
-// (more point data, cell data) are ignored.
+// of a FIELD. BINARY data is big-endian; ASCII data is numbers as text. The dataset's field data
+// before the geometry is skipped, and arrays after the volume's (more point data, cell data)
+// are ignored; cell data before the point data (as VTK writes a volume that has both) is an
+// error.
 #include "header_text.hpp"
 #include "input_file.hpp"
 #include "readers.hpp"
 
 #include <array>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -62,12 +65,29 @@ public:
     }
     // Where the line after the last one read starts: the data, after the header.
     std::size_t position() const { return pos_; }
+    // Skips `bytes` of binary data from position(), then the writer's line break after them.
+    void skip_bytes(std::size_t bytes, const char* what) {
+        if (bytes > text_.size() - pos_) past_header_read(what);
+        pos_ += bytes;
+        if (text_.substr(pos_, 2) == "\r\n") pos_ += 2;
+        else if (text_.substr(pos_, 1) == "\n") ++pos_;
+    }
+    // The byte at position() + at (a binary string's length).
+    unsigned char byte_at(std::size_t at, const char* what) const {
+        if (at >= text_.size() - pos_) past_header_read(what);
+        return static_cast<unsigned char>(text_[pos_ + at]);
+    }
     // Past blanks of any kind, as words() reads the line: an indented "  LOOKUP_TABLE default"
     // (or one after a line of spaces) was taken for the first samples, silently in BINARY.
     bool next_starts_with(std::string_view keyword) const {
         std::size_t at = pos_;
         while (at < text_.size() && trim(text_.substr(at, 1)).empty()) ++at;
         return lower(text_.substr(at, keyword.size())) == lower(keyword);
+    }
+    [[noreturn]] void past_header_read(const char* what) const {
+        if (text_.size() < kMaxVtkHeader) fail(path_, std::string("ends inside ") + what + " (truncated)");
+        fail(path_, std::string(what) + " runs past the first " + std::to_string(kMaxVtkHeader) +
+                        " bytes of the file (a header this long is not read)");
     }
 
 private:
@@ -80,6 +100,66 @@ std::string keyword(std::string_view word) {
     std::string k(word);
     for (char& c : k) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
     return k;
+}
+
+// Bytes of `values` values of a FIELD array's type in BINARY, as vtkDataWriter writes them
+// (vtkIdType as 32 bits, long as 64, bits packed eight a byte).
+std::size_t field_bytes(const std::string& path, std::string_view type, std::size_t values) {
+    const std::string t = lower(type);
+    if (t == "bit") return (values + 7) / 8;
+    if (t == "vtkidtype") return 4 * values;
+    if (t == "long" || t == "unsigned_long" || t == "vtktypeint64" || t == "vtktypeuint64") return 8 * values;
+    return values * scalar_size(parse_type(path, type));
+}
+
+// The dataset's field data before its geometry (vtkDataWriter writes a time value, a cycle
+// there: "FIELD FieldData 2"), skipped array by array: numbers, or strings (ASCII: one a line,
+// spaces as %20; BINARY: each after a big-endian length of 1, 2, 4 or 8 bytes whose top two
+// bits say which: 11, 10, 01, 00). It was refused, so a file VTK wrote with field data did not
+// read. Only what the header read holds is skipped (field data is small).
+void skip_field_data(Lines& lines, const std::string& path, const std::vector<std::string_view>& field, bool binary) {
+    if (field.size() != 3) fail(path, "'FIELD' takes a name and an array count");
+    const std::size_t arrays = parse_size(path, "FIELD", field[2]);
+    for (std::size_t i = 0; i < arrays; ++i) {
+        const std::vector<std::string_view> a = lines.words("a FIELD array");
+        if (a.size() == 1 && keyword(a[0]) == "NULL_ARRAY") continue;  // what VTK writes for a null array
+        if (a.size() != 4) fail(path, "a FIELD array line is 'name components tuples type'");
+        const std::size_t components = parse_size(path, "FIELD array", a[1]);
+        const std::size_t tuples = parse_size(path, "FIELD array", a[2]);
+        // A value takes a byte or more (bits aside): a larger count cannot lie in the header read.
+        if (components > kMaxVtkHeader || tuples > kMaxVtkHeader || components * tuples > 8 * kMaxVtkHeader)
+            lines.past_header_read("the dataset's FIELD array");
+        const std::size_t values = components * tuples;
+        const bool strings = lower(a[3]) == "string";
+        if (!binary && strings) {
+            for (std::size_t v = 0; v < values; ++v) (void)lines.raw("a FIELD string");  // one a line, may be empty
+        } else if (!binary) {
+            for (std::size_t left = values; left > 0;) {
+                const std::size_t n = lines.words("a FIELD array's values").size();
+                if (n > left)
+                    fail(path, "FIELD array '" + shown(a[0]) + "' has more values than its " + std::to_string(values));
+                left -= n;
+            }
+        } else if (strings) {
+            std::size_t at = 0;
+            for (std::size_t v = 0; v < values; ++v) {
+                const unsigned char first = lines.byte_at(at, "a FIELD string");
+                const std::size_t prefix = first >= 0xC0 ? 1 : first >= 0x80 ? 2 : first >= 0x40 ? 4 : 8;
+                std::uint64_t length = first & 0x3F;
+                for (std::size_t b = 1; b < prefix; ++b) length = length << 8 | lines.byte_at(at + b, "a FIELD string");
+                if (length > kMaxVtkHeader) lines.past_header_read("a FIELD string");
+                at += prefix + static_cast<std::size_t>(length);
+            }
+            lines.skip_bytes(at, "a FIELD string array");
+        } else {
+            lines.skip_bytes(field_bytes(path, a[3], values), "a FIELD array");
+        }
+        if (lines.next_starts_with("METADATA")) {  // version 5.1's block after an array, to a blank line
+            std::string_view line;
+            do line = lines.raw("the end of a METADATA block");
+            while (!trim(line).empty());
+        }
+    }
 }
 
 void expect_count(const std::string& path, const std::vector<std::string_view>& words, std::size_t count) {
@@ -149,8 +229,10 @@ VolumeHeader read_vtk_header(const InputFile& file) {
         } else if (k == "ORIGIN") {
             expect_count(path, w, 4);
             for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "ORIGIN", parse_double(path, "ORIGIN", w[a + 1]));
-        } else if (k == "CELL_DATA" || k == "FIELD") {
-            fail(path, k + " before POINT_DATA is not supported: the volume is the point data's first array");
+        } else if (k == "FIELD") {
+            skip_field_data(lines, path, w, info.encoding == "raw");
+        } else if (k == "CELL_DATA") {
+            fail(path, "CELL_DATA before POINT_DATA is not supported: the volume is the point data's first array");
         } else {
             fail(path, "unknown keyword '" + shown(w[0]) + "' in a STRUCTURED_POINTS header");
         }
