@@ -78,6 +78,20 @@ def main():
     write(with_field, "i16_field_data_ascii.vtk", binary=False)
     write(with_field, "i16_field_data_binary.vtk")
     write(with_field, "i16_field_data_binary_v42.vtk", version=42)
+    # Cell data too (VTK writes it before the point data): scalars, vectors, ids and a FIELD.
+    cells = with_field.GetNumberOfCells()
+    for vtk_type, np_type, components, name in ((vtk.VTK_FLOAT, np.float32, 1, "density"),
+                                                (vtk.VTK_DOUBLE, np.float64, 3, "flow"),
+                                                (vtk.VTK_ID_TYPE, np.int64, 1, "ids")):
+        array = numpy_support.numpy_to_vtk(np.arange(cells * components).reshape(cells, components).astype(np_type),
+                                           deep=1, array_type=vtk_type)
+        array.SetName(name)
+        with_field.GetCellData().AddArray(array)
+    with_field.GetCellData().SetScalars(with_field.GetCellData().GetArray("density"))
+    with_field.GetCellData().SetVectors(with_field.GetCellData().GetArray("flow"))
+    write(with_field, "i16_cell_data_ascii.vtk", binary=False)
+    write(with_field, "i16_cell_data_binary.vtk")
+    write(with_field, "i16_cell_data_binary_v42.vtk", version=42)
 
 
 if __name__ == "__main__":

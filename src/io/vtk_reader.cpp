@@ -3,15 +3,15 @@
 // then POINT_DATA whose first array is the volume: SCALARS with one component, COLOR_SCALARS
 // with one (how VTK writes unsigned char: bytes in BINARY, 0..1 in ASCII), or the first array
 // of a FIELD. BINARY data is big-endian; ASCII data is numbers as text. The dataset's field data
-// before the geometry is skipped, and arrays after the volume's (more point data, cell data)
-// are ignored; cell data before the point data (as VTK writes a volume that has both) is an
-// error.
+// (before the geometry) and cell data (before the point data, as VTK writes a volume that has
+// both) are skipped; arrays after the volume's are ignored.
 #include "header_text.hpp"
 #include "input_file.hpp"
 #include "readers.hpp"
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -20,7 +20,8 @@ namespace voxmesh::io {
 
 namespace {
 
-// The most bytes read looking for the end of the header (titles and keywords are short).
+// The bytes of the file the header is read through at a time (its lines are short; the window
+// moves on past data the header skips).
 constexpr std::size_t kMaxVtkHeader = std::size_t{1} << 16;
 
 struct TypeName {
@@ -44,15 +45,23 @@ ScalarType parse_type(const std::string& path, std::string_view name) {
 }
 
 // The header's lines, read as the legacy reader does: keywords case-insensitive, blank lines
-// skipped.
+// skipped. They are read through a window of the file, moved on where the header skips data
+// (field data, cell data before the point data), so views of earlier lines may not outlive the
+// next read.
 class Lines {
 public:
-    Lines(const std::string& path, std::string_view text) : path_(path), text_(text) {}
+    Lines(const std::string& path, const InputFile& file) : path_(path), file_(file) { move_to(0); }
 
-    // The next line, blank or not; fails at the end of what was read.
+    // The next line, blank or not; fails at the end of the file.
     std::string_view raw(const char* wanted) {
+        if (pos_ >= window_.size() || window_.find('\n', pos_) == std::string::npos) {
+            if (!file_ends_in_window()) move_to(offset());  // the line's start at the window's
+            if (!file_ends_in_window() && window_.find('\n') == std::string::npos)
+                fail(path_, std::string("has a line of more than ") + std::to_string(kMaxVtkHeader) + " bytes before " +
+                                wanted);
+        }
         std::string_view line;
-        if (!next_line(text_, pos_, line))
+        if (!next_line(window_, pos_, line))
             fail(path_, std::string("ends before ") + wanted + " (truncated, or not a volume file)");
         return line;
     }
@@ -64,36 +73,50 @@ public:
         }
     }
     // Where the line after the last one read starts: the data, after the header.
-    std::size_t position() const { return pos_; }
-    // Skips `bytes` of binary data from position(), then the writer's line break after them.
-    void skip_bytes(std::size_t bytes, const char* what) {
-        if (bytes > text_.size() - pos_) past_header_read(what);
-        pos_ += bytes;
-        if (text_.substr(pos_, 2) == "\r\n") pos_ += 2;
-        else if (text_.substr(pos_, 1) == "\n") ++pos_;
+    std::size_t offset() const { return base_ + pos_; }
+    std::size_t bytes_left() const { return file_.size() - offset(); }
+    // Skips `bytes` of binary data from offset().
+    void skip_bytes(std::uint64_t bytes, const char* what) {
+        if (bytes > bytes_left()) fail(path_, std::string("ends inside ") + what + " (truncated)");
+        if (bytes <= window_.size() - pos_) pos_ += static_cast<std::size_t>(bytes);
+        else move_to(offset() + static_cast<std::size_t>(bytes));
     }
-    // The byte at position() + at (a binary string's length).
-    unsigned char byte_at(std::size_t at, const char* what) const {
-        if (at >= text_.size() - pos_) past_header_read(what);
-        return static_cast<unsigned char>(text_[pos_ + at]);
+    // The writer's line break after binary data, if there is one.
+    void skip_line_break() {
+        if (pos_ + 2 > window_.size()) move_to(offset());
+        if (std::string_view(window_).substr(pos_, 2) == "\r\n") pos_ += 2;
+        else if (std::string_view(window_).substr(pos_, 1) == "\n") ++pos_;
     }
-    // Past blanks of any kind, as words() reads the line: an indented "  LOOKUP_TABLE default"
-    // (or one after a line of spaces) was taken for the first samples, silently in BINARY.
-    bool next_starts_with(std::string_view keyword) const {
+    // The bytes at offset() (a binary string's length), `count` <= 8.
+    std::uint64_t big_endian(std::size_t count, const char* what) {
+        if (count > window_.size() - pos_) move_to(offset());
+        if (count > window_.size() - pos_) fail(path_, std::string("ends inside ") + what + " (truncated)");
+        std::uint64_t value = 0;
+        for (std::size_t b = 0; b < count; ++b) value = value << 8 | static_cast<unsigned char>(window_[pos_ + b]);
+        return value;
+    }
+    // Whether the next non-blank line starts with `keyword`. Past blanks of any kind, as
+    // words() reads the line: an indented "  LOOKUP_TABLE default" (or one after a line of
+    // spaces) was taken for the first samples, silently in BINARY.
+    bool next_starts_with(std::string_view keyword) {
+        if (window_.size() - pos_ < kMaxVtkHeader / 2 && !file_ends_in_window()) move_to(offset());
         std::size_t at = pos_;
-        while (at < text_.size() && trim(text_.substr(at, 1)).empty()) ++at;
-        return lower(text_.substr(at, keyword.size())) == lower(keyword);
-    }
-    [[noreturn]] void past_header_read(const char* what) const {
-        if (text_.size() < kMaxVtkHeader) fail(path_, std::string("ends inside ") + what + " (truncated)");
-        fail(path_, std::string(what) + " runs past the first " + std::to_string(kMaxVtkHeader) +
-                        " bytes of the file (a header this long is not read)");
+        while (at < window_.size() && trim(std::string_view(window_).substr(at, 1)).empty()) ++at;
+        return lower(std::string_view(window_).substr(at, keyword.size())) == lower(keyword);
     }
 
 private:
+    void move_to(std::size_t offset) {
+        window_ = file_.read(offset, kMaxVtkHeader);
+        base_ = offset;
+        pos_ = 0;
+    }
+    bool file_ends_in_window() const { return base_ + window_.size() >= file_.size(); }
+
     const std::string& path_;
-    std::string_view text_;
-    std::size_t pos_ = 0;
+    const InputFile& file_;
+    std::string window_;
+    std::size_t base_ = 0, pos_ = 0;
 };
 
 std::string keyword(std::string_view word) {
@@ -102,9 +125,9 @@ std::string keyword(std::string_view word) {
     return k;
 }
 
-// Bytes of `values` values of a FIELD array's type in BINARY, as vtkDataWriter writes them
-// (vtkIdType as 32 bits, long as 64, bits packed eight a byte).
-std::size_t field_bytes(const std::string& path, std::string_view type, std::size_t values) {
+// Bytes of `values` values of a type in BINARY, as vtkDataWriter writes them (vtkIdType as 32
+// bits, long as 64, bits packed eight a byte).
+std::uint64_t binary_bytes(const std::string& path, std::string_view type, std::uint64_t values) {
     const std::string t = lower(type);
     if (t == "bit") return (values + 7) / 8;
     if (t == "vtkidtype") return 4 * values;
@@ -112,52 +135,109 @@ std::size_t field_bytes(const std::string& path, std::string_view type, std::siz
     return values * scalar_size(parse_type(path, type));
 }
 
-// The dataset's field data before its geometry (vtkDataWriter writes a time value, a cycle
-// there: "FIELD FieldData 2"), skipped array by array: numbers, or strings (ASCII: one a line,
-// spaces as %20; BINARY: each after a big-endian length of 1, 2, 4 or 8 bytes whose top two
-// bits say which: 11, 10, 01, 00). It was refused, so a file VTK wrote with field data did not
-// read. Only what the header read holds is skipped (field data is small).
-void skip_field_data(Lines& lines, const std::string& path, const std::vector<std::string_view>& field, bool binary) {
+std::uint64_t product(const std::string& path, std::uint64_t a, std::uint64_t b, const std::string& what) {
+    if (b != 0 && a > std::numeric_limits<std::uint64_t>::max() / b) fail(path, what + " has too many values");
+    return a * b;
+}
+
+// The words of the next non-blank line as strings: the window moves on under later reads.
+std::vector<std::string> copied_words(Lines& lines, const char* wanted) {
+    const std::vector<std::string_view> w = lines.words(wanted);
+    return {w.begin(), w.end()};
+}
+
+// Skips an array's `values` values of `type` after its header line, as vtkDataWriter writes
+// them: BINARY bytes and a line break; ASCII numbers, several a line. Strings: in ASCII one a
+// line (spaces as %20, possibly empty), in BINARY each after a big-endian length of 1, 2, 4 or
+// 8 bytes whose top two bits say which (11, 10, 01, 00; checked against VTK 9.1's output).
+// Then version 5.1's METADATA block, if one follows (to a blank line).
+void skip_values(Lines& lines, const std::string& path, bool binary, std::uint64_t values, const std::string& type,
+                 const std::string& what) {
+    if (values / 8 > lines.bytes_left()) fail(path, "ends inside " + what + " (truncated)");  // a value takes a bit or more
+    const bool strings = lower(type) == "string";
+    if (!binary && strings) {
+        for (std::uint64_t v = 0; v < values; ++v) (void)lines.raw(what.c_str());
+    } else if (!binary) {
+        for (std::uint64_t left = values; left > 0;) {
+            const std::size_t n = lines.words(what.c_str()).size();
+            if (n > left) fail(path, what + " has more values than its " + std::to_string(values));
+            left -= n;
+        }
+    } else if (strings) {
+        for (std::uint64_t v = 0; v < values; ++v) {
+            const std::uint64_t first = lines.big_endian(1, what.c_str());
+            const std::size_t prefix = first >= 0xC0 ? 1 : first >= 0x80 ? 2 : first >= 0x40 ? 4 : 8;
+            const std::uint64_t length = lines.big_endian(prefix, what.c_str()) & (~std::uint64_t{0} >> (66 - 8 * prefix));
+            lines.skip_bytes(prefix, what.c_str());
+            lines.skip_bytes(length, what.c_str());
+        }
+        lines.skip_line_break();
+    } else {
+        lines.skip_bytes(binary_bytes(path, type, values), what.c_str());
+        lines.skip_line_break();
+    }
+    if (lines.next_starts_with("METADATA")) {
+        std::string_view line;
+        do line = lines.raw("the end of a METADATA block");
+        while (!trim(line).empty());
+    }
+}
+
+// A FIELD's arrays ("FIELD name count" read), skipped as their lines say: the dataset's field
+// data before the geometry (a time value, a cycle), or a FIELD of the cell data. Both were
+// refused, so a file VTK wrote with either did not read.
+void skip_field(Lines& lines, const std::string& path, bool binary, const std::vector<std::string>& field) {
     if (field.size() != 3) fail(path, "'FIELD' takes a name and an array count");
     const std::size_t arrays = parse_size(path, "FIELD", field[2]);
     for (std::size_t i = 0; i < arrays; ++i) {
-        const std::vector<std::string_view> a = lines.words("a FIELD array");
+        const std::vector<std::string> a = copied_words(lines, "a FIELD array");
         if (a.size() == 1 && keyword(a[0]) == "NULL_ARRAY") continue;  // what VTK writes for a null array
         if (a.size() != 4) fail(path, "a FIELD array line is 'name components tuples type'");
-        const std::size_t components = parse_size(path, "FIELD array", a[1]);
-        const std::size_t tuples = parse_size(path, "FIELD array", a[2]);
-        // A value takes a byte or more (bits aside): a larger count cannot lie in the header read.
-        if (components > kMaxVtkHeader || tuples > kMaxVtkHeader || components * tuples > 8 * kMaxVtkHeader)
-            lines.past_header_read("the dataset's FIELD array");
-        const std::size_t values = components * tuples;
-        const bool strings = lower(a[3]) == "string";
-        if (!binary && strings) {
-            for (std::size_t v = 0; v < values; ++v) (void)lines.raw("a FIELD string");  // one a line, may be empty
-        } else if (!binary) {
-            for (std::size_t left = values; left > 0;) {
-                const std::size_t n = lines.words("a FIELD array's values").size();
-                if (n > left)
-                    fail(path, "FIELD array '" + shown(a[0]) + "' has more values than its " + std::to_string(values));
-                left -= n;
-            }
-        } else if (strings) {
-            std::size_t at = 0;
-            for (std::size_t v = 0; v < values; ++v) {
-                const unsigned char first = lines.byte_at(at, "a FIELD string");
-                const std::size_t prefix = first >= 0xC0 ? 1 : first >= 0x80 ? 2 : first >= 0x40 ? 4 : 8;
-                std::uint64_t length = first & 0x3F;
-                for (std::size_t b = 1; b < prefix; ++b) length = length << 8 | lines.byte_at(at + b, "a FIELD string");
-                if (length > kMaxVtkHeader) lines.past_header_read("a FIELD string");
-                at += prefix + static_cast<std::size_t>(length);
-            }
-            lines.skip_bytes(at, "a FIELD string array");
+        const std::string what = "FIELD array '" + shown(a[0]) + "'";
+        skip_values(lines, path, binary,
+                    product(path, parse_size(path, "FIELD array", a[1]), parse_size(path, "FIELD array", a[2]), what),
+                    a[3], what);
+    }
+}
+
+// The cell data before the point data (how VTK writes a volume that has both), skipped
+// attribute by attribute up to POINT_DATA: it was refused.
+void skip_cell_data(Lines& lines, const std::string& path, bool binary, std::uint64_t cells) {
+    while (!lines.next_starts_with("POINT_DATA")) {
+        const std::vector<std::string> a = copied_words(lines, "POINT_DATA");
+        const std::string k = keyword(a[0]);
+        const std::string what = "cell data " + k + (a.size() > 1 ? " '" + shown(a[1]) + "'" : std::string());
+        const auto need = [&](std::size_t lo, std::size_t hi, const char* form) {
+            if (a.size() < lo || a.size() > hi) fail(path, "'" + k + "' is '" + k + " " + form + "'");
+        };
+        const auto per_cell = [&](std::uint64_t n, const std::string& type) {
+            skip_values(lines, path, binary, product(path, cells, n, what), type, what);
+        };
+        if (k == "SCALARS") {
+            need(3, 4, "name type [components]");
+            const std::uint64_t components = a.size() == 4 ? parse_size(path, "SCALARS", a[3]) : 1;
+            if (lines.next_starts_with("LOOKUP_TABLE")) (void)lines.words("LOOKUP_TABLE");
+            per_cell(components, a[2]);
+        } else if (k == "COLOR_SCALARS") {  // bytes in BINARY, fractions in ASCII
+            need(3, 3, "name components");
+            per_cell(parse_size(path, "COLOR_SCALARS", a[2]), binary ? "unsigned_char" : "float");
+        } else if (k == "VECTORS" || k == "NORMALS" || k == "TENSORS" || k == "TENSORS6") {
+            need(3, 3, "name type");
+            per_cell(k == "TENSORS" ? 9 : k == "TENSORS6" ? 6 : 3, a[2]);
+        } else if (k == "TEXTURE_COORDINATES") {
+            need(4, 4, "name dimension type");
+            per_cell(parse_size(path, "TEXTURE_COORDINATES", a[2]), a[3]);
+        } else if (k == "GLOBAL_IDS" || k == "PEDIGREE_IDS") {
+            need(3, 3, "name type");
+            per_cell(1, a[2]);
+        } else if (k == "LOOKUP_TABLE") {  // RGBA per entry: bytes in BINARY, fractions in ASCII
+            need(3, 3, "name size");
+            skip_values(lines, path, binary, product(path, parse_size(path, "LOOKUP_TABLE", a[2]), 4, what),
+                        binary ? "unsigned_char" : "float", what);
+        } else if (k == "FIELD") {
+            skip_field(lines, path, binary, a);
         } else {
-            lines.skip_bytes(field_bytes(path, a[3], values), "a FIELD array");
-        }
-        if (lines.next_starts_with("METADATA")) {  // version 5.1's block after an array, to a blank line
-            std::string_view line;
-            do line = lines.raw("the end of a METADATA block");
-            while (!trim(line).empty());
+            fail(path, "unknown cell data attribute '" + shown(a[0]) + "' before POINT_DATA");
         }
     }
 }
@@ -173,8 +253,7 @@ void expect_count(const std::string& path, const std::vector<std::string_view>& 
 VolumeHeader read_vtk_header(const InputFile& file) {
     const std::string& path = file.path();
     if (file.size() == 0) fail(path, "file is empty");
-    const std::string text = file.read(0, kMaxVtkHeader);
-    Lines lines(path, text);
+    Lines lines(path, file);
     if (lower(lines.raw("the version line").substr(0, 22)) != "# vtk datafile version")
         fail(path, "not a legacy VTK file (the first line is not '# vtk DataFile Version x.y')");
     (void)lines.raw("the title line");
@@ -230,9 +309,10 @@ VolumeHeader read_vtk_header(const InputFile& file) {
             expect_count(path, w, 4);
             for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "ORIGIN", parse_double(path, "ORIGIN", w[a + 1]));
         } else if (k == "FIELD") {
-            skip_field_data(lines, path, w, info.encoding == "raw");
+            skip_field(lines, path, info.encoding == "raw", std::vector<std::string>(w.begin(), w.end()));
         } else if (k == "CELL_DATA") {
-            fail(path, "CELL_DATA before POINT_DATA is not supported: the volume is the point data's first array");
+            expect_count(path, w, 2);
+            skip_cell_data(lines, path, info.encoding == "raw", parse_size(path, "CELL_DATA", w[1]));
         } else {
             fail(path, "unknown keyword '" + shown(w[0]) + "' in a STRUCTURED_POINTS header");
         }
@@ -274,7 +354,7 @@ VolumeHeader read_vtk_header(const InputFile& file) {
     layout.dims = info.dims;
     layout.big_endian = info.big_endian;
     layout.data_path = path;
-    layout.offset = lines.position();
+    layout.offset = lines.offset();
     layout.more_may_follow = true;  // further arrays, and the writer's newline after binary data
     return h;
 }
