@@ -304,6 +304,10 @@ TEST_CASE("cli: every input format from standard input", "[cli]") {
     CHECK(legacy_vtk.code == 0);
     CHECK(legacy_vtk.out.find("format:    vtk (raw, big endian)") != std::string::npos);
     CHECK(legacy_vtk.out.find("range:     -100 .. 61") != std::string::npos);
+    // Text samples have no byte order: none is shown (it said "little endian").
+    const Result ascii_vtk = piped(cat(std::string(VOXMESH_TEST_DATA) + "/../fuzz_corpus/vtk/i16_ascii.vtk"), "info -");
+    CHECK(ascii_vtk.code == 0);
+    CHECK(ascii_vtk.out.find("format:    vtk (ascii)\n") != std::string::npos);
     const std::string npy = std::string(VOXMESH_TEST_DATA) + "/../fuzz_corpus/npy/i2_big_c.npy";  // numpy's own
     const Result numpy_file = piped(cat(npy), "info -");
     CHECK(numpy_file.code == 0);

@@ -105,8 +105,9 @@ int run_info(const InfoArgs& a) {
 
     const std::size_t samples = info.dims[0] * info.dims[1] * info.dims[2];
     std::cout << "file:      " << input.display() << "\n"
-              << "format:    " << info.format << " (" << info.encoding << ", "
-              << (info.big_endian ? "big" : "little") << " endian)\n"
+              << "format:    " << info.format << " (" << info.encoding
+              << (info.encoding == "ascii" ? "" : info.big_endian ? ", big endian" : ", little endian")  // text has none
+              << ")\n"
               << "dims:      " << dims_text(info.dims) << " (" << samples << " samples)\n"
               << "type:      " << scalar_name(info.type) << "\n"
               << "spacing:   " << triple_text(info.spacing) << "\n"
