@@ -30,6 +30,7 @@
 #include <cstring>
 #include <limits>
 #include <string>
+#include <string_view>
 #include <type_traits>
 
 namespace voxmesh {
@@ -343,7 +344,8 @@ struct Sculpt::Impl {
     }
 
     void apply(const Dab& dab, Units units) {
-        if (dab.op != BrushOp::Add && dab.op != BrushOp::Subtract && dab.op != BrushOp::Smooth && dab.op != BrushOp::Set)
+        // brush_op_name's switch names every op (-Wswitch keeps it whole): "?" is a value outside the enum
+        if (std::string_view(brush_op_name(dab.op)) == "?")
             throw Error("sculpt: unknown brush op " + std::to_string(static_cast<int>(dab.op)) +
                         " (expected BrushOp::Add, Subtract, Smooth or Set)");
         for (double v : dab.center) check_finite(v, "brush centre");
