@@ -39,10 +39,10 @@ int run_sculpt(const std::vector<std::size_t>& sizes, unsigned threads, std::siz
             const voxmesh::SculptBenchResult r = voxmesh::run_sculpt_benchmark(options, log);
             if (json) {
                 std::printf("{\"bench\":\"sculpt\",\"size\":%zu,\"backend\":\"%s\",\"device\":\"%s\",\"threads\":%u,"
-                            "\"dabs\":%zu,\"pause_ms\":%g,\"update_p50_ms\":%.3f,\"update_p95_ms\":%.3f,"
+                            "\"workers\":%u,\"dabs\":%zu,\"pause_ms\":%g,\"update_p50_ms\":%.3f,\"update_p95_ms\":%.3f,"
                             "\"update_p99_ms\":%.3f,\"update_cpu_p50_ms\":%.3f,\"frame_p95_ms\":%.3f,\"blocks_per_dab\":%.2f,"
                             "\"full_extract_ms\":%.3f,\"mesh_assembly_ms\":%.3f,\"triangles\":%zu}\n",
-                            n, voxmesh::backend_name(r.backend), r.device.c_str(), r.threads, r.update.count, pause_ms,
+                            n, voxmesh::backend_name(r.backend), r.device.c_str(), r.threads, r.workers, r.update.count, pause_ms,
                             r.update.p50, r.update.p95, r.update.p99, r.update_cpu.p50, r.frame.p95, r.mean_blocks_remeshed,
                             r.full_extract_ms, r.mesh_assembly_ms, r.triangles);
             } else {

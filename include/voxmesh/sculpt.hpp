@@ -248,7 +248,8 @@ struct SculptBenchOptions {
 
 struct SculptBenchResult {
     SculptBenchOptions options;
-    unsigned threads = 0;           // resolved
+    unsigned threads = 0;           // resolved: options.threads, or the cores for 0
+    unsigned workers = 0;           // the threads update() runs: `threads` capped at the cores
     Backend backend = Backend::Cpu; // what update() ran on (Cpu after a fallback)
     std::string device = "cpu";     // Sculpt::device_name()
     std::vector<std::string> warnings;  // e.g. the fallback to the CPU

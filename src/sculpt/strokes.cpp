@@ -330,6 +330,7 @@ SculptBenchResult run_sculpt_benchmark(const SculptBenchOptions& options,
     }
     r.threads = options.threads;
     if (r.threads == 0) r.threads = detail::resolve_threads(0);
+    r.workers = detail::running_threads(options.threads);  // as the Sculpt resolves them
     return r;
 }
 
@@ -340,6 +341,7 @@ std::string format_sculpt_benchmark(const SculptBenchResult& r) {
     const std::size_t n = r.options.resolution;
     o << "sculpt " << n << "^3, block " << r.options.block_size << ", ";
     if (r.backend == Backend::OpenCL) o << "OpenCL '" << r.device << "', ";
+    else if (r.workers < r.threads) o << r.threads << " threads asked for, run on " << r.workers << ", ";
     else o << r.threads << " threads, ";
     o << r.update.count << " dabs (radius " << r.options.radius_min << ".." << r.options.radius_max << ")";
     if (r.options.pause_ms > 0) o << ", each after a " << r.options.pause_ms << " ms sleep";
