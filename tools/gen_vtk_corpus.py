@@ -32,8 +32,10 @@ def image(dims, vtk_type, np_type, values=None, spacing=(0.5, 1, 2), origin=(-1,
     return img
 
 
-def write(data, name, binary=True, version=None, writer=vtk.vtkStructuredPointsWriter):
+def write(data, name, binary=True, version=None, writer=vtk.vtkStructuredPointsWriter, extent=False):
     w = writer()
+    if extent:
+        w.SetWriteExtent(True)
     w.SetInputData(data)
     w.SetFileName(os.path.join(OUT, name))
     if binary:
@@ -92,6 +94,30 @@ def main():
     write(with_field, "i16_cell_data_ascii.vtk", binary=False)
     write(with_field, "i16_cell_data_binary.vtk")
     write(with_field, "i16_cell_data_binary_v42.vtk", version=42)
+    # Arrays with a METADATA block: a vector with one of its three components named (the
+    # others' names are blank lines), each with a norm range (INFORMATION); in ASCII its 18
+    # values end with a blank line before METADATA, as do the strings.
+    meta = image((4, 3, 2), vtk.VTK_SHORT, np.int16)
+    cells = meta.GetNumberOfCells()
+    flow = numpy_support.numpy_to_vtk(np.arange(cells * 3).reshape(cells, 3).astype(np.float32), deep=1,
+                                      array_type=vtk.VTK_FLOAT)
+    flow.SetName("flow")
+    flow.SetComponentName(1, "vy")
+    flow.GetRange(-1)  # records L2_NORM_RANGE in the array's information
+    meta.GetCellData().SetVectors(flow)
+    labels = vtk.vtkStringArray()
+    labels.SetName("labels")
+    for i in range(cells):
+        labels.InsertNextValue("" if i % 2 else "label %d" % i)
+    labels.SetComponentName(0, "text")
+    meta.GetCellData().AddArray(labels)
+    write(meta, "i16_metadata_ascii.vtk", binary=False)
+    write(meta, "i16_metadata_binary.vtk")
+    # Written with EXTENT (and a negative spacing): the first sample is at ORIGIN + first * SPACING.
+    extent = image((4, 3, 2), vtk.VTK_SHORT, np.int16, spacing=(0.5, -1, 2))
+    extent.SetExtent(-3, 0, 4, 6, 1, 2)
+    write(extent, "i16_extent_ascii.vtk", binary=False, extent=True)
+    write(extent, "i16_extent_binary.vtk", extent=True)
 
 
 if __name__ == "__main__":

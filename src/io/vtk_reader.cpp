@@ -1,10 +1,11 @@
 // Legacy VTK (.vtk, as vtkStructuredPointsWriter and vtkDataSetWriter write it, file versions
-// 1.0 to 5.1): DATASET STRUCTURED_POINTS with DIMENSIONS, SPACING (or ASPECT_RATIO) and ORIGIN,
-// then POINT_DATA whose first array is the volume: SCALARS with one component, COLOR_SCALARS
-// with one (how VTK writes unsigned char: bytes in BINARY, 0..1 in ASCII), or the first array
-// of a FIELD. BINARY data is big-endian; ASCII data is numbers as text. The dataset's field data
-// (before the geometry) and cell data (before the point data, as VTK writes a volume that has
-// both) are skipped; arrays after the volume's are ignored.
+// 1.0 to 5.1): DATASET STRUCTURED_POINTS with DIMENSIONS (or EXTENT), SPACING (or ASPECT_RATIO)
+// and ORIGIN, then POINT_DATA whose first array is the volume: SCALARS with one component,
+// COLOR_SCALARS with one (how VTK writes unsigned char: bytes in BINARY, 0..1 in ASCII), or the
+// first array of a FIELD. BINARY data is big-endian; ASCII data is numbers as text. The
+// dataset's field data (before the geometry) and cell data (before the point data, as VTK
+// writes a volume that has both), with their arrays' METADATA blocks, are skipped; arrays after
+// the volume's are ignored.
 #include "header_text.hpp"
 #include "input_file.hpp"
 #include "readers.hpp"
@@ -64,6 +65,16 @@ public:
         if (!next_line(window_, pos_, line))
             fail(path_, std::string("ends before ") + wanted + " (truncated, or not a volume file)");
         return line;
+    }
+    // Passes the next line, blank or not and however long (an ASCII string value: VTK writes
+    // one a line, and one longer than the window was refused); fails at the end of the file.
+    void skip_line(const char* wanted) {
+        if (pos_ >= window_.size() && file_ends_in_window())
+            fail(path_, std::string("ends before ") + wanted + " (truncated, or not a volume file)");
+        std::size_t end;
+        while ((end = window_.find('\n', pos_)) == std::string::npos && !file_ends_in_window())
+            move_to(base_ + window_.size());
+        pos_ = end == std::string::npos ? window_.size() : end + 1;
     }
     // The next non-blank line, as words.
     std::vector<std::string_view> words(const char* wanted) {
@@ -146,18 +157,41 @@ std::vector<std::string> copied_words(Lines& lines, const char* wanted) {
     return {w.begin(), w.end()};
 }
 
-// Skips an array's `values` values of `type` after its header line, as vtkDataWriter writes
-// them: BINARY bytes and a line break; ASCII numbers, several a line. Strings: in ASCII one a
-// line (spaces as %20, possibly empty), in BINARY each after a big-endian length of 1, 2, 4 or
-// 8 bytes whose top two bits say which (11, 10, 01, 00; checked against VTK 9.1's output).
-// Then version 5.1's METADATA block, if one follows (to a blank line).
-void skip_values(Lines& lines, const std::string& path, bool binary, std::uint64_t values, const std::string& type,
-                 const std::string& what) {
+// Skips an array's METADATA block, if one follows, as VTK's reader does: the blank lines before
+// it (ASCII values end with one when their count is a multiple of nine, strings always do),
+// then lines to a blank one, but COMPONENT_NAMES is one line a component, and an unnamed
+// component's is blank. Taking the blank line before METADATA, or an unnamed component's, for
+// the block's end refused files VTK wrote ("unknown cell data attribute 'METADATA'").
+void skip_metadata(Lines& lines, const std::string& path, std::uint64_t components, const std::string& what) {
+    if (!lines.next_starts_with("METADATA")) return;
+    const std::string context = "the METADATA block of " + what;
+    (void)lines.words(context.c_str());  // METADATA, after any blank lines
+    for (;;) {
+        const std::string_view line = trim(lines.raw(context.c_str()));
+        if (line.empty()) return;
+        if (lower(line) != "component_names") continue;
+        if (components > lines.bytes_left()) fail(path, "ends inside " + context + " (truncated)");  // a line a name
+        for (std::uint64_t c = 0; c < components; ++c) lines.skip_line(context.c_str());
+    }
+}
+
+// Skips an array's `values` values (`components` a tuple) of `type` after its header line, as
+// vtkDataWriter writes them: BINARY bytes and a line break; ASCII numbers, several a line.
+// Strings: in ASCII one a line (spaces as %20, possibly empty), in BINARY each after a
+// big-endian length of 1, 2, 4 or 8 bytes whose top two bits say which (11, 10, 01, 00;
+// checked against VTK 9.1's output). Variants: one a line in both. Then the array's METADATA
+// block, if one follows.
+void skip_values(Lines& lines, const std::string& path, bool binary, std::uint64_t values, std::uint64_t components,
+                 const std::string& type, const std::string& what) {
     if (values / 8 > lines.bytes_left()) fail(path, "ends inside " + what + " (truncated)");  // a value takes a bit or more
-    const bool strings = lower(type) == "string";
-    if (!binary && strings) {
-        for (std::uint64_t v = 0; v < values; ++v) (void)lines.raw(what.c_str());
+    const std::string t = lower(type);
+    const bool strings = t == "string" || t == "utf8_string";  // utf8_string: a vtkUnicodeStringArray
+    if (t == "variant" || (!binary && strings)) {  // variants are "type value" lines in BINARY too
+        for (std::uint64_t v = 0; v < values; ++v) lines.skip_line(what.c_str());
     } else if (!binary) {
+        // The type checked as in BINARY: an unknown one's values were counted as words, and a
+        // utf8_string's or variant's lines misread as header lines.
+        (void)binary_bytes(path, type, 0);
         for (std::uint64_t left = values; left > 0;) {
             const std::size_t n = lines.words(what.c_str()).size();
             if (n > left) fail(path, what + " has more values than its " + std::to_string(values));
@@ -176,11 +210,7 @@ void skip_values(Lines& lines, const std::string& path, bool binary, std::uint64
         lines.skip_bytes(binary_bytes(path, type, values), what.c_str());
         lines.skip_line_break();
     }
-    if (lines.next_starts_with("METADATA")) {
-        std::string_view line;
-        do line = lines.raw("the end of a METADATA block");
-        while (!trim(line).empty());
-    }
+    skip_metadata(lines, path, components, what);
 }
 
 // A FIELD's arrays ("FIELD name count" read), skipped as their lines say: the dataset's field
@@ -194,9 +224,9 @@ void skip_field(Lines& lines, const std::string& path, bool binary, const std::v
         if (a.size() == 1 && keyword(a[0]) == "NULL_ARRAY") continue;  // what VTK writes for a null array
         if (a.size() != 4) fail(path, "a FIELD array line is 'name components tuples type'");
         const std::string what = "FIELD array '" + shown(a[0]) + "'";
-        skip_values(lines, path, binary,
-                    product(path, parse_size(path, "FIELD array", a[1]), parse_size(path, "FIELD array", a[2]), what),
-                    a[3], what);
+        const std::uint64_t components = parse_size(path, "FIELD array", a[1]);
+        skip_values(lines, path, binary, product(path, components, parse_size(path, "FIELD array", a[2]), what),
+                    components, a[3], what);
     }
 }
 
@@ -211,7 +241,7 @@ void skip_cell_data(Lines& lines, const std::string& path, bool binary, std::uin
             if (a.size() < lo || a.size() > hi) fail(path, "'" + k + "' is '" + k + " " + form + "'");
         };
         const auto per_cell = [&](std::uint64_t n, const std::string& type) {
-            skip_values(lines, path, binary, product(path, cells, n, what), type, what);
+            skip_values(lines, path, binary, product(path, cells, n, what), n, type, what);
         };
         if (k == "SCALARS") {
             need(3, 4, "name type [components]");
@@ -232,7 +262,7 @@ void skip_cell_data(Lines& lines, const std::string& path, bool binary, std::uin
             per_cell(1, a[2]);
         } else if (k == "LOOKUP_TABLE") {  // RGBA per entry: bytes in BINARY, fractions in ASCII
             need(3, 3, "name size");
-            skip_values(lines, path, binary, product(path, parse_size(path, "LOOKUP_TABLE", a[2]), 4, what),
+            skip_values(lines, path, binary, product(path, parse_size(path, "LOOKUP_TABLE", a[2]), 4, what), 4,
                         binary ? "unsigned_char" : "float", what);
         } else if (k == "FIELD") {
             skip_field(lines, path, binary, a);
@@ -280,6 +310,10 @@ VolumeHeader read_vtk_header(const InputFile& file) {
 
     bool have_dims = false;
     std::array<std::vector<double>, 3> axes;
+    // EXTENT's first indices, and the spacing with its sign: the first sample lies at
+    // ORIGIN + first * spacing.
+    std::array<long long, 3> first{0, 0, 0};
+    std::array<double, 3> signed_spacing{1, 1, 1};
     for (;;) {
         const std::vector<std::string_view> w = lines.words("POINT_DATA");
         const std::string k = keyword(w[0]);
@@ -297,12 +331,27 @@ VolumeHeader read_vtk_header(const InputFile& file) {
         if (k == "DIMENSIONS") {
             expect_count(path, w, 4);
             for (std::size_t a = 0; a < 3; ++a) info.dims[a] = parse_size(path, "DIMENSIONS", w[a + 1]);
+            first = {0, 0, 0};  // the last of EXTENT and DIMENSIONS holds
+            have_dims = true;
+        } else if (k == "EXTENT") {  // what vtkStructuredPointsWriter writes with WriteExtent on: it was refused
+            expect_count(path, w, 7);
+            for (std::size_t a = 0; a < 3; ++a) {
+                const long long lo = parse_integer(path, "EXTENT", w[2 * a + 1]);
+                const long long hi = parse_integer(path, "EXTENT", w[2 * a + 2]);
+                const std::string range = "EXTENT " + shown(w[2 * a + 1]) + " " + shown(w[2 * a + 2]);
+                if (lo < std::numeric_limits<std::int32_t>::min() || hi > std::numeric_limits<std::int32_t>::max())
+                    fail(path, range + " is out of VTK's int range");  // and hi - lo + 1 cannot overflow
+                if (hi < lo) fail(path, range + " is empty");
+                info.dims[a] = static_cast<std::size_t>(hi - lo) + 1;
+                first[a] = lo;
+            }
             have_dims = true;
         } else if (k == "SPACING" || k == "ASPECT_RATIO") {
             expect_count(path, w, 4);
             for (std::size_t a = 0; a < 3; ++a) {
                 const double s = parse_double(path, k, w[a + 1]);
                 info.spacing[a] = checked_spacing(path, k.c_str(), s);
+                signed_spacing[a] = s;
                 if (s < 0) reverse_direction(axes, a);
             }
         } else if (k == "ORIGIN") {
@@ -350,6 +399,10 @@ VolumeHeader read_vtk_header(const InputFile& file) {
 
     info.type = layout.type;
     info.data_file = path;
+    for (std::size_t a = 0; a < 3; ++a)
+        if (first[a] != 0)
+            info.origin[a] =
+                checked_origin(path, "EXTENT", info.origin[a] + static_cast<double>(first[a]) * signed_spacing[a]);
     apply_directions(h, axis_directions(axes));
     layout.dims = info.dims;
     layout.big_endian = info.big_endian;
