@@ -129,7 +129,7 @@ int main(int argc, char** argv) {
     app.add_option("--field", fields, "built-in fields: sphere, gyroid, blobs, ct (comma list; default sphere)")
         ->delimiter(',');
     // No comma list: a file's name may hold a comma. Several files: --input a.nrrd b.nrrd.
-    app.add_option("--input", inputs, "volume files (NRRD, MetaImage, NIfTI; names taken whole, commas and all); loading is not timed");
+    app.add_option("--input", inputs, "volume files (NRRD, MetaImage, NIfTI, legacy VTK, NumPy .npy; not raw; names taken whole, commas and all); loading is not timed");
     app.add_option("--iso", iso, "iso value (default: the field's, or voxmesh_iso in a file written by --write-volume)")
         ->transform(voxmesh::cli::decimal_number())
         ->check([](const std::string& text) {  // NaN stands for "not given" below: refuse it here

@@ -362,4 +362,19 @@ TEST_CASE("cli: an unknown VOXMESH_ISA is named, portable in any case is not", "
     }
 }
 
+// An iso outside the data (the MRI's stored values are 0..255; 499.5 is a CT's skin) gave
+// "no surface at iso 499.5" with nothing to say why: the warning names the range and the side.
+TEST_CASE("cli: no surface names the samples' range", "[cli]") {
+    iotest::Scratch s;
+    const std::string mri = quote(data_file("mri_someones_anatomy.nii.gz")), out = " -o " + quote(s.dir + "/o.stl");
+    const vmtest::ProgramResult above = vmtest::run_program(VOXMESH_CLI_PATH, "mesh " + mri + " --iso 499.5" + out, s.dir);
+    INFO(above.err);
+    CHECK(above.code == 0);
+    CHECK(above.err.find("no surface at iso 499.5") != std::string::npos);
+    CHECK(above.err.find("range 0 .. 255, all below the iso") != std::string::npos);
+    const vmtest::ProgramResult below = vmtest::run_program(VOXMESH_CLI_PATH, "mesh " + mri + " --iso 0" + out, s.dir);
+    INFO(below.err);
+    CHECK(below.err.find("range 0 .. 255, all at or above the iso") != std::string::npos);
+}
+
 #endif

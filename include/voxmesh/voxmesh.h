@@ -256,7 +256,7 @@ voxmesh_status voxmesh_read_raw(const char* path, const voxmesh_raw_layout* layo
 /* What the file said beyond the samples (voxmesh::VolumeInfo), for a volume read from a file
  * or bytes; all zero (value_scale 1) for a voxelized one. */
 typedef struct voxmesh_volume_info {
-    char format[16];      /* "nrrd", "metaimage", "nifti", "vtk", "raw"; "" when not read */
+    char format[16];      /* "nrrd", "metaimage", "nifti", "vtk", "npy", "raw"; "" when not read */
     char encoding[16];    /* "raw", "gzip" or "ascii" */
     int big_endian;       /* the stored samples' byte order */
     int flipped[3];       /* axes stored in the negative direction, reversed on load */

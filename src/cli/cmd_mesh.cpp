@@ -126,9 +126,14 @@ int run_mesh(const MeshArgs& a) {
     const std::size_t extracted_triangles = mesh.triangle_count();
     if (a.largest > 0) mesh = keep_largest_components(mesh, a.largest);
     const MeshTopology topo = analyze_topology(mesh);
-    if (mesh.triangle_count() == 0)
+    if (mesh.triangle_count() == 0) {
+        // Nearly always an iso outside the data (a typo, stored vs scaled values): say which side.
+        const ValueRange r = value_range(volume.view(), std::nullopt, a.threads);
+        const char* side = iso > r.max ? ", all below the iso" : iso <= r.min ? ", all at or above the iso" : "";
         std::cerr << "voxmesh: warning: no surface at iso " << format_double(iso) << " in '" << input_name(a.input)
-                  << "'; writing an empty mesh\n";
+                  << "' (its samples range " << format_double(r.min) << " .. " << format_double(r.max) << side
+                  << "); writing an empty mesh\n";
+    }
     write_mesh_output(a.output, a.format, mesh);
 
     if (a.json) {
@@ -165,7 +170,9 @@ Command add_mesh(CLI::App& app) {
     sub->add_option("-o,--output", a->output, "mesh file: .stl (binary), .ply (binary) or .obj; -: standard output (with --format)")
         ->required();
     add_mesh_format_option(sub, a->format);
-    a->iso_option = sub->add_option("--iso", a->iso, "iso value (default: midpoint of the value range)")
+    a->iso_option = sub->add_option("--iso", a->iso,
+                                    "iso value (default: the iso the file records as voxmesh_iso, as voxelize writes "
+                                    "it, else the midpoint of the value range)")
                         ->transform(decimal_number());
     sub->add_option("--backend", a->backend, "auto, cpu, opencl or hybrid (default auto)")
         ->check(CLI::IsMember({"auto", "cpu", "opencl", "hybrid"}));

@@ -74,8 +74,8 @@ int run_sculpt(const SculptArgs& a) {
     run_strokes(sculpt, dabs, [&](const StrokeFrame& f) {
         update_ms.push_back(1e3 * f.update_seconds);
         if (a.frames)
-            std::fprintf(report, "frame %zu: edit %.2f ms, update %.2f ms, %zu blocks re-meshed\n", f.frame, 1e3 * f.edit_seconds,
-                        1e3 * f.update_seconds, f.blocks_remeshed);
+            std::fprintf(report, "frame %zu: edit %.2f ms, update %.2f ms, %zu block%s re-meshed\n", f.frame,
+                         1e3 * f.edit_seconds, 1e3 * f.update_seconds, f.blocks_remeshed, f.blocks_remeshed == 1 ? "" : "s");
     });
     Mesh mesh = sculpt.mesh();
     if (a.largest > 0) mesh = keep_largest_components(mesh, a.largest);  // e.g. without the crumbs a brush left

@@ -88,7 +88,7 @@ int main(int argc, char** argv) {
     std::signal(SIGXFSZ, SIG_IGN);
     pin_pocl_workers();
     CLI::App app{"voxmesh " VOXMESH_VERSION_STRING
-                 ": marching cubes on every compute device (CPU threads, OpenCL), STL voxelization"};
+                 ": marching cubes on every compute device (CPU threads, OpenCL), voxelization of STL, PLY and OBJ models"};
     app.name("voxmesh");
     app.set_version_flag("--version", VOXMESH_VERSION_STRING);
     app.require_subcommand(1);
