@@ -11,6 +11,7 @@
 #include "support/mesh_checks.hpp"
 #include "support/run_program.hpp"
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -91,6 +92,32 @@ TEST_CASE("cli: a file size limit that stops the OpenCL kernel compiler is named
     CHECK(err.find("voxmesh: error: ") != std::string::npos);
     CHECK(err.find("a file size limit (ulimit -f) is set") != std::string::npos);
     CHECK(!fs::exists(s.dir + "/o.stl"));
+#endif
+}
+
+// Warnings are in the CLI's words, as errors are: Hybrid's advice with only CPU devices named
+// Options::devices and device_type, which the command line does not have.
+TEST_CASE("cli: a warning's advice names the CLI's options", "[cli]") {
+#ifdef VOXMESH_HAS_OPENCL
+    const auto devices = voxmesh::list_devices();
+    if (devices.empty() || std::any_of(devices.begin(), devices.end(), [](const voxmesh::DeviceInfo& d) {
+            return d.type != voxmesh::DeviceType::Cpu;
+        })) {
+        WARN("not only CPU OpenCL devices: SKIPPED");
+        return;
+    }
+    iotest::Scratch s;
+    const std::string args = "mesh " + quote(data_file("headsq.nrrd")) + " --iso 499.5 --backend hybrid -o " +
+                             quote(s.dir + "/o.stl");
+    for (const std::string json : {"", " --json"}) {
+        const vmtest::ProgramResult r = vmtest::run_program(VOXMESH_CLI_PATH, args + json, s.dir);
+        INFO(r.err << r.out);
+        CHECK(r.code == 0);
+        const std::string said = r.err + r.out;
+        CHECK(said.find("name one with --device to use it anyway") != std::string::npos);
+        CHECK(said.find("Options::") == std::string::npos);
+        CHECK(said.find("device_type") == std::string::npos);
+    }
 #endif
 }
 

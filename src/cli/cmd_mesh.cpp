@@ -76,7 +76,7 @@ void print_json(const MeshArgs& a, double iso, const std::string& iso_source, co
           << ", \"transfer_s\": " << format_double(d.transfer_s) << ", \"wall_s\": " << format_double(d.wall_s) << "}";
     }
     o << "], \"warnings\": [";
-    for (std::size_t i = 0; i < stats.warnings.size(); ++i) o << (i ? ", " : "") << json_string(stats.warnings[i]);
+    for (std::size_t i = 0; i < stats.warnings.size(); ++i) o << (i ? ", " : "") << json_string(in_cli_words(stats.warnings[i]));
     o << "]}";
     report_stream(a.output) << o.str() << "\n";
 }
@@ -119,7 +119,7 @@ int run_mesh(const MeshArgs& a) {
     options.normals = !a.no_normals;
     options.inside_below = a.inside_below;
     if (a.device >= 0) options.devices = {a.device};
-    options.log = [](const std::string& message) { std::cerr << "voxmesh: warning: " << message << "\n"; };
+    options.log = print_warning;
 
     Stats stats;
     Mesh mesh = extract(volume.view(), options, stats);  // errors here are not about the file

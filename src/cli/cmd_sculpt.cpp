@@ -50,7 +50,7 @@ int run_sculpt(const SculptArgs& a) {
     options.threads = a.threads;
     options.backend = parse_backend(a.backend);
     options.device = a.device;
-    options.log = [](const std::string& message) { std::cerr << "voxmesh: warning: " << message << "\n"; };
+    options.log = print_warning;
     // A device that does not exist is named before the model is read and voxelized (minutes at
     // a high resolution), and not as the model file's fault. With no device at all the CPU
     // re-meshes, with the library's warning.

@@ -9,10 +9,12 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <limits>
 #include <system_error>
+#include <utility>
 
 #include <unistd.h>
 
@@ -314,5 +316,20 @@ Backend parse_backend(const std::string& name) {
         if (name == backend_name(b)) return b;
     throw BadInput("unknown backend '" + name + "' (use auto, cpu, opencl or hybrid)");
 }
+
+std::string in_cli_words(std::string message) {
+    static const std::pair<const char*, const char*> kWords[] = {
+        // Hybrid's advice when the only devices are CPUs: the CLI has no device_type option.
+        {"name one in Options::devices, or set device_type to Cpu, to use it anyway", "name one with --device to use it anyway"},
+        {"Backend::Cpu", "--backend cpu"},       {"Backend::Auto", "--backend auto"},
+        {"Backend::OpenCL", "--backend opencl"}, {"Backend::Hybrid", "--backend hybrid"},
+        {"list_devices()", "voxmesh devices"},   {"Options::devices", "--device"}};
+    for (const auto& [api, cli] : kWords)
+        for (std::size_t at = message.find(api); at != std::string::npos; at = message.find(api, at + std::strlen(cli)))
+            message.replace(at, std::strlen(api), cli);
+    return message;
+}
+
+void print_warning(const std::string& message) { std::cerr << "voxmesh: warning: " << in_cli_words(message) << "\n"; }
 
 }  // namespace voxmesh::cli

@@ -134,6 +134,12 @@ using voxmesh::detail::dims_text;  // "NXxNYxNZ"
 std::string triple_text(const std::array<double, 3>& v);
 std::string pieces_text(std::size_t pieces);  // "1 piece", "29 pieces"
 std::string device_type_name(DeviceType type);
+
+// The library's advice names its API ("use Backend::Cpu", "list_devices()"); here the options
+// and commands that do the same. For errors and warnings alike.
+std::string in_cli_words(std::string message);
+// Options::log for the commands: "voxmesh: warning: " and the message in the CLI's words.
+void print_warning(const std::string& message);
 Backend parse_backend(const std::string& name);
 
 }  // namespace voxmesh::cli

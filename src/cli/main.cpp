@@ -59,19 +59,6 @@ int report_written(int code) {
     return code == voxmesh::cli::kExitOk ? voxmesh::cli::kExitBadInput : code;
 }
 
-// The library's advice names its API ("use Backend::Cpu", "list_devices()"); here the
-// options and commands that do the same.
-std::string in_cli_words(std::string message) {
-    static const std::pair<const char*, const char*> kWords[] = {
-        {"Backend::Cpu", "--backend cpu"},       {"Backend::Auto", "--backend auto"},
-        {"Backend::OpenCL", "--backend opencl"}, {"Backend::Hybrid", "--backend hybrid"},
-        {"list_devices()", "voxmesh devices"},   {"Options::devices", "--device"}};
-    for (const auto& [api, cli] : kWords)
-        for (std::size_t at = message.find(api); at != std::string::npos; at = message.find(api, at + std::strlen(cli)))
-            message.replace(at, std::strlen(api), cli);
-    return message;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
