@@ -204,7 +204,10 @@ TEST_CASE("vtk: bad headers and data are errors naming the file", "[io][vtk][err
                Contains("sample 7: '300' is out of range"));
     CHECK_THAT(error_of(kHeader + "SCALARS v short\n1 2 3 4 x 6 7 8\n"), Contains("sample 4: 'x' is not a number"));
     CHECK_THAT(error_of(kHeader + "SCALARS v float 3\n" + numbers), Contains("3 components"));
-    CHECK_THAT(error_of(kHeader + "VECTORS v float\n" + numbers), Contains("first array is VECTORS"));
+    CHECK_THAT(error_of(kHeader + "VECTORS v float\n" + numbers), Contains("ends before point data VECTORS 'v'"));
+    CHECK_THAT(error_of(kHeader + "POLYGONS 1 4\n3 0 1 2\n"), Contains("the point data has POLYGONS where the volume's"));
+    CHECK_THAT(error_of(kHeader + "NORMALS n float\n" + numbers + numbers + numbers),
+               Contains("ends before SCALARS or FIELD"));
     CHECK_THAT(error_of(kHeader + "SCALARS v long\n" + numbers), Contains("unsupported VTK data type 'long'"));
     CHECK_THAT(error_of(kHeader + "COLOR_SCALARS v 4\n" + numbers), Contains("4 components"));
     CHECK_THAT(error_of(kHeader + "COLOR_SCALARS v 1\n0 0.5 1 1 1 1 1 2\n"), Contains("'2' is not a colour value"));
@@ -266,6 +269,37 @@ TEST_CASE("vtk: the header may vary as VTK's reader allows", "[io][vtk]") {
     CHECK(v.spacing == std::array<double, 3>{2, 2, 2});
     CHECK(v.origin == std::array<double, 3>{1, 2, 3});
     for (int i = 0; i < 8; ++i) CHECK(static_cast<const std::int32_t*>(v.data)[i] == i + 1);
+}
+
+// Found by a user review: a volume file whose point data starts with VECTORS (or NORMALS, ...)
+// and has its SCALARS after was refused; VTK's reader passes the other attributes looking for
+// the scalars.
+TEST_CASE("vtk: point data attributes before the volume's SCALARS are skipped", "[io][vtk]") {
+    Scratch s;
+    const std::string head = "# vtk DataFile Version 3.0\nt\n";
+    const std::string geometry = "\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\nPOINT_DATA 8\n";
+    std::string ascii = head + "ASCII" + geometry + "VECTORS v float\n";
+    for (int i = 0; i < 24; ++i) ascii += "9 ";
+    ascii += "\nNORMALS n double\n";
+    for (int i = 0; i < 24; ++i) ascii += "0.5\n";
+    ascii += "TEXTURE_COORDINATES t 2 float\n";
+    for (int i = 0; i < 16; ++i) ascii += "7 ";
+    ascii += "\nLOOKUP_TABLE lut 2\n0 0 0 1 1 1 1 1\nSCALARS volume short\nLOOKUP_TABLE default\n1 2 3 4 5 6 7 8\n";
+    std::string binary = head + "BINARY" + geometry + "VECTORS v float\n" + std::string(96, '\x41') +
+                         "\nGLOBAL_IDS g int\n" + std::string(32, '\x01') + "\nSCALARS volume short\nLOOKUP_TABLE default\n";
+    for (int i = 1; i <= 8; ++i) binary += std::string{'\0', static_cast<char>(i)};  // big-endian
+    for (const std::string& text : {ascii, binary}) {
+        const Volume v = read_volume(s.file("skipped.vtk", text));
+        REQUIRE(v.type == ScalarType::I16);
+        for (int i = 0; i < 8; ++i) CHECK(static_cast<const std::int16_t*>(v.data)[i] == i + 1);
+    }
+    // The FIELD after a VECTORS (how VTK writes point data without active scalars) is the volume.
+    std::string field = head + "ASCII" + geometry + "VECTORS v float\n";
+    for (int i = 0; i < 24; ++i) field += "0 ";
+    field += "\nFIELD FieldData 1\ndensity 1 8 float\n8 7 6 5 4 3 2 1\n";
+    const Volume f = read_volume(s.file("field.vtk", field));
+    REQUIRE(f.type == ScalarType::F32);
+    for (int i = 0; i < 8; ++i) CHECK(static_cast<const float*>(f.data)[i] == static_cast<float>(8 - i));
 }
 
 // Found by a review: LOOKUP_TABLE was looked for only at the start of the next line, so one

@@ -112,9 +112,9 @@ std::optional<double> recorded_iso(const VolumeInfo& info, const std::string& na
 // NRRD (.nrrd, .nhdr), MetaImage (.mhd, .mha), NIfTI-1 (.nii, .nii.gz), legacy VTK (.vtk),
 // NumPy (.npy), chosen by extension (case-insensitive). A .nii that is gzip-compressed is detected by content.
 // Legacy VTK: DATASET STRUCTURED_POINTS (DIMENSIONS, SPACING or ASPECT_RATIO, ORIGIN; a
-// negative spacing flips its axis) whose POINT_DATA's first array is the volume: SCALARS or
-// COLOR_SCALARS (unsigned char; ASCII writes byte b as b/255) of one component, or a FIELD's
-// first array; BINARY (big-endian, copied) or ASCII (numbers that must fit the type); arrays
+// negative spacing flips its axis) whose POINT_DATA's first SCALARS or COLOR_SCALARS (unsigned
+// char; ASCII writes byte b as b/255) of one component, or a FIELD's first array, is the
+// volume (VECTORS, NORMALS, ... before it are skipped); BINARY (big-endian, copied) or ASCII (numbers that must fit the type); arrays
 // after it are ignored. read_volume_info checks ASCII data only for length.
 // NRRD: 'line skip' then 'byte skip' (-1: samples end the file; raw only) as teem applies
 // them, from the data file's start or, for attached data, from just past the blank line.

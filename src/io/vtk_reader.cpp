@@ -1,8 +1,8 @@
 // Legacy VTK (.vtk, as vtkStructuredPointsWriter and vtkDataSetWriter write it, file versions
 // 1.0 to 5.1): DATASET STRUCTURED_POINTS with DIMENSIONS (or EXTENT), SPACING (or ASPECT_RATIO)
-// and ORIGIN, then POINT_DATA whose first array is the volume: SCALARS with one component,
-// COLOR_SCALARS with one (how VTK writes unsigned char: bytes in BINARY, 0..1 in ASCII), or the
-// first array of a FIELD. BINARY data is big-endian; ASCII data is numbers as text. The
+// and ORIGIN, then POINT_DATA whose first SCALARS with one component, COLOR_SCALARS with one
+// (how VTK writes unsigned char: bytes in BINARY, 0..1 in ASCII), or first array of a FIELD is
+// the volume (other attributes before it are skipped). BINARY data is big-endian; ASCII data is numbers as text. The
 // dataset's field data (before the geometry) and cell data (before the point data, as VTK
 // writes a volume that has both), with their arrays' METADATA blocks, are skipped; arrays after
 // the volume's are ignored.
@@ -230,46 +230,50 @@ void skip_field(Lines& lines, const std::string& path, bool binary, const std::v
     }
 }
 
-// The cell data before the point data (how VTK writes a volume that has both), skipped
-// attribute by attribute up to POINT_DATA: it was refused.
-void skip_cell_data(Lines& lines, const std::string& path, bool binary, std::uint64_t cells) {
-    while (!lines.next_starts_with("POINT_DATA")) {
-        const std::vector<std::string> a = copied_words(lines, "POINT_DATA");
-        const std::string k = keyword(a[0]);
-        const std::string what = "cell data " + k + (a.size() > 1 ? " '" + shown(a[1]) + "'" : std::string());
-        const auto need = [&](std::size_t lo, std::size_t hi, const char* form) {
-            if (a.size() < lo || a.size() > hi) fail(path, "'" + k + "' is '" + k + " " + form + "'");
-        };
-        const auto per_cell = [&](std::uint64_t n, const std::string& type) {
-            skip_values(lines, path, binary, product(path, cells, n, what), n, type, what);
-        };
-        if (k == "SCALARS") {
-            need(3, 4, "name type [components]");
-            const std::uint64_t components = a.size() == 4 ? parse_size(path, "SCALARS", a[3]) : 1;
-            if (lines.next_starts_with("LOOKUP_TABLE")) (void)lines.words("LOOKUP_TABLE");
-            per_cell(components, a[2]);
-        } else if (k == "COLOR_SCALARS") {  // bytes in BINARY, fractions in ASCII
-            need(3, 3, "name components");
-            per_cell(parse_size(path, "COLOR_SCALARS", a[2]), binary ? "unsigned_char" : "float");
-        } else if (k == "VECTORS" || k == "NORMALS" || k == "TENSORS" || k == "TENSORS6") {
-            need(3, 3, "name type");
-            per_cell(k == "TENSORS" ? 9 : k == "TENSORS6" ? 6 : 3, a[2]);
-        } else if (k == "TEXTURE_COORDINATES") {
-            need(4, 4, "name dimension type");
-            per_cell(parse_size(path, "TEXTURE_COORDINATES", a[2]), a[3]);
-        } else if (k == "GLOBAL_IDS" || k == "PEDIGREE_IDS") {
-            need(3, 3, "name type");
-            per_cell(1, a[2]);
-        } else if (k == "LOOKUP_TABLE") {  // RGBA per entry: bytes in BINARY, fractions in ASCII
-            need(3, 3, "name size");
-            skip_values(lines, path, binary, product(path, parse_size(path, "LOOKUP_TABLE", a[2]), 4, what), 4,
-                        binary ? "unsigned_char" : "float", what);
-        } else if (k == "FIELD") {
-            skip_field(lines, path, binary, a);
-        } else {
-            fail(path, "unknown cell data attribute '" + shown(a[0]) + "' before POINT_DATA");
-        }
+// Skips one attribute (its line `a` read) of `count` tuples: the cell data's before the point
+// data (how VTK writes a volume that has both), and the point data's before the volume's
+// array (VECTORS, NORMALS, ... that VTK's reader passes looking for the scalars). Both were refused.
+void skip_attribute(Lines& lines, const std::string& path, bool binary, std::uint64_t count,
+                    const std::vector<std::string>& a, const std::string& data) {
+    const std::string k = keyword(a[0]);
+    const std::string what = data + " " + k + (a.size() > 1 ? " '" + shown(a[1]) + "'" : std::string());
+    const auto need = [&](std::size_t lo, std::size_t hi, const char* form) {
+        if (a.size() < lo || a.size() > hi) fail(path, "'" + k + "' is '" + k + " " + form + "'");
+    };
+    const auto per_tuple = [&](std::uint64_t n, const std::string& type) {
+        skip_values(lines, path, binary, product(path, count, n, what), n, type, what);
+    };
+    if (k == "SCALARS") {
+        need(3, 4, "name type [components]");
+        const std::uint64_t components = a.size() == 4 ? parse_size(path, "SCALARS", a[3]) : 1;
+        if (lines.next_starts_with("LOOKUP_TABLE")) (void)lines.words("LOOKUP_TABLE");
+        per_tuple(components, a[2]);
+    } else if (k == "COLOR_SCALARS") {  // bytes in BINARY, fractions in ASCII
+        need(3, 3, "name components");
+        per_tuple(parse_size(path, "COLOR_SCALARS", a[2]), binary ? "unsigned_char" : "float");
+    } else if (k == "VECTORS" || k == "NORMALS" || k == "TENSORS" || k == "TENSORS6") {
+        need(3, 3, "name type");
+        per_tuple(k == "TENSORS" ? 9 : k == "TENSORS6" ? 6 : 3, a[2]);
+    } else if (k == "TEXTURE_COORDINATES") {
+        need(4, 4, "name dimension type");
+        per_tuple(parse_size(path, "TEXTURE_COORDINATES", a[2]), a[3]);
+    } else if (k == "GLOBAL_IDS" || k == "PEDIGREE_IDS") {
+        need(3, 3, "name type");
+        per_tuple(1, a[2]);
+    } else if (k == "LOOKUP_TABLE") {  // RGBA per entry: bytes in BINARY, fractions in ASCII
+        need(3, 3, "name size");
+        skip_values(lines, path, binary, product(path, parse_size(path, "LOOKUP_TABLE", a[2]), 4, what), 4,
+                    binary ? "unsigned_char" : "float", what);
+    } else if (k == "FIELD") {
+        skip_field(lines, path, binary, a);
+    } else {
+        fail(path, "unknown " + data + " attribute '" + shown(a[0]) + "'");
     }
+}
+
+void skip_cell_data(Lines& lines, const std::string& path, bool binary, std::uint64_t cells) {
+    while (!lines.next_starts_with("POINT_DATA"))
+        skip_attribute(lines, path, binary, cells, copied_words(lines, "POINT_DATA"), "cell data");
 }
 
 void expect_count(const std::string& path, const std::vector<std::string_view>& words, std::size_t count) {
@@ -367,9 +371,23 @@ VolumeHeader read_vtk_header(const InputFile& file) {
         }
     }
 
-    // The volume: the point data's first array, with one component.
-    const std::vector<std::string_view> array = lines.words("SCALARS or FIELD");
-    const std::string k = keyword(array[0]);
+    // The volume: the point data's first SCALARS, COLOR_SCALARS or FIELD, which must have one
+    // component; other attributes before it are skipped, as VTK's reader passes them.
+    std::vector<std::string> array;
+    std::string k;
+    for (;;) {
+        array = copied_words(lines, "SCALARS or FIELD");
+        k = keyword(array[0]);
+        if (k == "SCALARS" || k == "COLOR_SCALARS" || k == "FIELD") break;
+        if (k == "LOOKUP_TABLE" || k == "VECTORS" || k == "NORMALS" || k == "TENSORS" || k == "TENSORS6" ||
+            k == "TEXTURE_COORDINATES" || k == "GLOBAL_IDS" || k == "PEDIGREE_IDS")
+            skip_attribute(lines, path, info.encoding == "raw", info.dims[0] * info.dims[1] * info.dims[2], array,
+                           "point data");
+        else
+            fail(path, "the point data has " + shown(array[0]) +
+                           " where the volume's array should be; a volume is read from SCALARS or COLOR_SCALARS "
+                           "with one component, or a FIELD array");
+    }
     if (k == "SCALARS") {
         if (array.size() != 3 && array.size() != 4) fail(path, "'SCALARS' takes a name, a type and optionally a component count");
         layout.type = parse_type(path, array[2]);
@@ -392,9 +410,6 @@ VolumeHeader read_vtk_header(const InputFile& file) {
         if (parse_size(path, "FIELD array", first[2]) != info.dims[0] * info.dims[1] * info.dims[2])
             fail(path, "FIELD array '" + shown(first[0]) + "' has " + shown(first[2]) + " tuples, not POINT_DATA's count");
         layout.type = parse_type(path, first[3]);
-    } else {
-        fail(path, "the point data's first array is " + shown(array[0]) +
-                       "; a volume is read from SCALARS or COLOR_SCALARS with one component, or a FIELD array");
     }
 
     info.type = layout.type;
