@@ -150,15 +150,23 @@ TEST_CASE("sculpt strokes: the built-in path winds over the sphere model", "[scu
     CHECK(voxmesh::summarize_latencies({}).count == 0);
 }
 
-TEST_CASE("sculpt strokes: the benchmark driver runs on a small model", "[sculpt]") {
+namespace {
+// A benchmark small enough for a test: an n^3 sphere, blocks of 8, brushes of radius 3..5.
+voxmesh::SculptBenchOptions small_benchmark(std::size_t n, std::size_t dabs, unsigned threads, std::size_t extracts) {
     voxmesh::SculptBenchOptions o;
-    o.resolution = 48;
-    o.dabs = 20;
-    o.threads = 2;
+    o.resolution = n;
+    o.dabs = dabs;
+    o.threads = threads;
     o.block_size = 8;
     o.radius_min = 3;
     o.radius_max = 5;
-    o.extract_repeats = 1;
+    o.extract_repeats = extracts;
+    return o;
+}
+}  // namespace
+
+TEST_CASE("sculpt strokes: the benchmark driver runs on a small model", "[sculpt]") {
+    const voxmesh::SculptBenchOptions o = small_benchmark(48, 20, 2, 1);
     const auto r = voxmesh::run_sculpt_benchmark(o);
     CHECK(r.update.count == 20);
     CHECK(r.triangles > 0);
@@ -171,15 +179,8 @@ TEST_CASE("sculpt strokes: the benchmark driver runs on a small model", "[sculpt
 }
 
 TEST_CASE("sculpt strokes: the benchmark reports the threads asked for and the workers that ran", "[sculpt]") {
-    voxmesh::SculptBenchOptions o;
-    o.resolution = 24;
-    o.dabs = 2;
-    o.block_size = 8;
-    o.radius_min = 2;
-    o.radius_max = 3;
-    o.extract_repeats = 0;
     const unsigned cores = voxmesh::detail::resolve_threads(0);
-    o.threads = cores + 14;  // the paper's 16-thread row on 2 cores
+    voxmesh::SculptBenchOptions o = small_benchmark(24, 2, cores + 14, 0);  // the paper's 16-thread row on 2 cores
     const auto r = voxmesh::run_sculpt_benchmark(o);
     CHECK(r.threads == cores + 14);
     CHECK(r.workers == cores);
