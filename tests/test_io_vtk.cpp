@@ -197,6 +197,8 @@ TEST_CASE("vtk: bad headers and data are errors naming the file", "[io][vtk][err
     CHECK_THAT(error_of(kHeader + "SCALARS v float 3\n" + numbers), Contains("3 components"));
     CHECK_THAT(error_of(kHeader + "VECTORS v float\n" + numbers), Contains("ends before point data VECTORS 'v'"));
     CHECK_THAT(error_of(kHeader + "POLYGONS 1 4\n3 0 1 2\n"), Contains("the point data has POLYGONS where the volume's"));
+    CHECK_THAT(error_of(kHeader + "FIELD f 0\n"), Contains("FIELD 'f' has no arrays") && !Contains("NULL_ARRAY"));
+    CHECK_THAT(error_of(kHeader + "FIELD f 2\nNULL_ARRAY\nNULL_ARRAY\n"), Contains("has no arrays, only NULL_ARRAY placeholders"));
     CHECK_THAT(error_of(kHeader + "NORMALS n float\n" + numbers + numbers + numbers),
                Contains("ends before SCALARS or FIELD"));
     CHECK_THAT(error_of(kHeader + "SCALARS v long\n" + numbers), Contains("unsupported VTK data type 'long'"));
@@ -284,13 +286,18 @@ TEST_CASE("vtk: point data attributes before the volume's SCALARS are skipped", 
         REQUIRE(v.type == ScalarType::I16);
         for (int i = 0; i < 8; ++i) CHECK(static_cast<const std::int16_t*>(v.data)[i] == i + 1);
     }
-    // The FIELD after a VECTORS (how VTK writes point data without active scalars) is the volume.
+    // The FIELD after a VECTORS (how VTK writes point data without active scalars) is the volume,
     std::string field = head + "ASCII" + geometry + "VECTORS v float\n";
     for (int i = 0; i < 24; ++i) field += "0 ";
     field += "\nFIELD FieldData 1\ndensity 1 8 float\n8 7 6 5 4 3 2 1\n";
-    const Volume f = read_volume(s.file("field.vtk", field));
-    REQUIRE(f.type == ScalarType::F32);
-    for (int i = 0; i < 8; ++i) CHECK(static_cast<const float*>(f.data)[i] == static_cast<float>(8 - i));
+    // ... and so is its first array that is not a NULL_ARRAY (what VTK writes for a null one).
+    for (const char* nulls : {"FIELD FieldData 1\n", "FIELD FieldData 3\nNULL_ARRAY\n\nNULL_ARRAY\n"}) {
+        std::string text = field;
+        text.replace(text.find("FIELD FieldData 1\n"), 18, nulls);
+        const Volume f = read_volume(s.file("field.vtk", text));
+        REQUIRE(f.type == ScalarType::F32);
+        for (int i = 0; i < 8; ++i) CHECK(static_cast<const float*>(f.data)[i] == static_cast<float>(8 - i));
+    }
 }
 
 // Found by a review: LOOKUP_TABLE was looked for only at the start of the next line, so one

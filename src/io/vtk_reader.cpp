@@ -402,8 +402,15 @@ VolumeHeader read_vtk_header(const InputFile& file) {
         layout.unit_colors = layout.text;  // ASCII writes byte b as b / 255
     } else if (k == "FIELD") {
         if (array.size() != 3) fail(path, "'FIELD' takes a name and an array count");
-        if (parse_size(path, "FIELD", array[2]) == 0) fail(path, "FIELD '" + shown(array[1]) + "' has no arrays");
-        const std::vector<std::string_view> first = lines.words("the FIELD's first array");
+        const std::size_t count = parse_size(path, "FIELD", array[2]);
+        // The first array that is not VTK's NULL_ARRAY placeholder (a null array has no values).
+        std::vector<std::string_view> first;
+        for (std::size_t i = 0; first.empty(); ++i) {
+            if (i == count)
+                fail(path, "FIELD '" + shown(array[1]) + "' has no arrays" + (count ? ", only NULL_ARRAY placeholders" : ""));
+            first = lines.words("the FIELD's first array");
+            if (first.size() == 1 && keyword(first[0]) == "NULL_ARRAY") first.clear();
+        }
         if (first.size() != 4) fail(path, "a FIELD array line is 'name components tuples type'");
         if (parse_size(path, "FIELD array", first[1]) != 1)
             fail(path, "FIELD array '" + shown(first[0]) + "' has " + shown(first[1]) + " components; a volume needs 1");
