@@ -8,10 +8,12 @@
 #include "support/io_scratch.hpp"
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <sstream>
 #include <string>
+#include <vector>
 #include <type_traits>
 
 using Catch::Matchers::Contains;
@@ -194,6 +196,10 @@ TEST_CASE("vtk: bad headers and data are errors naming the file", "[io][vtk][err
     CHECK_THAT(error_of(kHeader + "SCALARS v unsigned_char\n1 2 3 4 5 6 7 300\n"),
                Contains("sample 7: '300' is out of range"));
     CHECK_THAT(error_of(kHeader + "SCALARS v short\n1 2 3 4 x 6 7 8\n"), Contains("sample 4: 'x' is not a number"));
+    CHECK_THAT(error_of(kHeader + "SCALARS v double\n1 2 3 4 1e400 6 7 8\n"),
+               Contains("sample 4: '1e400' is beyond the range of double"));
+    CHECK_THAT(error_of(kHeader + "SCALARS v float\n1 2 3 +-4 5 6 7 8\n"), Contains("sample 3: '+-4' is not a number"));
+    CHECK_THAT(error_of(kHeader + "SCALARS v double\n1 2 3 +-4 5 6 7 8\n"), Contains("sample 3: '+-4' is not a number"));
     CHECK_THAT(error_of(kHeader + "SCALARS v float 3\n" + numbers), Contains("3 components"));
     CHECK_THAT(error_of(kHeader + "VECTORS v float\n" + numbers), Contains("ends before point data VECTORS 'v'"));
     CHECK_THAT(error_of(kHeader + "POLYGONS 1 4\n3 0 1 2\n"), Contains("the point data has POLYGONS where the volume's"));
@@ -262,6 +268,28 @@ TEST_CASE("vtk: the header may vary as VTK's reader allows", "[io][vtk]") {
     CHECK(v.spacing == std::array<double, 3>{2, 2, 2});
     CHECK(v.origin == std::array<double, 3>{1, 2, 3});
     for (int i = 0; i < 8; ++i) CHECK(static_cast<const std::int32_t*>(v.data)[i] == i + 1);
+}
+
+// A double too small for a double was refused ("out of range") where a float's reads as a
+// signed zero, as strtod and VTK's reader (operator>>, which keeps the denormal or 0) take it.
+TEST_CASE("vtk: ASCII doubles that underflow read as signed zeros, as floats do", "[io][vtk]") {
+    Scratch s;
+    for (const char* type : {"float", "double"}) {
+        INFO(type);
+        const Volume v = read_volume(s.file("tiny.vtk", kHeader + "SCALARS v " + type +
+                                                            "\n1e-400 -1e-400 +1e-999999999999 4.9e-324 +5 -0 7 8\n"));
+        std::vector<double> got(8);
+        for (std::size_t i = 0; i < 8; ++i)
+            got[i] = v.type == ScalarType::F64 ? static_cast<const double*>(v.data)[i] : static_cast<const float*>(v.data)[i];
+        CHECK(got[0] == 0);
+        CHECK(!std::signbit(got[0]));
+        CHECK(got[1] == 0);
+        CHECK(std::signbit(got[1]));
+        CHECK(got[2] == 0);
+        CHECK(got[3] == (v.type == ScalarType::F64 ? 4.9e-324 : 0.0));  // a double's denormal is kept
+        CHECK(got[4] == 5);
+        CHECK(std::signbit(got[5]));
+    }
 }
 
 // Found by a user review: a volume file whose point data starts with VECTORS (or NORMALS, ...)

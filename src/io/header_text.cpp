@@ -115,19 +115,30 @@ long long decimal_magnitude(std::string_view word) {
 
 }  // namespace
 
-const char* float_word(std::string_view& word, float& value) {
-    if (!word.empty() && word.front() == '+') word.remove_prefix(1);  // from_chars rejects '+'
+// float_word and double_word: `beyond` is what an overflow is.
+template <class Real>
+const char* real_word(std::string_view& word, Real& value, const char* beyond) {
+    // from_chars rejects a leading '+'; "+-1" stays "not a number"
+    if (word.size() > 1 && word[0] == '+' && word[1] != '-') word.remove_prefix(1);
     value = 0;
     const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), value);
     if (end != word.data() + word.size() || word.empty() || (ec != std::errc() && ec != std::errc::result_out_of_range))
         return "is not a number";
     if (ec == std::errc::result_out_of_range) {
-        // Underflow reads as a signed zero (as strtof and most readers do); overflow has no
-        // float to stand for it.
-        if (decimal_magnitude(word) >= 0) return "is beyond the range of float (about 3.4e38)";
-        value = word.front() == '-' ? -0.0f : 0.0f;
+        // Underflow reads as a signed zero (as strtod and most readers do); overflow has no
+        // value to stand for it.
+        if (decimal_magnitude(word) >= 0) return beyond;
+        value = word.front() == '-' ? -Real(0) : Real(0);
     }
     return nullptr;
+}
+
+const char* float_word(std::string_view& word, float& value) {
+    return real_word(word, value, "is beyond the range of float (about 3.4e38)");
+}
+
+const char* double_word(std::string_view& word, double& value) {
+    return real_word(word, value, "is beyond the range of double (about 1.8e308)");
 }
 
 std::vector<double> parse_doubles(const std::string& path, std::string_view field, std::string_view value,

@@ -35,6 +35,8 @@ double parse_double(const std::string& path, std::string_view field, std::string
 // range is refused. Returns nullptr, or what is wrong with the word ("is not a number", ...);
 // `word` loses its '+', as it is then shown.
 const char* float_word(std::string_view& word, float& value);
+// The same for a double (ASCII legacy VTK samples): "1e-400" is a signed zero, "1e400" refused.
+const char* double_word(std::string_view& word, double& value);
 // float_word, refusing with Error("'path': " + where() + "'word' is ..."). `where` (the line,
 // the record) is called only for that, not for every number read.
 template <class Where>

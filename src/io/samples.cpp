@@ -149,23 +149,23 @@ void to_host_layout(Volume& v, const SampleLayout& layout) {
 
 bool is_space(char c) { return c == ' ' || c == '\t' || c == '\n' || c == '\r' || c == '\v' || c == '\f'; }
 
-// One number of text samples as T: an integer whole and in T's range, a float as float_word
-// reads it, a double as from_chars does (each may start with '+'); what is wrong with it otherwise.
+// One number of text samples as T: an integer whole and in T's range (it may start with '+'), a
+// float or double as float_word and double_word read it; what is wrong with it otherwise.
 template <class T>
 const char* parse_sample(std::string_view word, T& out) {
     if constexpr (std::is_same_v<T, float>) {
         return float_word(word, out);
+    } else if constexpr (std::is_same_v<T, double>) {
+        return double_word(word, out);
     } else {
-        using Wide = std::conditional_t<std::is_integral_v<T>, long long, double>;
         // from_chars rejects a leading '+', which VTK's reader (operator>>) takes.
         if (word.size() > 1 && word[0] == '+' && word[1] != '-') word.remove_prefix(1);
-        Wide value{};
+        long long value = 0;
         const auto [end, error] = std::from_chars(word.data(), word.data() + word.size(), value);
         if (error == std::errc::result_out_of_range) return "is out of range";
         if (error != std::errc() || end != word.data() + word.size()) return "is not a number";
-        if constexpr (std::is_integral_v<T>)
-            if (value < std::numeric_limits<T>::min() || value > std::numeric_limits<T>::max())
-                return "is out of range for the type";
+        if (value < std::numeric_limits<T>::min() || value > std::numeric_limits<T>::max())
+            return "is out of range for the type";
         out = static_cast<T>(value);
         return nullptr;
     }
