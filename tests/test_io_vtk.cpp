@@ -13,8 +13,8 @@
 #include <cstring>
 #include <sstream>
 #include <string>
-#include <vector>
 #include <type_traits>
+#include <vector>
 
 using Catch::Matchers::Contains;
 using namespace voxmesh;
