@@ -270,6 +270,24 @@ TEST_CASE("vtk: the header may vary as VTK's reader allows", "[io][vtk]") {
     for (int i = 0; i < 8; ++i) CHECK(static_cast<const std::int32_t*>(v.data)[i] == i + 1);
 }
 
+// VTK's reader reads ASCII words, so values may follow "LOOKUP_TABLE name" on its line; they
+// were lost with the line (the volume's samples shifted, a skipped array over-read).
+TEST_CASE("vtk: ASCII values on the LOOKUP_TABLE line are read", "[io][vtk]") {
+    Scratch s;
+    const std::string cell_data = "CELL_DATA 1\nSCALARS c float 2\nLOOKUP_TABLE default 0.5\n0.25\n";
+    for (const std::string& before : {std::string(), cell_data}) {
+        const std::string geometry = "# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n";
+        const Volume v = read_volume(s.file("lut.vtk", geometry + before +
+                                                           "POINT_DATA 8\nSCALARS v short\nLOOKUP_TABLE default 1 2 3\n4 5 6 7 8\n"));
+        REQUIRE(v.type == ScalarType::I16);
+        for (int i = 0; i < 8; ++i) CHECK(static_cast<const std::int16_t*>(v.data)[i] == i + 1);
+    }
+    CHECK_THROWS_WITH(read_volume(s.file("over.vtk", "# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\n"
+                                                     "DIMENSIONS 2 2 2\nCELL_DATA 1\nSCALARS c float\n"
+                                                     "LOOKUP_TABLE default 1 2\nPOINT_DATA 8\n")),
+                      Contains("cell data SCALARS 'c' has more values than its 1"));
+}
+
 // A double too small for a double was refused ("out of range") where a float's reads as a
 // signed zero, as strtod and VTK's reader (operator>>, which keeps the denormal or 0) take it.
 TEST_CASE("vtk: ASCII doubles that underflow read as signed zeros, as floats do", "[io][vtk]") {

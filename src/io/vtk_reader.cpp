@@ -85,6 +85,10 @@ public:
     }
     // Where the line after the last one read starts: the data, after the header.
     std::size_t offset() const { return base_ + pos_; }
+    // Where a word of the last line read starts in the file.
+    std::size_t offset_of(std::string_view word) const {
+        return base_ + static_cast<std::size_t>(word.data() - window_.data());
+    }
     std::size_t bytes_left() const { return file_.size() - offset(); }
     // Skips `bytes` of binary data from offset().
     void skip_bytes(std::uint64_t bytes, const char* what) {
@@ -155,6 +159,21 @@ std::uint64_t product(const std::string& path, std::uint64_t a, std::uint64_t b,
 std::vector<std::string> copied_words(Lines& lines, const char* wanted) {
     const std::vector<std::string_view> w = lines.words(wanted);
     return {w.begin(), w.end()};
+}
+
+// The optional "LOOKUP_TABLE name" line after SCALARS, read; returns the ASCII values on that
+// line (0 or more; VTK's reader reads words, so they may follow the name there: they were
+// lost) and sets `data` to where the values start. BINARY data starts on the next line.
+std::uint64_t skip_lookup_table_line(Lines& lines, bool binary, std::size_t& data) {
+    data = lines.offset();
+    if (!lines.next_starts_with("LOOKUP_TABLE")) return 0;
+    const std::vector<std::string_view> w = lines.words("LOOKUP_TABLE");
+    if (binary || w.size() <= 2) {
+        data = lines.offset();
+        return 0;
+    }
+    data = lines.offset_of(w[2]);
+    return w.size() - 2;
 }
 
 // Skips an array's METADATA block, if one follows, as VTK's reader does: the blank lines before
@@ -246,8 +265,11 @@ void skip_attribute(Lines& lines, const std::string& path, bool binary, std::uin
     if (k == "SCALARS") {
         need(3, 4, "name type [components]");
         const std::uint64_t components = a.size() == 4 ? parse_size(path, "SCALARS", a[3]) : 1;
-        if (lines.next_starts_with("LOOKUP_TABLE")) (void)lines.words("LOOKUP_TABLE");
-        per_tuple(components, a[2]);
+        std::size_t data = 0;
+        const std::uint64_t on_line = skip_lookup_table_line(lines, binary, data);
+        const std::uint64_t values = product(path, count, components, what);
+        if (on_line > values) fail(path, what + " has more values than its " + std::to_string(values));
+        skip_values(lines, path, binary, values - on_line, components, a[2], what);
     } else if (k == "COLOR_SCALARS") {  // bytes in BINARY, fractions in ASCII
         need(3, 3, "name components");
         per_tuple(parse_size(path, "COLOR_SCALARS", a[2]), binary ? "unsigned_char" : "float");
@@ -375,6 +397,7 @@ VolumeHeader read_vtk_header(const InputFile& file) {
     // component; other attributes before it are skipped, as VTK's reader passes them.
     std::vector<std::string> array;
     std::string k;
+    std::size_t data_start = 0;  // set where the volume's header ends
     for (;;) {
         array = copied_words(lines, "SCALARS or FIELD");
         k = keyword(array[0]);
@@ -393,7 +416,7 @@ VolumeHeader read_vtk_header(const InputFile& file) {
         layout.type = parse_type(path, array[2]);
         if (array.size() == 4 && parse_size(path, "SCALARS", array[3]) != 1)
             fail(path, "SCALARS '" + shown(array[1]) + "' has " + shown(array[3]) + " components; a volume needs 1");
-        if (lines.next_starts_with("LOOKUP_TABLE")) (void)lines.words("LOOKUP_TABLE");
+        (void)skip_lookup_table_line(lines, info.encoding == "raw", data_start);
     } else if (k == "COLOR_SCALARS") {
         if (array.size() != 3) fail(path, "'COLOR_SCALARS' takes a name and a component count");
         if (parse_size(path, "COLOR_SCALARS", array[2]) != 1)
@@ -418,6 +441,7 @@ VolumeHeader read_vtk_header(const InputFile& file) {
             fail(path, "FIELD array '" + shown(first[0]) + "' has " + shown(first[2]) + " tuples, not POINT_DATA's count");
         layout.type = parse_type(path, first[3]);
     }
+    if (k != "SCALARS") data_start = lines.offset();
 
     info.type = layout.type;
     info.data_file = path;
@@ -429,7 +453,7 @@ VolumeHeader read_vtk_header(const InputFile& file) {
     layout.dims = info.dims;
     layout.big_endian = info.big_endian;
     layout.data_path = path;
-    layout.offset = lines.offset();
+    layout.offset = data_start;
     layout.more_may_follow = true;  // further arrays, and the writer's newline after binary data
     return h;
 }
