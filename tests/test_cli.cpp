@@ -489,6 +489,42 @@ TEST_CASE("cli: info reports an axis stored in the negative direction", "[cli]")
     CHECK(mesh_flip.err.find("rotation") == std::string::npos);
 }
 
+TEST_CASE("cli: mesh --world places the mesh by the file's direction matrix", "[cli]") {
+    Scratch s;
+    // A box of 1s (index 1..4 of 6) in 0s: at iso 0.5 its faces lie at index 0.5 and 4.5.
+    std::vector<float> samples(6 * 6 * 6, 0.f);
+    for (std::size_t k = 1; k < 5; ++k)
+        for (std::size_t j = 1; j < 5; ++j)
+            for (std::size_t i = 1; i < 5; ++i) samples[i + 6 * (j + 6 * k)] = 1.f;
+    const std::string head = "NRRD0004\ntype: float\ndimension: 3\nsizes: 6 6 6\nendian: little\nencoding: raw\n"
+                             "space: left-posterior-superior\nspace origin: (5,-3,7)\n";
+    const std::string rotated =
+        s.write("perm.nrrd", head + "space directions: (0,0,2) (1.5,0,0) (0,-1,0)\n\n" + f32_bytes(samples));
+    const Result world = run(s, "mesh " + quote(rotated) + " -o " + quote(s.path("w.stl")) + " --iso 0.5 --world");
+    INFO(world.err);
+    REQUIRE(world.code == 0);
+    CHECK(world.err.find("warning") == std::string::npos);  // nothing dropped
+    // Index axis 0 runs along z from 7 in steps of 2, axis 1 along x from 5 by 1.5, axis 2 down y from -3.
+    const Result bounds = run(s, "info " + quote(s.path("w.stl")));
+    CHECK(bounds.out.find("bounds:    5.75 -7.5 8 .. 11.75 -3.5 16") != std::string::npos);
+    CHECK(bounds.out.find("topology:  closed") != std::string::npos);
+    CHECK(bounds.out.find("volume:") != std::string::npos);
+    CHECK(bounds.out.find("negative: the triangles face inward") == std::string::npos);  // determinant -1, still outward
+    const Result plain = run(s, "mesh " + quote(rotated) + " -o " + quote(s.path("p.stl")) + " --iso 0.5");
+    REQUIRE(plain.code == 0);
+    CHECK(plain.err.find("--world") != std::string::npos);  // the warning says the way on
+    const Result info = run(s, "info " + quote(rotated));
+    CHECK(info.out.find("world:     sample 0 at 5 -3 7; axes x: 0 0 1, y: 1 0 0, z: 0 -1 0") != std::string::npos);
+
+    // Flips only: --world changes nothing.
+    const std::string flipped =
+        s.write("flip.nrrd", head + "space directions: (-2,0,0) (0,1.5,0) (0,0,-1)\n\n" + f32_bytes(samples));
+    REQUIRE(run(s, "mesh " + quote(flipped) + " -o " + quote(s.path("f1.stl")) + " --iso 0.5 --world").code == 0);
+    REQUIRE(run(s, "mesh " + quote(flipped) + " -o " + quote(s.path("f2.stl")) + " --iso 0.5").code == 0);
+    CHECK(stl_triangles(s.path("f1.stl")) > 0);
+    CHECK(iotest::read_file(s.path("f1.stl")) == iotest::read_file(s.path("f2.stl")));
+}
+
 // The AVX2 row packers, the AVX2/BMI copy of the generator and the batched normals must give
 // the portable code's bits (no fused multiply-adds; IEEE divide and square root), for every
 // sample type's packer: the [core] tests under VOXMESH_ISA=portable only compare with the

@@ -32,9 +32,22 @@
 // pixdim[1..3] is ignored, its magnitude being the spacing (nifti1_io's qform takes a pixdim
 // <= 0 as 1 and nibabel refuses a negative one; a zero or NaN pixdim, where used, is an error
 // here). The rest of a direction (an oblique axis's off-axis part, a rotation, an axis
-// permutation, which is never flipped) is dropped: the axis keeps its spacing (the
-// direction's length) and the origin as written, apart from the flip,
-// and VolumeInfo::rotation_dropped says so.
+// permutation, which is never flipped) is not applied to the samples: the axis keeps its
+// spacing (the direction's length) and the origin as written, apart from the flip, and
+// VolumeInfo::rotation_dropped says so. It is kept as the volume's world transform instead
+// (to_world places a mesh with it):
+//   world(i,j,k) = world_origin + D * ((i,j,k) * spacing)     (i,j,k: the loaded Volume's index)
+// D (VolumeInfo::directions) has the unit direction of loaded index axis a as column a: the
+// file's direction for axis a (NRRD vector, sform column, qform rotation column, MetaImage
+// TransformMatrix column) divided by its length, as spacing gives the length (a NRRD space of
+// more than three dimensions keeps the first three components), negated for a flipped axis,
+// whose samples now run the other way. world_origin is where loaded sample (0,0,0) lies: for
+// the file's origin O and unit directions u_a (before negation),
+//   world_origin = O + sum over flipped a of u_a * spacing_a * (n_a - 1)
+// (the file's last sample along a is the loaded first). A volume without rotation_dropped has
+// D = identity and world_origin = origin exactly (an off-axis part within header noise,
+// 1e-6 of the length, is dropped as before), so to_world changes nothing; so do directions
+// that do not span 3-D (a NRRD space of 2 dimensions), which are dropped as before.
 //
 // NIfTI scl_slope / scl_inter are NOT applied: the samples keep their stored type and
 // values (so they can be mapped, and an iso value means the same as in other tools that
@@ -89,7 +102,7 @@ struct VolumeInfo {
     // Axes stored in the negative direction, reversed on load (see Geometry).
     std::array<bool, 3> flipped{false, false, false};
     // The direction matrix is not diagonal (a rotation, an axis permutation, an oblique axis):
-    // that part is dropped, as before (see Geometry).
+    // the samples stay in index axes, and `directions` / `world_origin` hold it (see Geometry).
     bool rotation_dropped = false;
     std::string encoding;     // "raw", "gzip" (zlib streams, as in MetaImage, count as "gzip"), "ascii" (legacy VTK)
     bool big_endian = false;  // byte order of the stored samples
@@ -100,7 +113,22 @@ struct VolumeInfo {
     double value_offset = 0;
     // NRRD "key:=value" lines, unescaped (e.g. what write_nrrd was given); empty for other formats.
     std::map<std::string, std::string> key_values;
+    // The world transform of the loaded Volume: sample (i,j,k) lies at
+    // world_origin + D * ((i,j,k) * spacing), D[c][a] = directions[3 * c + a] (column a: loaded
+    // index axis a's unit direction). Identity and `origin` unless rotation_dropped.
+    std::array<double, 9> directions{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    std::array<double, 3> world_origin{0, 0, 0};
+    // (Last, so that the fields before them keep their places for code built against 0.1.0.)
 };
+
+// Moves a mesh extracted from the Volume `info` describes (positions origin + index * spacing,
+// as extract places them) into the file's world frame (see Geometry): positions by the affine,
+// normals by the inverse-transpose of `directions` (renormalised, so still unit and outward),
+// and, where its determinant is negative (a mirroring), every triangle's winding reversed so
+// that it stays counter-clockwise seen from outside. Nothing changes where the transform is
+// the identity (no rotation_dropped). Throws Error for arrays that are not whole triples,
+// normals for a different number of vertices, and a singular or non-finite transform.
+void to_world(Mesh& mesh, const VolumeInfo& info);
 
 // The iso voxmesh recorded for meshing a volume it wrote: the NRRD line "voxmesh_iso:=value"
 // (`voxmesh voxelize` writes 0 for a distance field and 127.5 for occupancy, voxmesh-bench

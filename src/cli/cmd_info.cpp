@@ -117,8 +117,17 @@ int run_info(const InfoArgs& a) {
     if (const std::string axes = flipped_axes(info.flipped); !axes.empty())
         std::cout << "flipped:   " << axes
                   << " (stored in the negative direction; reversed on load, origin is the minimum corner)\n";
-    if (info.rotation_dropped)
-        std::cout << "rotation:  dropped (the direction matrix is not axis-aligned; spacing and origin as above)\n";
+    if (info.rotation_dropped) {
+        // The loaded axes' directions (columns of D), so the user can see what --world applies.
+        const auto column = [&](std::size_t a) {  // + 0.0: a negated zero prints as 0, not -0
+            const auto& d = info.directions;
+            return triple_text({d[a] + 0.0, d[3 + a] + 0.0, d[6 + a] + 0.0});
+        };
+        std::cout << "rotation:  dropped (the direction matrix is not axis-aligned; spacing and origin as above; "
+                     "mesh --world applies it)\n"
+                  << "world:     sample 0 at " << triple_text(info.world_origin) << "; axes x: " << column(0)
+                  << ", y: " << column(1) << ", z: " << column(2) << "\n";
+    }
     if (!info.data_file.empty() && info.data_file != path) std::cout << "data file: " << info.data_file << "\n";
     if (info.value_scale != 1 || info.value_offset != 0)
         std::cout << "scaling:   physical = stored * " << format_double(info.value_scale) << " + "

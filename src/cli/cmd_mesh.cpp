@@ -1,5 +1,5 @@
 // voxmesh mesh INPUT -o OUTPUT [--iso V] [--backend ...] [--threads N] [--device I]
-//   [--no-normals] [--inside-below] [--largest N] [--json] [raw flags]
+//   [--no-normals] [--inside-below] [--largest N] [--world] [--json] [raw flags]
 #include "common.hpp"
 #include "stdin_input.hpp"
 
@@ -21,7 +21,7 @@ struct MeshArgs {
     unsigned threads = 0;
     int device = -1;  // -1: every device of the backend
     std::size_t largest = 0;  // keep that many pieces with the most triangles; 0: all
-    bool no_normals = false, inside_below = false, json = false;
+    bool no_normals = false, inside_below = false, world = false, json = false;
     RawFlags raw;
     CLI::Option* iso_option = nullptr;
 };
@@ -92,7 +92,7 @@ int run_mesh(const MeshArgs& a) {
         throw BadInput("--iso is " + format_double(a.iso) + "; give a finite value");
     refuse_device_on_cpu(a.backend, a.device, "give --backend opencl, hybrid or auto");
     VolumeInfo info;
-    const Volume volume = load_volume(a.input, a.raw, a.threads, &info);
+    const Volume volume = load_volume(a.input, a.raw, a.threads, &info, a.world);
     // Named here: extract() would say the same without the file.
     for (int d = 0; d < 3; ++d)
         if (volume.dims[d] < 2)
@@ -125,6 +125,7 @@ int run_mesh(const MeshArgs& a) {
     Mesh mesh = extract(volume.view(), options, stats);  // errors here are not about the file
     const std::size_t extracted_triangles = mesh.triangle_count();
     if (a.largest > 0) mesh = keep_largest_components(mesh, a.largest);
+    if (a.world) to_world(mesh, info);  // after extract and the pieces: they work in index axes
     const MeshTopology topo = analyze_topology(mesh);
     if (mesh.triangle_count() == 0) {
         // Nearly always an iso outside the data (a typo, stored vs scaled values): say which side.
@@ -183,6 +184,9 @@ Command add_mesh(CLI::App& app) {
     sub->add_flag("--no-normals", a->no_normals, "do not compute vertex normals");
     sub->add_flag("--inside-below", a->inside_below, "values below iso are inside (SDFs): flips winding and normals");
     add_largest_option(sub, a->largest, "drops the specks of noise around a CT's surface");
+    sub->add_flag("--world", a->world,
+                  "place the mesh in the file's world frame, rotation included (NRRD space directions, MetaImage "
+                  "TransformMatrix, NIfTI sform/qform); without it the mesh is in the volume's index axes");
     sub->add_flag("--json", a->json, "print the summary as JSON (on standard error with -o -)");
     add_raw_flags(sub, a->raw);
     return {sub, [a] { return run_mesh(*a); }};

@@ -191,7 +191,7 @@ Volume finite_samples(Volume v, const std::string& name, unsigned threads) {
 
 }  // namespace
 
-Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads, VolumeInfo* info_out) {
+Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads, VolumeInfo* info_out, bool world) {
     if (arg == "-" && raw.any_given()) {  // raw samples piped in: the flags say what they are
         if (::isatty(STDIN_FILENO))
             throw BadInput(std::string(kStdinName) + " is a terminal: pipe or redirect raw samples into it");
@@ -205,12 +205,13 @@ Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads
         throw BadInput("'" + input.display() + "': --dims/--type/--endian/--offset/--spacing/--origin apply only to .raw input");
     VolumeInfo info;
     Volume v = input.read([&] { return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path, info); });
-    // A Volume has no orientation: say so when the file's direction matrix is thrown away,
+    // A Volume has no orientation: say so when the file's direction matrix is left out,
     // since the mesh then lies in index-aligned axes, not where other tools put it.
-    if (info.rotation_dropped)
+    if (info.rotation_dropped && !world)
         std::cerr << "voxmesh: warning: '" << input.display()
                   << "': the direction matrix is not axis-aligned; its rotation is dropped and the mesh is in the "
-                     "volume's index axes, each running the way it mostly points\n";
+                     "volume's index axes, each running the way it mostly points (--world places it in the file's "
+                     "world frame)\n";
     if (info_out) *info_out = std::move(info);
     return finite_samples(std::move(v), input.display(), threads);
 }

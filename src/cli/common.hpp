@@ -122,7 +122,9 @@ void write_volume_output(const std::string& output, const VolumeView& volume,
 // Reads a volume file (raw with the flags, else by extension) and rejects NaN/inf samples,
 // scanning for them on `threads` threads (0: every CPU this process may use).
 // info (may be null): the file's header as read_volume gives it (a default VolumeInfo for raw samples).
-Volume load_volume(const std::string& path, const RawFlags& raw, unsigned threads = 0, VolumeInfo* info = nullptr);
+// world: the caller places the mesh with to_world, so a dropped rotation is not warned about.
+Volume load_volume(const std::string& path, const RawFlags& raw, unsigned threads = 0, VolumeInfo* info = nullptr,
+                   bool world = false);
 RawLayout raw_layout(const std::string& path, const RawFlags& raw);
 
 

@@ -92,6 +92,26 @@ AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes) {
         // would mirror the mesh. Only the small off-axis part is dropped.
         if (own_largest) d.flipped[a] = v[a] < 0;
     }
+    // What the samples keep: each axis along its own, flipped or not. Exact where nothing else
+    // is dropped (off-axis noise stays dropped), so to_world then changes nothing.
+    for (std::size_t a = 0; a < 3; ++a) d.directions[4 * a] = d.flipped[a] ? -1 : 1;
+    if (!d.rotation_dropped) return d;
+    // Unit directions, as spacing gives the length. World has three components: those past
+    // the third (a NRRD space of more dimensions) are dropped after normalising, so the first
+    // three stay as the file places samples.
+    std::array<double, 9> m{};
+    for (std::size_t a = 0; a < 3; ++a) {
+        const std::vector<double>& v = axes[a];
+        const double length = vector_length(v);
+        if (length == 0) {  // a zero vector says nothing: the axis's own direction
+            m[4 * a] = 1;
+            continue;
+        }
+        for (std::size_t c = 0; c < 3 && c < v.size(); ++c) m[3 * c + a] = v[c] / length;
+    }
+    const double det = m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6]) +
+                       m[2] * (m[3] * m[7] - m[4] * m[6]);
+    if (std::fabs(det) > 1e-6) d.directions = m;  // else (directions in a plane) dropped, as before
     return d;
 }
 
@@ -105,9 +125,19 @@ void reverse_direction(std::array<std::vector<double>, 3>& axes, std::size_t a) 
 
 void apply_directions(VolumeHeader& h, const AxisDirections& d) {
     VolumeInfo& info = h.info;
-    for (std::size_t a = 0; a < 3; ++a)
-        if (d.flipped[a] && info.dims[a] > 0)
-            info.origin[a] -= info.spacing[a] * static_cast<double>(info.dims[a] - 1);
+    // The file's last sample along a flipped axis is the loaded first: world_origin moves
+    // along the file's direction, and the loaded axis runs the opposite way.
+    info.world_origin = info.origin;
+    info.directions = d.directions;
+    for (std::size_t a = 0; a < 3; ++a) {
+        if (!d.flipped[a]) continue;
+        const double extent = info.dims[a] > 0 ? info.spacing[a] * static_cast<double>(info.dims[a] - 1) : 0.0;
+        for (std::size_t c = 0; c < 3; ++c) {
+            info.world_origin[c] += info.directions[3 * c + a] * extent;
+            info.directions[3 * c + a] = -info.directions[3 * c + a];
+        }
+        info.origin[a] -= extent;
+    }
     info.flipped = d.flipped;
     info.rotation_dropped = d.rotation_dropped;
     h.layout.flipped = d.flipped;

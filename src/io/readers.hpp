@@ -39,10 +39,13 @@ double checked_spacing(const std::string& path, const char* field, double value)
 double checked_origin(const std::string& path, const char* field, double value);
 
 // What a Volume keeps of a direction matrix: which index axes run in the negative
-// direction of their own world axis, and whether anything else (a rotation) is dropped.
+// direction of their own world axis, whether anything else (a rotation) is left out of the
+// samples' placement, and the file's unit directions (column a: index axis a, before flips;
+// identity-with-flips unless rotation_dropped) for VolumeInfo's world transform.
 struct AxisDirections {
     std::array<bool, 3> flipped{false, false, false};
     bool rotation_dropped = false;
+    std::array<double, 9> directions{1, 0, 0, 0, 1, 0, 0, 0, 1};
 };
 // `axes[a]` is index axis a's direction vector in world components (any length; components
 // past the third count as off-axis). A zero vector says nothing and is left alone.
@@ -55,6 +58,7 @@ void reverse_direction(std::array<std::vector<double>, 3>& axes, std::size_t a);
 
 // Records `d` in the header and moves the origin of each flipped axis to the grid's minimum
 // corner; load_samples then reverses those axes, so every sample keeps its world position.
+// Also sets the world transform (directions, world_origin) for the flipped samples.
 // Call once spacing, origin and dims are final.
 void apply_directions(VolumeHeader& h, const AxisDirections& d);
 
