@@ -719,7 +719,7 @@ TEST_CASE("cli: running out of memory exits 1, not as bad input", "[cli][memory]
     CHECK(vmtest::run_program("sh", "-c " + quote(fits), s.dir.string()).code == 0);
 }
 
-TEST_CASE("cli: voxelize refuses a grid larger than physical memory", "[cli]") {
+TEST_CASE("cli: voxelize refuses a grid larger than the memory available", "[cli]") {
     // At most 4608^3 f32 samples (resolution 4096, padding 256): about 391 GB.
     const double physical = double(::sysconf(_SC_PHYS_PAGES)) * double(::sysconf(_SC_PAGESIZE));
     if (physical >= 4.0 * 4608 * 4608 * 4608) {
@@ -730,7 +730,7 @@ TEST_CASE("cli: voxelize refuses a grid larger than physical memory", "[cli]") {
     const std::string vol = s.path("huge.nrrd");
     expect_rejected(s, "voxelize " + quote(data_file("20mm-xyz-cube.stl")) + " -o " + quote(vol) +
                            " --resolution 4096 --padding 256",
-                    "resolution 4096", vol, "physical memory");
+                    "resolution 4096", vol, "memory available");
 }
 
 TEST_CASE("cli: devices and demo", "[cli]") {
@@ -827,6 +827,50 @@ TEST_CASE("cli: info on a model gives its size, topology, area and volume", "[cl
     expect_rejected(s, "info " + quote(open) + " --dims 2 2 2", "open.ply", "", "apply only to .raw");
     const std::string junk = s.write("junk.ply", "ply\nformat ascii 1.0\n");
     expect_rejected(s, "info " + quote(junk), "junk.ply", "");
+}
+
+// Two overlapping spheres in one STL (CAD bodies): --fill nonzero voxelizes their union, the
+// default (evenodd) leaves the overlap out; a flipped triangle is refused for nonzero only.
+TEST_CASE("cli: voxelize and sculpt --fill", "[cli]") {
+    Scratch s;
+    voxmesh::Mesh pair = voxmesh::read_stl(data_file("unit_sphere.stl"));
+    const std::size_t n = pair.positions.size();
+    pair.positions.resize(2 * n);
+    for (std::size_t i = 0; i < n; ++i) pair.positions[n + i] = pair.positions[i] + (i % 3 == 0 ? 1.0f : 0.0f);
+    const std::size_t t = pair.indices.size();
+    for (std::size_t i = 0; i < t; ++i) pair.indices.push_back(pair.indices[i] + static_cast<std::uint32_t>(n / 3));
+    const std::string model = s.path("pair.stl");
+    voxmesh::write_mesh(model, pair);
+
+    const Result u = run(s, "sculpt " + quote(model) + " --resolution 48 --fill nonzero -o " + quote(s.path("u.stl")));
+    INFO(u.err);
+    REQUIRE(u.code == 0);
+    CHECK(u.out.find("in 1 piece, closed (euler 2)") != std::string::npos);
+    const Result x = run(s, "sculpt " + quote(model) + " --resolution 48 -o " + quote(s.path("x.stl")));
+    REQUIRE(x.code == 0);
+    CHECK(x.out.find("closed (euler 2)") == std::string::npos);
+
+    const std::string vol = s.path("u.nrrd");
+    REQUIRE(run(s, "voxelize " + quote(model) + " -o " + quote(vol) + " --resolution 48 --fill nonzero").code == 0);
+    const Result m = run(s, "mesh " + quote(vol) + " -o " + quote(s.path("m.stl")));
+    REQUIRE(m.code == 0);
+    const voxmesh::MeshTopology topo = voxmesh::analyze_topology(voxmesh::read_stl(s.path("m.stl")));
+    CHECK(topo.closed());
+    CHECK(topo.euler == 2);
+
+    std::swap(pair.indices[1], pair.indices[2]);
+    const std::string flipped = s.path("flipped.stl");
+    voxmesh::write_mesh(flipped, pair);
+    const std::string out = s.path("f.nrrd");
+    expect_rejected(s, "voxelize " + quote(flipped) + " -o " + quote(out) + " --resolution 16 --fill nonzero",
+                    "flipped.stl", out, "not consistently wound: 3 edges");
+    expect_rejected(s, "voxelize " + quote(flipped) + " -o " + quote(out) + " --resolution 16 --fill nonzero",
+                    "--fill evenodd", out);
+    CHECK(run(s, "voxelize " + quote(flipped) + " -o " + quote(out) + " --resolution 16 --fill evenodd").code == 0);
+    expect_rejected(s, "sculpt " + quote(flipped) + " --resolution 16 --fill nonzero -o " + quote(s.path("f.stl")),
+                    "--fill evenodd", s.path("f.stl"));
+    expect_rejected(s, "voxelize " + quote(model) + " -o " + quote(s.path("b.nrrd")) + " --resolution 16 --fill odd",
+                    "--fill", s.path("b.nrrd"));
 }
 
 // The same model as STL, PLY and OBJ (the PLY and OBJ written by the library from what

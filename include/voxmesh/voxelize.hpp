@@ -6,12 +6,21 @@
 // every side. origin and spacing of the result are set so that meshing it back
 // (voxmesh::extract) lands in the model's own coordinates.
 //
-// Inside test (the documented rule): even-odd parity of the crossings of a ray along +x.
+// Inside test: the crossings of a ray along +x, by VoxelizeOptions::fill.
+//  - FillRule::EvenOdd (default): inside after an odd number of crossings. Does not depend
+//    on the triangles' orientation, so inconsistently wound meshes voxelize correctly; but
+//    where closed shells overlap (several intersecting CAD bodies in one STL) the overlap is
+//    outside, and a shell inside another (both closed) leaves a hollow between them.
+//  - FillRule::NonZero: inside where the winding number is non-zero, each crossing counted
+//    +1 or -1 by its triangle's orientation: the union of the closed shells (overlaps and
+//    nested shells are filled solid; an inside-out shell, all normals inward, has winding -1
+//    and is filled too; an inward shell inside an outward one cancels it: a cavity, as solids
+//    with voids are modelled). Needs consistent winding: a mesh with an edge used twice in the same
+//    direction by its two triangles is rejected with Error.
 // The mesh is snapped to a fixed-point lattice of 2^-16 voxel (vertices move by at most
-// 2^-17 voxel) and crossings are decided with exact integer predicates and symbolic
-// perturbation of the ray, so rays that pass exactly through vertices or along edges
-// count every surface crossing exactly once: no streaks. Parity does not depend on the
-// triangles' orientation, so inconsistently wound meshes voxelize correctly.
+// 2^-17 voxel) and crossings, and their signs, are decided with exact integer predicates
+// and symbolic perturbation of the ray, so rays that pass exactly through vertices or along
+// edges count every surface crossing exactly once: no streaks.
 //
 // Input rules: the mesh is welded by exact position first (unwelded STL soup is fine);
 // triangles with a repeated vertex are ignored; then every edge must belong to exactly two
@@ -30,6 +39,18 @@ enum class VoxelField {
                 // outside; mesh it back at iso 0 (the default inside = value >= iso gives
                 // outward normals). Exact within `band` voxels of the surface, clamped to
                 // +-band*h farther away, and to +-FLT_MAX (models spanning most of the float range).
+                // The sign follows `fill`; the magnitude is the distance to the nearest
+                // triangle, buried ones included: under NonZero a sample inside an overlap
+                // (or between nested shells) measures to the nearest buried surface, so there
+                // it can be less than the distance to the union's surface. Samples outside
+                // are exact (the union's surface is nearer than anything it encloses), and
+                // the sign changes only across the union's surface, so meshing at iso 0
+                // gives the union's surface alone, its vertices within a voxel.
+};
+
+enum class FillRule {
+    EvenOdd,  // inside after an odd number of crossings (any winding)
+    NonZero,  // inside where the winding number is non-zero: the union of closed shells
 };
 
 struct VoxelizeOptions {
@@ -37,18 +58,20 @@ struct VoxelizeOptions {
     std::size_t padding = 2;       // extra samples outside the box on every side (0..256); 0 lets
                                    // the surface touch the border, so its mesh is open there
     VoxelField field = VoxelField::Distance;
+    FillRule fill = FillRule::EvenOdd;  // NonZero for overlapping or nested shells (CAD bodies)
     double band = 3;               // Distance: exact within this many voxels (>= 2)
     unsigned threads = 0;          // 0 = all cores; the result does not depend on it
 };
 
-// `mesh` must be closed (every edge in two triangles); open or non-manifold input, an empty
-// mesh, non-finite positions or out-of-range indices are rejected with Error. So are, before
-// anything large is allocated, a grid whose bytes exceed the machine's physical memory
-// (sysconf(_SC_PHYS_PAGES) * page size) and a grid with samples beyond the range of float
-// (a model near +-3.4e38 plus padding), which extract() could not mesh, and triangle row
-// lists (each triangle once per z row it spans) that would not fit beside the grid. A model
-// with no sample inside it (flat, or thinner than a voxel everywhere) is an Error too: its
-// volume would mesh back to nothing.
+// `mesh` must be closed (every edge in two triangles), and for FillRule::NonZero consistently
+// wound (its two triangles use each edge in opposite directions); open or non-manifold input,
+// an empty mesh, non-finite positions or out-of-range indices are rejected with Error. So
+// are, before anything large is allocated, a grid whose bytes exceed the memory available
+// (MemAvailable in /proc/meminfo, else physical memory, as the volume readers check), a grid
+// with samples beyond the range of float (a model near +-3.4e38 plus padding), which
+// extract() could not mesh, and triangle row lists (each triangle once per z row it spans)
+// that would not fit beside the grid. A model with no sample inside it (flat, or thinner
+// than a voxel everywhere) is an Error too: its volume would mesh back to nothing.
 Volume voxelize(const Mesh& mesh, const VoxelizeOptions& options);
 
 }  // namespace voxmesh

@@ -1,4 +1,4 @@
-// voxmesh sculpt MODEL.stl|.ply|.obj --resolution N [--padding P] [--strokes FILE] -o OUT.ply
+// voxmesh sculpt MODEL.stl|.ply|.obj --resolution N [--padding P] [--strokes FILE] [--fill evenodd|nonzero] -o OUT.ply
 //                [--backend cpu|opencl|auto] [--device I] [--threads T] [--frames] [--largest N]
 // The paper's loop: voxelize a model, apply brush dabs, re-mesh only what each dab touched.
 // Without strokes, the paper's pipeline in one step: the model voxelized and meshed again.
@@ -24,6 +24,7 @@ struct SculptArgs {
     std::string input, strokes, output, format;
     std::size_t resolution = 0;
     std::size_t padding = 2;  // samples of room around the model
+    std::string fill = "evenodd";
     unsigned threads = 0;
     std::string backend = "cpu";
     int device = -1;  // -1: a GPU/accelerator, else the first device
@@ -64,6 +65,7 @@ int run_sculpt(const SculptArgs& a) {
     const Mesh model = load_model(a.input, "sculpt");
     VoxelizeOptions voxelize_options = Sculpt::model_voxelization(a.resolution, options);
     voxelize_options.padding = a.padding;
+    voxelize_options.fill = parse_fill_rule(a.fill);
     Sculpt sculpt =
         about_file(input_name(a.input), [&] { return Sculpt::from_mesh(model, voxelize_options, options); });
     const UpdateResult first = sculpt.update();
@@ -119,6 +121,7 @@ Command add_sculpt(CLI::App& app) {
                     "samples of room around the model (0..256, default 2): a surface built up past it is cut open at "
                     "the volume's border")
         ->transform(whole_number_in(0, 256));
+    add_fill_option(sub, a->fill);
     sub->add_option("--backend", a->backend,
                     "where each update re-meshes: cpu (threads), opencl (a device; the CPU with a warning when there "
                     "is none) or auto (a GPU when there is one); default cpu")

@@ -1,4 +1,5 @@
 // voxmesh voxelize MODEL.stl|.ply|.obj -o VOLUME.nrrd --resolution N [--padding P] [--field occupancy|distance]
+//                 [--fill evenodd|nonzero]
 #include "common.hpp"
 #include "stdin_input.hpp"
 
@@ -17,6 +18,7 @@ struct VoxelizeArgs {
     std::size_t resolution = 0;
     std::size_t padding = 2;
     std::string field = "distance";
+    std::string fill = "evenodd";
 };
 
 int run_voxelize(const VoxelizeArgs& a) {
@@ -27,6 +29,7 @@ int run_voxelize(const VoxelizeArgs& a) {
     options.resolution = a.resolution;
     options.padding = a.padding;
     options.field = a.field == "occupancy" ? VoxelField::Occupancy : VoxelField::Distance;
+    options.fill = parse_fill_rule(a.fill);
     const auto t0 = std::chrono::steady_clock::now();
     const Volume volume = about_file(input_name(a.input), [&] { return voxelize(model, options); });
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -58,6 +61,7 @@ Command add_voxelize(CLI::App& app) {
                     "distance: f32 signed distance, positive inside, mesh at iso 0 (default); "
                     "occupancy: u8 255 inside / 0 outside, mesh at iso 127.5")
         ->check(CLI::IsMember({"occupancy", "distance"}));
+    add_fill_option(sub, a->fill);
     return {sub, [a] { return run_voxelize(*a); }};
 }
 

@@ -318,13 +318,28 @@ Backend parse_backend(const std::string& name) {
     throw BadInput("unknown backend '" + name + "' (use auto, cpu, opencl or hybrid)");
 }
 
+void add_fill_option(CLI::App* sub, std::string& fill) {
+    sub->add_option("--fill", fill,
+                    "which samples are inside: evenodd, after an odd number of surface crossings (default; any "
+                    "winding, but overlapping shells leave their overlap out and nested shells a hollow); nonzero, "
+                    "the union of the closed shells (overlapping CAD bodies; needs consistent winding)")
+        ->check(CLI::IsMember({"evenodd", "nonzero"}));
+}
+
+FillRule parse_fill_rule(const std::string& name) {
+    if (name == "evenodd") return FillRule::EvenOdd;
+    if (name == "nonzero") return FillRule::NonZero;
+    throw BadInput("unknown fill rule '" + name + "' (use evenodd or nonzero)");
+}
+
 std::string in_cli_words(std::string message) {
     static const std::pair<const char*, const char*> kWords[] = {
         // Hybrid's advice when the only devices are CPUs: the CLI has no device_type option.
         {"name one in Options::devices, or set device_type to Cpu, to use it anyway", "name one with --device to use it anyway"},
         {"Backend::Cpu", "--backend cpu"},       {"Backend::Auto", "--backend auto"},
         {"Backend::OpenCL", "--backend opencl"}, {"Backend::Hybrid", "--backend hybrid"},
-        {"list_devices()", "voxmesh devices"},   {"Options::devices", "--device"}};
+        {"list_devices()", "voxmesh devices"},   {"Options::devices", "--device"},
+        {"FillRule::EvenOdd", "--fill evenodd"}, {"the NonZero fill rule", "--fill nonzero"}};
     for (const auto& [api, cli] : kWords)
         for (std::size_t at = message.find(api); at != std::string::npos; at = message.find(api, at + std::strlen(cli)))
             message.replace(at, std::strlen(api), cli);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <voxmesh/io.hpp>
+#include <voxmesh/voxelize.hpp>
 #include <voxmesh/voxmesh.hpp>
 
 #include "core/dims_text.hpp"
@@ -55,8 +56,11 @@ inline std::string naming(const std::string& path, const std::string& message) {
     return message.find(path) != std::string::npos ? message : "'" + path + "': " + message;
 }
 
-// Runs f; a voxmesh::Error it throws becomes BadInput whose message names `path`, except
-// running out of memory, which stays an OutOfMemoryError (exit code 1).
+std::string in_cli_words(std::string message);
+
+// Runs f; a voxmesh::Error it throws becomes BadInput whose message names `path` (and its
+// advice in the CLI's words), except running out of memory, which stays an OutOfMemoryError
+// (exit code 1).
 template <class F>
 auto about_file(const std::string& path, F&& f) -> decltype(f()) {
     try {
@@ -64,7 +68,7 @@ auto about_file(const std::string& path, F&& f) -> decltype(f()) {
     } catch (const voxmesh::OutOfMemoryError& e) {
         throw voxmesh::OutOfMemoryError(naming(path, e.what()));
     } catch (const voxmesh::Error& e) {
-        throw BadInput(naming(path, e.what()));
+        throw BadInput(naming(path, in_cli_words(e.what())));
     }
 }
 
@@ -143,5 +147,8 @@ std::string in_cli_words(std::string message);
 // Options::log for the commands: "voxmesh: warning: " and the message in the CLI's words.
 void print_warning(const std::string& message);
 Backend parse_backend(const std::string& name);
+// --fill evenodd|nonzero for the commands that voxelize a model (VoxelizeOptions::fill).
+void add_fill_option(CLI::App* sub, std::string& fill);
+FillRule parse_fill_rule(const std::string& name);
 
 }  // namespace voxmesh::cli

@@ -5,7 +5,9 @@
 //     distance of the samples within `band` voxels of its plane and box;
 //  2. inside test: for every row (y, z) the crossings of the ray along +x with the mesh,
 //     decided on a fixed-point lattice with exact integer predicates and a symbolic
-//     perturbation of the ray, sorted; a sample is inside after an odd number of them.
+//     perturbation of the ray, each signed by its triangle's orientation, sorted; a sample
+//     is inside after an odd number of them (EvenOdd) or where their signed sum, the
+//     winding number, is non-zero (NonZero).
 // Every sample is a function of the mesh alone, so the result does not depend on threads.
 
 #include <voxmesh/voxelize.hpp>
@@ -50,7 +52,7 @@ struct Soup {
     std::vector<std::array<std::uint32_t, 3>> tris;  // non-degenerate (three distinct ids)
 };
 
-Soup weld_and_check(const Mesh& mesh) {
+Soup weld_and_check(const Mesh& mesh, FillRule fill) {
     detail::check_mesh_arrays(mesh, "voxelize: ");
     const std::size_t nv = mesh.vertex_count();
     if (mesh.indices.empty()) throw Error("voxelize: the mesh has no triangles");
@@ -72,8 +74,9 @@ Soup weld_and_check(const Mesh& mesh) {
         remap[order[i]] = static_cast<std::uint32_t>(soup.points.size() - 1);
     }
 
-    std::vector<std::uint64_t> edges;
+    std::vector<std::uint64_t> edges, directed;  // directed: only NonZero needs the winding
     edges.reserve(mesh.indices.size());
+    if (fill == FillRule::NonZero) directed.reserve(mesh.indices.size());
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
         const std::array<std::uint32_t, 3> tri{remap[mesh.indices[3 * t]], remap[mesh.indices[3 * t + 1]],
                                                remap[mesh.indices[3 * t + 2]]};
@@ -82,6 +85,7 @@ Soup weld_and_check(const Mesh& mesh) {
         for (int e = 0; e < 3; ++e) {
             const std::uint64_t a = tri[e], b = tri[(e + 1) % 3];
             edges.push_back(a < b ? (a << 32 | b) : (b << 32 | a));
+            if (fill == FillRule::NonZero) directed.push_back(a << 32 | b);
         }
     }
     if (soup.tris.empty()) throw Error("voxelize: every triangle of the mesh is degenerate (no area)");
@@ -101,6 +105,16 @@ Soup weld_and_check(const Mesh& mesh) {
     if (nonmanifold)
         throw Error("voxelize: the mesh is not manifold: " + std::to_string(nonmanifold) +
                     " edges belong to more than two triangles");
+    // Each edge is in exactly two triangles now: they agree on the winding when they use it
+    // in opposite directions, so a directed edge seen twice is a flipped neighbour.
+    std::sort(directed.begin(), directed.end());
+    std::size_t flipped = 0;
+    for (std::size_t i = 1; i < directed.size(); ++i) flipped += directed[i] == directed[i - 1];
+    if (flipped)
+        throw Error("voxelize: the mesh is not consistently wound: " + std::to_string(flipped) +
+                    " edges are used in the same direction by both their triangles, so the NonZero fill rule "
+                    "cannot tell inside from outside; fix the winding, or use FillRule::EvenOdd (parity, which "
+                    "ignores the winding)");
     return soup;
 }
 
@@ -153,29 +167,39 @@ Grid make_grid(const Soup& soup, const VoxelizeOptions& options) {
     return g;
 }
 
-using io::physical_memory;  // SIZE_MAX when unknown: allocation still reports a failure
+// What the system can give now (MemAvailable, as the volume readers check; physical memory
+// where unknown): a grid that fits in physical memory but not beside what else runs would
+// swap, or meet the OOM killer, instead of being refused.
+using io::available_memory;
 
 std::size_t grid_bytes(const Grid& g, std::size_t sample_bytes) {
     return g.dims[0] * g.dims[1] * g.dims[2] * sample_bytes;  // < 2^41 (kMaxDim^3 * 4)
 }
 
-// Refuses a grid that cannot fit in this machine's physical memory, before allocating it:
-// the volume is written in full, so overcommit would only defer the failure to the OOM killer.
+// Refuses a grid that cannot fit in the memory available, before allocating it: the volume
+// is written in full, so overcommit would only defer the failure to the OOM killer.
 void check_grid_memory(const Grid& g, const VoxelizeOptions& options, std::size_t sample_bytes) {
-    const std::size_t bytes = grid_bytes(g, sample_bytes), physical = physical_memory();
-    if (bytes > physical)
+    const std::size_t bytes = grid_bytes(g, sample_bytes), available = available_memory();
+    if (bytes > available)
         throw Error("voxelize: the " + detail::dims_text(g.dims) + " grid (resolution " + std::to_string(options.resolution) +
                     ", padding " + std::to_string(options.padding) + ") needs " + std::to_string(bytes) +
-                    " bytes, more than the " + std::to_string(physical) +
-                    " bytes of physical memory; use a lower resolution");
+                    " bytes, more than the " + std::to_string(available) +
+                    " bytes of memory available; use a lower resolution");
 }
 
 using Lattice = std::array<std::int64_t, 3>;
 
-// One row's crossings along +x (grid x coordinates of the hits).
+// A crossing of the ray: grid x, and the winding number's change there.
+struct Hit {
+    double x;
+    int step;  // +1 through a triangle whose normal faces the ray (into an outward shell), else -1
+    bool operator<(const Hit& o) const { return x < o.x || (x == o.x && step < o.step); }
+};
+
+// One row's crossings along +x, sorted.
 void row_crossings(const std::vector<Lattice>& q, const std::vector<std::array<std::uint32_t, 3>>& tris,
                    const std::uint32_t* cand, std::size_t ncand, std::int64_t py, std::int64_t pz,
-                   std::vector<double>& hits) {
+                   std::vector<Hit>& hits) {
     hits.clear();
     for (std::size_t c = 0; c < ncand; ++c) {
         const auto& t = tris[cand[c]];
@@ -190,7 +214,9 @@ void row_crossings(const std::vector<Lattice>& q, const std::vector<std::array<s
         if (orient_sos(cc[1], cc[2], a[1], a[2], py, pz, wb) != s) continue;
         const double inv = 1.0 / double(area);
         const double x = (double(wa) * double(a[0]) + double(wb) * double(b[0]) + double(wc) * double(cc[0])) * inv;
-        hits.push_back(x / kFixedScale);
+        // area is the x component of the lattice triangle's normal (b - a) x (c - a), exact:
+        // s says which way the triangle faces the ray.
+        hits.push_back({x / kFixedScale, -s});
     }
     std::sort(hits.begin(), hits.end());
 }
@@ -285,7 +311,9 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
     if (distance && !(options.band >= 2 && options.band <= 1000))
         throw Error("voxelize: band must be between 2 and 1000 voxels");
 
-    const Soup soup = weld_and_check(mesh);
+    if (options.fill != FillRule::EvenOdd && options.fill != FillRule::NonZero)
+        throw Error("voxelize: unknown fill rule " + std::to_string(static_cast<int>(options.fill)));
+    const Soup soup = weld_and_check(mesh, options.fill);
     const Grid grid = make_grid(soup, options);
     const std::size_t nx = grid.dims[0], ny = grid.dims[1], nz = grid.dims[2];
     static_assert(kMaxResolution + 2 * kMaxPadding <= kMaxDim);
@@ -335,11 +363,12 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
     // Each triangle is listed once per z row it spans (< 2^32 triangles x kMaxDim rows, no
     // overflow): many tall triangles at a high resolution make that list larger than the grid.
     const std::size_t list_bytes = row_start[nz] * sizeof(std::uint32_t);
-    if (list_bytes > physical_memory() - std::min(physical_memory(), grid_bytes(grid, scalar_size(type))))
+    const std::size_t available = available_memory();
+    if (list_bytes > available - std::min(available, grid_bytes(grid, scalar_size(type))))
         throw Error("voxelize: the " + std::to_string(soup.tris.size()) + " triangles span " +
                     std::to_string(row_start[nz]) + " z rows in all at resolution " +
                     std::to_string(options.resolution) + "; their row lists (" + std::to_string(list_bytes) +
-                    " bytes) and the grid do not fit in physical memory; use a lower resolution");
+                    " bytes) and the grid do not fit in the memory available; use a lower resolution");
     row_tris.resize(row_start[nz]);
     {
         std::vector<std::size_t> fill(row_start.begin(), row_start.end() - 1);
@@ -413,8 +442,9 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
         }
 
         // Pass 2: inside test per row, then the final sample values.
-        std::vector<double> hits;
+        std::vector<Hit> hits;
         PlaneRows rows;
+        const bool nonzero = options.fill == FillRule::NonZero;
         std::size_t inside_here = 0;
         std::uint8_t* occ = distance ? nullptr : static_cast<std::uint8_t*>(volume.data);
         for (std::size_t k = z0; k < z1; ++k) {
@@ -424,10 +454,11 @@ Volume voxelize_mesh(const Mesh& mesh, const VoxelizeOptions& options) {
                 const std::int64_t py = std::int64_t(j) << kFixedBits;
                 row_crossings(q, soup.tris, rows.row(j), rows.row_size(j), py, pz, hits);
                 std::size_t passed = 0;
+                int winding = 0;
                 const std::size_t base = plane * k + nx * j;
                 for (std::size_t i = 0; i < nx; ++i) {
-                    while (passed < hits.size() && hits[passed] < double(i)) ++passed;
-                    const bool inside = passed % 2 == 1;
+                    for (; passed < hits.size() && hits[passed].x < double(i); ++passed) winding += hits[passed].step;
+                    const bool inside = nonzero ? winding != 0 : passed % 2 == 1;
                     inside_here += inside;
                     if (distance) {
                         // Clamped: band * h can pass FLT_MAX (a model spanning most of the
