@@ -15,6 +15,7 @@
 #include <memory>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 namespace {
@@ -292,6 +293,33 @@ TEST_CASE("C API: read_mesh, mesh_from_arrays, analyze_topology and voxelize giv
     CHECK(defaults.band == cpp_defaults.band);
     CHECK(defaults.threads == cpp_defaults.threads);
     CHECK(defaults.field == VOXMESH_FIELD_DISTANCE);
+    CHECK(defaults.fill == VOXMESH_FILL_EVENODD);
+
+    // The fill rule reaches the library: NonZero refuses a mesh with one triangle turned over,
+    // EvenOdd takes it; the NonZero torus is the C++ call's.
+    voxmesh::Mesh turned = cpp;
+    std::swap(turned.indices[1], turned.indices[2]);
+    REQUIRE(voxmesh_mesh_from_arrays(turned.positions.data(), turned.vertex_count(), turned.indices.data(),
+                                     turned.triangle_count(), &made) == VOXMESH_OK);
+    const MeshPtr one_turned(made, voxmesh_mesh_free);
+    voxmesh_voxelize_options options = voxmesh_default_voxelize_options();
+    options.resolution = 32;
+    voxmesh_volume* volume = nullptr;
+    REQUIRE(voxmesh_voxelize(one_turned.get(), &options, &volume) == VOXMESH_OK);
+    voxmesh_volume_free(volume);
+    options.fill = VOXMESH_FILL_NONZERO;
+    CHECK(voxmesh_voxelize(one_turned.get(), &options, &volume) == VOXMESH_ERROR);
+    CHECK_THAT(std::string(voxmesh_last_error()), Catch::Contains("not consistently wound"));
+    REQUIRE(voxmesh_voxelize(copied.get(), &options, &volume) == VOXMESH_OK);
+    const VolumePtr nonzero(volume, voxmesh_volume_free);
+    voxmesh::VoxelizeOptions cpp_nonzero;
+    cpp_nonzero.resolution = 32;
+    cpp_nonzero.fill = voxmesh::FillRule::NonZero;
+    require_same(voxmesh_volume_get_view(nonzero.get()), voxmesh::voxelize(cpp, cpp_nonzero));
+    options.fill = 7;
+    CHECK(voxmesh_voxelize(copied.get(), &options, &volume) == VOXMESH_ERROR);
+    CHECK(std::string(voxmesh_last_error()) ==
+          "voxmesh_voxelize: unknown fill rule 7 (VOXMESH_FILL_EVENODD or VOXMESH_FILL_NONZERO)");
 }
 
 TEST_CASE("C API: models that cannot be voxelized or checked fail with the library's message", "[capi]") {

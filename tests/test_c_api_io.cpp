@@ -46,6 +46,8 @@ void require_same(const voxmesh_volume_info& c, const voxmesh::VolumeInfo& cpp) 
     CHECK(c.rotation_dropped == cpp.rotation_dropped);
     CHECK(c.value_scale == cpp.value_scale);
     CHECK(c.value_offset == cpp.value_offset);
+    for (std::size_t i = 0; i < 9; ++i) CHECK(c.directions[i] == cpp.directions[i]);
+    for (std::size_t c3 = 0; c3 < 3; ++c3) CHECK(c.world_origin[c3] == cpp.world_origin[c3]);
 }
 
 }  // namespace
@@ -107,6 +109,7 @@ TEST_CASE("C API: volumes from bytes, raw files and NRRD writes, with what the f
     }
     CHECK(std::string(voxmesh_volume_get_info(nullptr).format).empty());
     CHECK(voxmesh_volume_get_info(nullptr).value_scale == 1);
+    CHECK(voxmesh_volume_get_info(nullptr).directions[4] == 1);  // the identity
 
     // Raw: big-endian u16 after a 3-byte header, a negative spacing flipping x.
     voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Gyroid, 9, voxmesh::ScalarType::U16);
@@ -163,6 +166,41 @@ TEST_CASE("C API: volumes from bytes, raw files and NRRD writes, with what the f
     CHECK(voxmesh_write_nrrd(nrrd_path.c_str(), &view) == VOXMESH_ERROR);
     CHECK_THAT(std::string(voxmesh_last_error()), Catch::Contains("spacing"));
     CHECK(iotest::read_file(nrrd_path) == want);  // nothing lost
+}
+
+TEST_CASE("C API: the world transform and mesh_to_world are the C++ library's", "[capi]") {
+    // A NRRD whose axes are permuted and one mirrored: x along world z, y along world x, z
+    // along -y (determinant -1).
+    iotest::Scratch scratch;
+    const voxmesh::FieldVolume field = voxmesh::make_field(voxmesh::Field::Sphere, 12, voxmesh::ScalarType::F32);
+    std::string text = "NRRD0004\ntype: float\ndimension: 3\nsizes: 12 12 12\nendian: little\nencoding: raw\n"
+                       "space: left-posterior-superior\nspace directions: (0,0,2) (1.5,0,0) (0,-1,0)\n"
+                       "space origin: (5,-3,7)\n\n";
+    text.append(static_cast<const char*>(field.volume.data), field.volume.byte_size());
+    const std::string path = scratch.file("permuted.nrrd", text);
+    voxmesh::VolumeInfo info;
+    const voxmesh::Volume cpp_volume = voxmesh::read_volume(path, info);
+    REQUIRE(info.rotation_dropped);
+    voxmesh_volume* made = nullptr;
+    REQUIRE(voxmesh_read_volume(path.c_str(), &made) == VOXMESH_OK);
+    VolumePtr volume(made, voxmesh_volume_free);
+    require_same(voxmesh_volume_get_info(volume.get()), info);
+
+    voxmesh_options options = voxmesh_default_options();
+    options.iso = field.iso;
+    MeshPtr mesh = extract_c(voxmesh_volume_get_view(volume.get()), options);
+    voxmesh::Options cpp_options;
+    cpp_options.iso = field.iso;
+    voxmesh::Mesh cpp_mesh = voxmesh::extract(cpp_volume.view(), cpp_options);
+    REQUIRE(cpp_mesh.triangle_count() > 0);
+    const voxmesh::Mesh before = cpp_mesh;
+    REQUIRE(voxmesh_mesh_to_world(mesh.get(), volume.get()) == VOXMESH_OK);
+    voxmesh::to_world(cpp_mesh, info);
+    require_same(mesh.get(), cpp_mesh);
+    CHECK(cpp_mesh.indices != before.indices);  // a mirroring turns every triangle over
+    CHECK(voxmesh_mesh_to_world(nullptr, volume.get()) == VOXMESH_ERROR);
+    CHECK(voxmesh_mesh_to_world(mesh.get(), nullptr) == VOXMESH_ERROR);
+    CHECK_THAT(std::string(voxmesh_last_error()), Catch::Contains("the volume"));
 }
 
 TEST_CASE("C API: keep_largest_components is the C++ call's", "[capi]") {

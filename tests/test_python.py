@@ -282,6 +282,24 @@ class VoxelizeTest(unittest.TestCase):
             np.testing.assert_allclose(lo, [-1.5, -1.5, -0.5], atol=0.05)
             np.testing.assert_allclose(hi, [1.5, 1.5, 0.5], atol=0.05)
 
+    def test_fill_rules_for_overlapping_bodies(self):
+        # Two cubes of side 2 overlapping in a unit cube: the union holds 15, even-odd leaves
+        # the overlap out (14); nonzero needs consistent winding.
+        positions, indices = cube_mesh(2.0)
+        both = (np.vstack([positions, positions + 1.0]), np.vstack([indices, indices + 8]))
+        for fill, expected in (("evenodd", 14.0), ("nonzero", 15.0)):
+            back = voxmesh.extract(voxmesh.voxelize(both, resolution=60, fill=fill), iso=0.0)
+            self.assertTrue(back.topology().closed, fill)
+            self.assertAlmostEqual(enclosed_volume(back) / expected, 1.0, delta=0.02, msg=fill)
+        turned = indices.copy()
+        turned[0] = turned[0][::-1]
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "not consistently wound"):
+            voxmesh.voxelize((positions, turned), resolution=20, fill="nonzero")
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "unknown fill rule 'odd'"):
+            voxmesh.voxelize(both, resolution=20, fill="odd")
+        sculpt = voxmesh.Sculpt.from_mesh(both, resolution=48, fill="nonzero")
+        self.assertEqual(sculpt.mesh().topology().euler, 2)
+
     def test_arrays_of_ones_own(self):
         positions, indices = cube_mesh(2.0)
         mesh = voxmesh.Mesh.from_arrays(positions, indices)
@@ -601,6 +619,35 @@ class SculptTest(unittest.TestCase):
         mesh = s.mesh()
         want = voxmesh.extract(s.array, backend="cpu")
         self.assertTrue(np.array_equal(mesh.indices, want.indices))
+
+
+class WorldTest(unittest.TestCase):
+    def test_mesh_to_world_follows_the_files_affine(self):
+        # A sphere in a NRRD whose axes are permuted, one mirrored (x along z, y along x, z along -y).
+        n = 12
+        z, y, x = np.mgrid[0:n, 0:n, 0:n].astype(np.float32)
+        samples = (4.0 - np.sqrt((x - 5.5) ** 2 + (y - 5.5) ** 2 + (z - 5.5) ** 2)).astype("<f4")
+        header = (f"NRRD0004\ntype: float\ndimension: 3\nsizes: {n} {n} {n}\nendian: little\nencoding: raw\n"
+                  "space: left-posterior-superior\nspace directions: (0,0,2) (1.5,0,0) (0,-1,0)\n"
+                  "space origin: (5,-3,7)\n\n")
+        volume = voxmesh.read_volume(header.encode() + samples.tobytes(), name="permuted.nrrd")
+        info = volume.info
+        self.assertTrue(info["rotation_dropped"])
+        self.assertEqual(info["directions"], ((0, 1, 0), (0, 0, -1), (1, 0, 0)))
+        self.assertEqual(info["world_origin"], (5.0, -3.0, 7.0))
+        mesh = voxmesh.extract(volume, iso=0.0)
+        index_frame = mesh.positions.astype(np.float64).copy()
+        indices = mesh.indices.copy()
+        mesh.to_world(volume)
+        expected = np.asarray(info["world_origin"]) + (index_frame - np.asarray(volume.origin)) @ np.asarray(info["directions"]).T
+        np.testing.assert_allclose(mesh.positions, expected, atol=1e-4)
+        np.testing.assert_array_equal(mesh.indices, indices[:, [0, 2, 1]])  # mirrored: turned over
+        self.assertGreater(enclosed_volume(mesh), 0)  # still outward
+        # The sphere's centre is where the file's affine puts index (5.5, 5.5, 5.5).
+        centre = np.array([5, -3, 7]) + 5.5 * np.array([0, 0, 2]) + 5.5 * np.array([1.5, 0, 0]) + 5.5 * np.array([0, -1, 0])
+        np.testing.assert_allclose(mesh.positions.mean(axis=0), centre, atol=0.05)
+        with self.assertRaisesRegex(voxmesh.VoxmeshError, "must be a voxmesh.Volume"):
+            mesh.to_world(samples)
 
 
 class BytesAndFilesTest(unittest.TestCase):

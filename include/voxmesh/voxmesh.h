@@ -221,14 +221,19 @@ typedef enum voxmesh_voxel_field {
     VOXMESH_FIELD_OCCUPANCY = 0, /* u8: 255 inside, 0 outside; mesh it back at iso 127.5 */
     VOXMESH_FIELD_DISTANCE = 1   /* f32 signed distance, positive inside; mesh it back at iso 0 */
 } voxmesh_voxel_field;
+typedef enum voxmesh_fill_rule {
+    VOXMESH_FILL_EVENODD = 0, /* inside after an odd number of crossings (any winding) */
+    VOXMESH_FILL_NONZERO = 1  /* the union of closed shells (overlapping bodies); needs consistent winding */
+} voxmesh_fill_rule;
 typedef struct voxmesh_voxelize_options {
     size_t resolution; /* voxels along the longest side of the bounding box (2..4096) */
     size_t padding;    /* samples added outside the box on every side */
     int field;         /* a voxmesh_voxel_field */
     double band;       /* distance: exact within this many voxels (>= 2) */
     unsigned threads;  /* 0: the CPUs this process may use */
+    int fill;          /* a voxmesh_fill_rule */
 } voxmesh_voxelize_options;
-/* resolution 128, padding 2, distance, band 3, threads 0. */
+/* resolution 128, padding 2, distance, band 3, threads 0, even-odd. */
 voxmesh_voxelize_options voxmesh_default_voxelize_options(void);
 voxmesh_status voxmesh_voxelize(const voxmesh_mesh* mesh, const voxmesh_voxelize_options* options,
                                 voxmesh_volume** volume);
@@ -262,8 +267,17 @@ typedef struct voxmesh_volume_info {
     int flipped[3];       /* axes stored in the negative direction, reversed on load */
     int rotation_dropped; /* a direction matrix that is not diagonal was dropped */
     double value_scale, value_offset; /* NIfTI scl_slope / scl_inter (not applied): 1 and 0 elsewhere */
+    /* The file's world transform (voxmesh::VolumeInfo): sample (i,j,k) lies at world_origin +
+     * D * ((i,j,k) * spacing), D[c][a] = directions[3 * c + a]; the identity and the volume's
+     * origin unless rotation_dropped. */
+    double directions[9];
+    double world_origin[3];
 } voxmesh_volume_info;
 voxmesh_volume_info voxmesh_volume_get_info(const voxmesh_volume* volume);
+/* A mesh extracted from `volume` moved into its file's world frame (voxmesh::to_world):
+ * positions by the affine, normals by its inverse-transpose, the winding reversed under a
+ * mirroring; nothing changes for a volume without a rotation (or one not read from a file). */
+voxmesh_status voxmesh_mesh_to_world(voxmesh_mesh* mesh, const voxmesh_volume* volume);
 
 /* NRRD (raw, host byte order) through a temporary renamed into place (voxmesh::write_nrrd). */
 voxmesh_status voxmesh_write_nrrd(const char* path, const voxmesh_volume_view* volume);

@@ -65,7 +65,7 @@ class _Topology(ctypes.Structure):
 
 class _VoxelizeOptions(ctypes.Structure):
     _fields_ = [("resolution", ctypes.c_size_t), ("padding", ctypes.c_size_t), ("field", ctypes.c_int),
-                ("band", ctypes.c_double), ("threads", ctypes.c_uint)]
+                ("band", ctypes.c_double), ("threads", ctypes.c_uint), ("fill", ctypes.c_int)]
 
 
 class _Stats(ctypes.Structure):
@@ -108,7 +108,8 @@ class _ValueRange(ctypes.Structure):
 class _VolumeInfo(ctypes.Structure):
     _fields_ = [("format", ctypes.c_char * 16), ("encoding", ctypes.c_char * 16), ("big_endian", ctypes.c_int),
                 ("flipped", ctypes.c_int * 3), ("rotation_dropped", ctypes.c_int), ("value_scale", ctypes.c_double),
-                ("value_offset", ctypes.c_double)]
+                ("value_offset", ctypes.c_double), ("directions", ctypes.c_double * 9),
+                ("world_origin", ctypes.c_double * 3)]
 
 
 class _SculptOptions(ctypes.Structure):
@@ -232,6 +233,8 @@ def _declare_io(lib, handle):
     lib.voxmesh_write_mesh_to_memory.argtypes = [handle, ctypes.c_char_p, ctypes.POINTER(handle)]
     lib.voxmesh_read_mesh_from_memory.restype = status
     lib.voxmesh_read_mesh_from_memory.argtypes = [ctypes.c_void_p, size, ctypes.c_char_p, ctypes.POINTER(handle)]
+    lib.voxmesh_mesh_to_world.restype = status
+    lib.voxmesh_mesh_to_world.argtypes = [handle, handle]
     lib.voxmesh_keep_largest_components.restype = status
     lib.voxmesh_keep_largest_components.argtypes = [handle, size, ctypes.POINTER(handle)]
     lib.voxmesh_read_volume_from_memory.restype = status
@@ -433,6 +436,15 @@ class Mesh:
         return _take_bytes(lambda out: _lib.voxmesh_write_mesh_to_memory(self._handle.pointer,
                                                                           f"mesh.{format}".encode(), out))
 
+    def to_world(self, volume):
+        """Moves this mesh, extracted from `volume` (a Volume read from a file), into the file's
+        world frame, in place (voxmesh::to_world): positions by volume.info's affine, normals by
+        its inverse-transpose, the winding reversed where it mirrors. Nothing changes for a
+        volume without a rotation (info["rotation_dropped"] false) or one not read from a file."""
+        if not isinstance(volume, Volume):
+            raise VoxmeshError(f"volume must be a voxmesh.Volume (read_volume's); got {type(volume).__name__}")
+        _check(_lib.voxmesh_mesh_to_world(self._handle.pointer, volume._handle.pointer))
+
     def largest_components(self, count=1):
         """The `count` connected pieces with the most triangles, in their order (a CT's surface
         without the specks of noise around it); normals kept."""
@@ -487,8 +499,11 @@ class Volume:
     """A volume read from a file or voxelized: `array` [z, y, x], `spacing` and `origin` as
     (x, y, z). A file's samples are read-only (they may be the file itself, mapped). `info`
     is what the file said beyond the samples (None for a voxelized volume): format, encoding,
-    big_endian, flipped (axes stored reversed, turned on load), rotation_dropped, and NIfTI's
-    value_scale and value_offset (not applied: a physical iso p is (p - offset) / scale)."""
+    big_endian, flipped (axes stored reversed, turned on load), rotation_dropped, NIfTI's
+    value_scale and value_offset (not applied: a physical iso p is (p - offset) / scale), and
+    the file's world transform: sample (i, j, k) lies at world_origin + directions @ ((i, j, k) *
+    spacing), directions 3 rows of 3 (a tuple) whose column a is axis a's unit direction (the identity,
+    and world_origin the origin, unless rotation_dropped; Mesh.to_world applies it)."""
 
     def __init__(self, pointer, readonly=True):
         handle = _Handle(pointer, _lib.voxmesh_volume_free)
@@ -502,7 +517,9 @@ class Volume:
         self.info = None if not info.format else {
             "format": info.format.decode(), "encoding": info.encoding.decode(), "big_endian": bool(info.big_endian),
             "flipped": tuple(bool(f) for f in info.flipped), "rotation_dropped": bool(info.rotation_dropped),
-            "value_scale": info.value_scale, "value_offset": info.value_offset}
+            "value_scale": info.value_scale, "value_offset": info.value_offset,
+            "directions": tuple(tuple(info.directions[3 * c:3 * c + 3]) for c in range(3)),
+            "world_origin": tuple(info.world_origin)}
 
 
 def _is_bytes(source):
@@ -619,11 +636,14 @@ def _check_automatic(**values):
 
 
 _FIELDS = {"occupancy": 0, "distance": 1}
+_FILLS = {"evenodd": 0, "nonzero": 1}
 
 
-def _voxelize_options(resolution, padding, field, band, threads):
+def _voxelize_options(resolution, padding, field, band, threads, fill="evenodd"):
     if field not in _FIELDS:
         raise VoxmeshError(f"unknown field '{field}' (distance, occupancy)")
+    if fill not in _FILLS:
+        raise VoxmeshError(f"unknown fill rule '{fill}' (evenodd, nonzero)")
     for name, value in (("resolution", resolution), ("padding", padding), ("threads", threads)):
         _whole_number(name, value, f"{name} must not be negative; got {value}")
     options = _lib.voxmesh_default_voxelize_options()
@@ -632,16 +652,19 @@ def _voxelize_options(resolution, padding, field, band, threads):
     options.field = _FIELDS[field]
     options.band = _real("band", band)
     options.threads = int(threads)
+    options.fill = _FILLS[fill]
     return options
 
 
-def voxelize(mesh, resolution=128, padding=2, field="distance", band=3.0, threads=0):
+def voxelize(mesh, resolution=128, padding=2, field="distance", band=3.0, threads=0, fill="evenodd"):
     """A closed mesh (a Mesh, or a (positions, indices) pair) as a Volume, as voxmesh::voxelize:
     field "distance" (float32, positive inside: extract it at iso 0) or "occupancy" (uint8, 255
-    inside: extract it at iso 127.5); spacing and origin put its mesh back in the model's units."""
+    inside: extract it at iso 127.5); spacing and origin put its mesh back in the model's units.
+    fill "evenodd" (inside after an odd number of crossings, any winding) or "nonzero" (the union
+    of overlapping or nested closed shells; needs consistent winding)."""
     if not isinstance(mesh, Mesh):
         mesh = Mesh.from_arrays(*mesh)
-    options = _voxelize_options(resolution, padding, field, band, threads)
+    options = _voxelize_options(resolution, padding, field, band, threads, fill)
     pointer = ctypes.c_void_p()
     _check(_lib.voxmesh_voxelize(mesh._handle.pointer, ctypes.byref(options), ctypes.byref(pointer)))
     return Volume(pointer.value, readonly=False)
@@ -992,14 +1015,15 @@ class Sculpt:
 
     @classmethod
     def from_mesh(cls, model, resolution=128, padding=2, band=4.0, threads=0, block_size=32, normals=True,
-                  strength_scale=0.0, backend="cpu", device=-1):
+                  strength_scale=0.0, backend="cpu", device=-1, fill="evenodd"):
         """A closed model (a Mesh, or a (positions, indices) pair) voxelized to a signed distance
         field with `resolution` voxels along its longest side and `padding` samples around it:
         float32, positive inside, iso 0, in the model's units; brush strengths are in voxels of
-        surface displacement. A surface built up past the padding is cut open at the border."""
+        surface displacement. A surface built up past the padding is cut open at the border.
+        fill: as voxelize's ("nonzero" for overlapping bodies)."""
         if not isinstance(model, Mesh):
             model = Mesh.from_arrays(*model)
-        grid = _voxelize_options(resolution, padding, "distance", band, threads)
+        grid = _voxelize_options(resolution, padding, "distance", band, threads, fill)
         options = _sculpt_options(0.0, threads, block_size, normals, False, strength_scale, backend, device)
         pointer = ctypes.c_void_p()
         _check(_lib.voxmesh_sculpt_from_mesh(model._handle.pointer, ctypes.byref(grid), ctypes.byref(options),

@@ -319,6 +319,11 @@ voxmesh::VoxelizeOptions voxelize_options(const voxmesh_voxelize_options& given,
                              " (VOXMESH_FIELD_OCCUPANCY or VOXMESH_FIELD_DISTANCE)");
     cpp.band = given.band;
     cpp.threads = given.threads;
+    if (given.fill == VOXMESH_FILL_EVENODD) cpp.fill = voxmesh::FillRule::EvenOdd;
+    else if (given.fill == VOXMESH_FILL_NONZERO) cpp.fill = voxmesh::FillRule::NonZero;
+    else
+        throw voxmesh::Error(std::string(who) + ": unknown fill rule " + std::to_string(given.fill) +
+                             " (VOXMESH_FILL_EVENODD or VOXMESH_FILL_NONZERO)");
     return cpp;
 }
 
@@ -610,6 +615,7 @@ voxmesh_voxelize_options voxmesh_default_voxelize_options(void) {
     options.field = defaults.field == voxmesh::VoxelField::Occupancy ? VOXMESH_FIELD_OCCUPANCY : VOXMESH_FIELD_DISTANCE;
     options.band = defaults.band;
     options.threads = defaults.threads;
+    options.fill = defaults.fill == voxmesh::FillRule::NonZero ? VOXMESH_FILL_NONZERO : VOXMESH_FILL_EVENODD;
     return options;
 }
 
@@ -677,9 +683,12 @@ voxmesh_status voxmesh_read_raw(const char* path, const voxmesh_raw_layout* layo
 
 voxmesh_volume_info voxmesh_volume_get_info(const voxmesh_volume* volume) {
     voxmesh_volume_info out{};
+    static const voxmesh::VolumeInfo kNotRead;  // identity and origin 0
+    const voxmesh::VolumeInfo& info = volume ? volume->info : kNotRead;
+    std::copy(info.directions.begin(), info.directions.end(), out.directions);
+    std::copy(info.world_origin.begin(), info.world_origin.end(), out.world_origin);
     out.value_scale = 1;
     if (!volume) return out;
-    const voxmesh::VolumeInfo& info = volume->info;
     copy_text(out.format, info.format);
     copy_text(out.encoding, info.encoding);
     out.big_endian = info.big_endian;
@@ -688,6 +697,14 @@ voxmesh_volume_info voxmesh_volume_get_info(const voxmesh_volume* volume) {
     out.value_scale = info.value_scale;
     out.value_offset = info.value_offset;
     return out;
+}
+
+voxmesh_status voxmesh_mesh_to_world(voxmesh_mesh* mesh, const voxmesh_volume* volume) {
+    return guarded([&] {
+        require(mesh, "voxmesh_mesh_to_world", "the mesh");
+        require(volume, "voxmesh_mesh_to_world", "the volume");
+        voxmesh::to_world(mesh->mesh, volume->info);
+    });
 }
 
 voxmesh_status voxmesh_write_nrrd(const char* path, const voxmesh_volume_view* volume) {
