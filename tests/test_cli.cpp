@@ -500,10 +500,10 @@ TEST_CASE("cli: mesh --world places the mesh by the file's direction matrix", "[
                              "space: left-posterior-superior\nspace origin: (5,-3,7)\n";
     const std::string rotated =
         s.write("perm.nrrd", head + "space directions: (0,0,2) (1.5,0,0) (0,-1,0)\n\n" + f32_bytes(samples));
-    const Result world = run(s, "mesh " + quote(rotated) + " -o " + quote(s.path("w.stl")) + " --iso 0.5 --world");
+    const Result world = run(s, "mesh " + quote(rotated) + " -o " + quote(s.path("w.stl")) + " --iso 0.5 --world --backend cpu");
     INFO(world.err);
     REQUIRE(world.code == 0);
-    CHECK(world.err.find("warning") == std::string::npos);  // nothing dropped
+    CHECK(world.err.find("warning") == std::string::npos);  // nothing dropped (--backend cpu: auto warns without OpenCL)
     // Index axis 0 runs along z from 7 in steps of 2, axis 1 along x from 5 by 1.5, axis 2 down y from -3.
     const Result bounds = run(s, "info " + quote(s.path("w.stl")));
     CHECK(bounds.out.find("bounds:    5.75 -7.5 8 .. 11.75 -3.5 16") != std::string::npos);
