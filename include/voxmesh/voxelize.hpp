@@ -59,7 +59,7 @@ struct VoxelizeOptions {
                                    // the surface touch the border, so its mesh is open there
     VoxelField field = VoxelField::Distance;
     FillRule fill = FillRule::EvenOdd;  // NonZero for overlapping or nested shells (CAD bodies)
-    double band = 3;               // Distance: exact within this many voxels (>= 2)
+    double band = 3;               // Distance: exact within this many voxels (2..1000)
     unsigned threads = 0;          // 0 = all cores; the result does not depend on it
 };
 

@@ -229,7 +229,7 @@ typedef struct voxmesh_voxelize_options {
     size_t resolution; /* voxels along the longest side of the bounding box (2..4096) */
     size_t padding;    /* samples added outside the box on every side */
     int field;         /* a voxmesh_voxel_field */
-    double band;       /* distance: exact within this many voxels (>= 2) */
+    double band;       /* distance: exact within this many voxels (2..1000) */
     unsigned threads;  /* 0: the CPUs this process may use */
     int fill;          /* a voxmesh_fill_rule */
 } voxmesh_voxelize_options;
