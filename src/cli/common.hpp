@@ -56,11 +56,8 @@ inline std::string naming(const std::string& path, const std::string& message) {
     return message.find(path) != std::string::npos ? message : "'" + path + "': " + message;
 }
 
-std::string in_cli_words(std::string message);
-
-// Runs f; a voxmesh::Error it throws becomes BadInput whose message names `path` (and its
-// advice in the CLI's words), except running out of memory, which stays an OutOfMemoryError
-// (exit code 1).
+// Runs f; a voxmesh::Error it throws becomes BadInput whose message names `path`, except
+// running out of memory, which stays an OutOfMemoryError (exit code 1).
 template <class F>
 auto about_file(const std::string& path, F&& f) -> decltype(f()) {
     try {
@@ -68,7 +65,7 @@ auto about_file(const std::string& path, F&& f) -> decltype(f()) {
     } catch (const voxmesh::OutOfMemoryError& e) {
         throw voxmesh::OutOfMemoryError(naming(path, e.what()));
     } catch (const voxmesh::Error& e) {
-        throw BadInput(naming(path, in_cli_words(e.what())));
+        throw BadInput(naming(path, e.what()));
     }
 }
 

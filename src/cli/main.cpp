@@ -97,8 +97,8 @@ int main(int argc, char** argv) {
             if (c.sub->parsed()) return report_written(c.run());
         std::cerr << "voxmesh: no subcommand given (see voxmesh --help)\n";
         return kExitBadInput;
-    } catch (const BadInput& e) {
-        std::cerr << "voxmesh: error: " << e.what() << "\n";
+    } catch (const BadInput& e) {  // it may carry the library's message (about_file): its advice too
+        std::cerr << "voxmesh: error: " << in_cli_words(e.what()) << "\n";
         return kExitBadInput;
     } catch (const voxmesh::OutOfMemoryError& e) {
         std::cerr << "voxmesh: error: " << e.what() << "\n";
