@@ -251,8 +251,9 @@ void skip_field(Lines& lines, const std::string& path, bool binary, const std::v
 
 // Skips one attribute (its line `a` read) of `count` tuples: the cell data's before the point
 // data (how VTK writes a volume that has both), and the point data's before the volume's
-// array (VECTORS, NORMALS, ... that VTK's reader passes looking for the scalars). Both were refused.
-void skip_attribute(Lines& lines, const std::string& path, bool binary, std::uint64_t count,
+// array (VECTORS, NORMALS, ... that VTK's reader passes looking for the scalars). Both were
+// refused. False, reading nothing more, for a line that is no attribute: the caller says why.
+bool skip_attribute(Lines& lines, const std::string& path, bool binary, std::uint64_t count,
                     const std::vector<std::string>& a, const std::string& data) {
     const std::string k = keyword(a[0]);
     const std::string what = data + " " + k + (a.size() > 1 ? " '" + shown(a[1]) + "'" : std::string());
@@ -289,13 +290,17 @@ void skip_attribute(Lines& lines, const std::string& path, bool binary, std::uin
     } else if (k == "FIELD") {
         skip_field(lines, path, binary, a);
     } else {
-        fail(path, "unknown " + data + " attribute '" + shown(a[0]) + "'");
+        return false;
     }
+    return true;
 }
 
 void skip_cell_data(Lines& lines, const std::string& path, bool binary, std::uint64_t cells) {
-    while (!lines.next_starts_with("POINT_DATA"))
-        skip_attribute(lines, path, binary, cells, copied_words(lines, "POINT_DATA"), "cell data");
+    while (!lines.next_starts_with("POINT_DATA")) {
+        const std::vector<std::string> a = copied_words(lines, "POINT_DATA");
+        if (!skip_attribute(lines, path, binary, cells, a, "cell data"))
+            fail(path, "unknown cell data attribute '" + shown(a[0]) + "'");
+    }
 }
 
 void expect_count(const std::string& path, const std::vector<std::string_view>& words, std::size_t count) {
@@ -337,8 +342,8 @@ VolumeHeader read_vtk_header(const InputFile& file) {
     bool have_dims = false;
     std::array<std::vector<double>, 3> axes;
     // EXTENT's first indices, and the spacing with its sign: the first sample lies at
-    // ORIGIN + first * spacing.
-    std::array<long long, 3> first{0, 0, 0};
+    // ORIGIN + extent_first * spacing.
+    std::array<long long, 3> extent_first{0, 0, 0};
     std::array<double, 3> signed_spacing{1, 1, 1};
     for (;;) {
         const std::vector<std::string_view> w = lines.words("POINT_DATA");
@@ -357,7 +362,7 @@ VolumeHeader read_vtk_header(const InputFile& file) {
         if (k == "DIMENSIONS") {
             expect_count(path, w, 4);
             for (std::size_t a = 0; a < 3; ++a) info.dims[a] = parse_size(path, "DIMENSIONS", w[a + 1]);
-            first = {0, 0, 0};  // the last of EXTENT and DIMENSIONS holds
+            extent_first = {0, 0, 0};  // the last of EXTENT and DIMENSIONS holds
             have_dims = true;
         } else if (k == "EXTENT") {  // what vtkStructuredPointsWriter writes with WriteExtent on: it was refused
             expect_count(path, w, 7);
@@ -369,7 +374,7 @@ VolumeHeader read_vtk_header(const InputFile& file) {
                     fail(path, range + " is out of VTK's int range");  // and hi - lo + 1 cannot overflow
                 if (hi < lo) fail(path, range + " is empty");
                 info.dims[a] = static_cast<std::size_t>(hi - lo) + 1;
-                first[a] = lo;
+                extent_first[a] = lo;
             }
             have_dims = true;
         } else if (k == "SPACING" || k == "ASPECT_RATIO") {
@@ -397,20 +402,17 @@ VolumeHeader read_vtk_header(const InputFile& file) {
     // component; other attributes before it are skipped, as VTK's reader passes them.
     std::vector<std::string> array;
     std::string k;
-    std::size_t data_start = 0;  // set where the volume's header ends
     for (;;) {
         array = copied_words(lines, "SCALARS or FIELD");
         k = keyword(array[0]);
         if (k == "SCALARS" || k == "COLOR_SCALARS" || k == "FIELD") break;
-        if (k == "LOOKUP_TABLE" || k == "VECTORS" || k == "NORMALS" || k == "TENSORS" || k == "TENSORS6" ||
-            k == "TEXTURE_COORDINATES" || k == "GLOBAL_IDS" || k == "PEDIGREE_IDS")
-            skip_attribute(lines, path, info.encoding == "raw", info.dims[0] * info.dims[1] * info.dims[2], array,
-                           "point data");
-        else
+        if (!skip_attribute(lines, path, info.encoding == "raw", info.dims[0] * info.dims[1] * info.dims[2], array,
+                            "point data"))
             fail(path, "the point data has " + shown(array[0]) +
                            " where the volume's array should be; a volume is read from SCALARS or COLOR_SCALARS "
                            "with one component, or a FIELD array");
     }
+    std::size_t data_start = 0;  // where the volume's samples start
     if (k == "SCALARS") {
         if (array.size() != 3 && array.size() != 4) fail(path, "'SCALARS' takes a name, a type and optionally a component count");
         layout.type = parse_type(path, array[2]);
@@ -446,9 +448,9 @@ VolumeHeader read_vtk_header(const InputFile& file) {
     info.type = layout.type;
     info.data_file = path;
     for (std::size_t a = 0; a < 3; ++a)
-        if (first[a] != 0)
-            info.origin[a] =
-                checked_origin(path, "EXTENT", info.origin[a] + static_cast<double>(first[a]) * signed_spacing[a]);
+        if (extent_first[a] != 0)
+            info.origin[a] = checked_origin(path, "EXTENT",
+                                            info.origin[a] + static_cast<double>(extent_first[a]) * signed_spacing[a]);
     apply_directions(h, axis_directions(axes));
     layout.dims = info.dims;
     layout.big_endian = info.big_endian;
