@@ -1010,6 +1010,15 @@ class FilesTest(unittest.TestCase):
 
     def test_version(self):
         self.assertRegex(voxmesh.version(), r"^\d+\.\d+\.\d+$")
+        self.assertEqual(voxmesh.__version__, voxmesh.version())
+        # Installed by pip (CI's virtual environment), the distribution's version is the same.
+        import importlib.metadata
+        try:
+            installed = importlib.metadata.version("voxmesh")
+        except importlib.metadata.PackageNotFoundError:
+            installed = None
+        if installed is not None and os.path.dirname(voxmesh.__file__).startswith(sys.prefix):
+            self.assertEqual(installed, voxmesh.__version__)
 
     def test_a_library_of_another_version_is_refused(self):
         # Found by a review: the package loaded any libvoxmesh_c, whose structs may differ.

@@ -336,6 +336,10 @@ def version():
     return _lib.voxmesh_version().decode()
 
 
+# The version of the library loaded, which _load checked is the one this package was built for.
+__version__ = version()
+
+
 def _check(status):
     if status == 0:
         return
