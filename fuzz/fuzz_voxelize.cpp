@@ -1,7 +1,8 @@
 // libFuzzer target: read_mesh (PLY for input starting "ply", STL for "solid" or a binary STL
-// size, OBJ otherwise), then voxelize what it reads on a small grid, both fields. A model
-// voxelize accepts must give a volume that meshes back (extract) to a closed 2-manifold:
-// occupancy in {0, 255}, distances finite, and the padding keeps the surface off the border.
+// size, OBJ otherwise), then voxelize what it reads on a small grid, both fields and both fill
+// rules. A model voxelize accepts must give a volume that meshes back (extract) to a closed
+// 2-manifold: occupancy in {0, 255}, distances finite, and the padding keeps the surface off
+// the border; NonZero fills every sample EvenOdd fills.
 // Vertices no triangle uses (PLY and OBJ keep them) must change nothing: the volume equals
 // that of the model without them.
 #include "fuzz_common.hpp"
@@ -54,16 +55,18 @@ bool same(const Outcome& a, const Outcome& b) {
            std::memcmp(a.volume.data, b.volume.data, a.volume.byte_size()) == 0;
 }
 
-void check_voxelized(const voxmesh::Mesh& model, voxmesh::VoxelField field, std::size_t resolution) {
+Outcome check_voxelized(const voxmesh::Mesh& model, voxmesh::VoxelField field, voxmesh::FillRule fill,
+                        std::size_t resolution) {
     voxmesh::VoxelizeOptions options;
     options.resolution = resolution;
     options.padding = 2;
     options.field = field;
+    options.fill = fill;
     options.threads = 1;
-    const Outcome outcome = voxelized(model, options);
+    Outcome outcome = voxelized(model, options);
     const voxmesh::Mesh used = without_unused_vertices(model);
     if (used.vertex_count() != model.vertex_count() && !same(outcome, voxelized(used, options))) std::abort();
-    if (!outcome.error.empty()) return;  // open, non-manifold, flat, beyond float, ...: refused with a message
+    if (!outcome.error.empty()) return outcome;  // open, non-manifold, flat, beyond float, ...: refused with a message
     const voxmesh::Volume& volume = outcome.volume;
     const std::size_t n = volume.sample_count();
     if (field == voxmesh::VoxelField::Occupancy) {
@@ -81,6 +84,24 @@ void check_voxelized(const voxmesh::Mesh& model, voxmesh::VoxelField field, std:
     const voxmesh::Mesh back =
         fuzz::extract_or_abort(volume.view(), field == voxmesh::VoxelField::Occupancy ? 127.5 : 0.0);
     if (back.triangle_count() == 0 || !voxmesh::analyze_topology(back).closed()) std::abort();
+    return outcome;
+}
+
+// An odd winding number is a non-zero one: every sample EvenOdd fills, NonZero fills too. So
+// where EvenOdd accepts the model (each edge in two triangles), NonZero refuses it only for
+// its winding.
+void check_fill_rules(const voxmesh::Mesh& model, std::size_t resolution) {
+    const Outcome odd = check_voxelized(model, voxmesh::VoxelField::Occupancy, voxmesh::FillRule::EvenOdd, resolution);
+    const Outcome nonzero = check_voxelized(model, voxmesh::VoxelField::Occupancy, voxmesh::FillRule::NonZero, resolution);
+    if (!odd.error.empty()) return;
+    if (!nonzero.error.empty()) {
+        if (nonzero.error.find("not consistently wound") == std::string::npos) std::abort();
+        return;
+    }
+    const auto* a = static_cast<const std::uint8_t*>(odd.volume.data);
+    const auto* b = static_cast<const std::uint8_t*>(nonzero.volume.data);
+    for (std::size_t i = 0; i < odd.volume.sample_count(); ++i)
+        if (a[i] > b[i]) std::abort();
 }
 
 }  // namespace
@@ -98,7 +119,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     // The resolution from the input's length: small grids, different per input.
     const std::size_t resolution = 4 + size % 13;
-    check_voxelized(model, voxmesh::VoxelField::Occupancy, resolution);
-    check_voxelized(model, voxmesh::VoxelField::Distance, resolution);
+    check_fill_rules(model, resolution);
+    check_voxelized(model, voxmesh::VoxelField::Distance, voxmesh::FillRule::EvenOdd, resolution);
+    check_voxelized(model, voxmesh::VoxelField::Distance, voxmesh::FillRule::NonZero, resolution);
     return 0;
 }

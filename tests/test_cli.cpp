@@ -871,6 +871,27 @@ TEST_CASE("cli: voxelize and sculpt --fill", "[cli]") {
                     "--fill evenodd", s.path("f.stl"));
     expect_rejected(s, "voxelize " + quote(model) + " -o " + quote(s.path("b.nrrd")) + " --resolution 16 --fill odd",
                     "--fill", s.path("b.nrrd"));
+
+    // Two unit cubes stacked, sharing the face z = 1: evenodd refuses its edges (four triangles
+    // each) and names the rule that takes them.
+    voxmesh::Mesh stack;
+    for (float z0 : {0.0f, 1.0f}) {
+        const auto base = static_cast<std::uint32_t>(stack.vertex_count());
+        for (int v = 0; v < 8; ++v)
+            stack.positions.insert(stack.positions.end(), {float(v & 1), float(v >> 1 & 1), z0 + float(v >> 2)});
+        for (std::uint32_t i : {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                                2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5})
+            stack.indices.push_back(base + i);
+    }
+    const std::string stacked = s.path("stack.stl");
+    voxmesh::write_mesh(stacked, stack);
+    const std::string stack_out = s.path("stack.nrrd");
+    expect_rejected(s, "voxelize " + quote(stacked) + " -o " + quote(stack_out) + " --resolution 16", "stack.stl", stack_out,
+                    "not manifold: 5 edges belong to more than two triangles; --fill nonzero accepts");
+    const Result st = run(s, "sculpt " + quote(stacked) + " --resolution 16 --fill nonzero -o " + quote(s.path("st.stl")));
+    INFO(st.err);
+    REQUIRE(st.code == 0);
+    CHECK(st.out.find("in 1 piece, closed (euler 2)") != std::string::npos);
 }
 
 // The same model as STL, PLY and OBJ (the PLY and OBJ written by the library from what

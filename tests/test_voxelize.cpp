@@ -814,3 +814,53 @@ TEST_CASE("voxelize: NonZero does not depend on the thread count", "[voxelize]")
     model = joined(model, uv_sphere({-0.5, 0, 0}, 0.3, 16, 8, true));
     check_thread_independent(model, voxmesh::FillRule::NonZero);
 }
+
+// Bodies exported together that share faces or edges (an assembly in one STL): those edges are
+// in four triangles. NonZero only needs each edge used as often in each direction, so it fills
+// their union; EvenOdd refuses them as before.
+TEST_CASE("voxelize: bodies sharing a face or an edge: NonZero fills their union", "[voxelize]") {
+    const voxmesh::Mesh face = joined(subdivided_box({0, 0, 0}, {1, 1, 1}, 2), subdivided_box({0, 0, 1}, {1, 1, 2}, 2));
+    const voxmesh::Mesh edge = joined(subdivided_box({0, 0, 0}, {1, 1, 1}, 2), subdivided_box({1, 1, 0}, {2, 2, 1}, 2));
+    for (const voxmesh::Mesh* model : {&face, &edge}) {
+        for (const auto field : {voxmesh::VoxelField::Distance, voxmesh::VoxelField::Occupancy}) {
+            INFO((model == &face ? "face" : "edge") << ", field " << int(field));
+            const Meshed u = voxelize_and_mesh(*model, voxmesh::FillRule::NonZero, field, 32);
+            CHECK(u.topology.closed());
+            CHECK(u.mesh_volume == Approx(2.0).epsilon(0.02));
+            if (model == &face) {
+                CHECK(u.topology.components == 1);
+                CHECK(u.topology.euler == 2);
+            }
+        }
+        voxmesh::VoxelizeOptions vo;
+        vo.resolution = 16;
+        CHECK_THROWS_WITH(voxmesh::voxelize(*model, vo), Catch::Contains("not manifold") && Catch::Contains("NonZero"));
+    }
+}
+
+TEST_CASE("voxelize: NonZero refuses edges used unevenly, and a cancelling pair changes nothing", "[voxelize]") {
+    const voxmesh::Mesh box = subdivided_box({0, 0, 0}, {1, 1, 1}, 2);
+    const auto with_copies = [&](std::size_t t, int same, int flipped) {
+        voxmesh::Mesh m = box;
+        const std::uint32_t a = box.indices[3 * t], b = box.indices[3 * t + 1], c = box.indices[3 * t + 2];
+        for (int i = 0; i < same; ++i) m.indices.insert(m.indices.end(), {a, b, c});
+        for (int i = 0; i < flipped; ++i) m.indices.insert(m.indices.end(), {a, c, b});
+        return m;
+    };
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 16;
+    vo.fill = voxmesh::FillRule::NonZero;
+    // One copy: its edges are in three triangles, an odd number (a fin, not a closed surface).
+    CHECK_THROWS_WITH(voxmesh::voxelize(with_copies(5, 1, 0), vo),
+                      Catch::Contains("not closed: 3 edges belong to an odd number of triangles"));
+    // Two copies the same way: four triangles, three of them one way.
+    CHECK_THROWS_WITH(voxmesh::voxelize(with_copies(5, 2, 0), vo),
+                      Catch::Contains("not consistently wound: 3 edges are used more often in one direction"));
+    // A copy each way: a two-sided sheet on the surface, whose crossings cancel: the same volume.
+    for (const auto field : {voxmesh::VoxelField::Distance, voxmesh::VoxelField::Occupancy}) {
+        vo.field = field;
+        const voxmesh::Volume plain = voxmesh::voxelize(box, vo), sheet = voxmesh::voxelize(with_copies(5, 1, 1), vo);
+        REQUIRE(plain.byte_size() == sheet.byte_size());
+        CHECK(std::memcmp(plain.data, sheet.data, plain.byte_size()) == 0);
+    }
+}

@@ -15,8 +15,10 @@
 //    +1 or -1 by its triangle's orientation: the union of the closed shells (overlaps and
 //    nested shells are filled solid; an inside-out shell, all normals inward, has winding -1
 //    and is filled too; an inward shell inside an outward one cancels it: a cavity, as solids
-//    with voids are modelled). Needs consistent winding: a mesh with an edge used twice in the same
-//    direction by its two triangles is rejected with Error.
+//    with voids are modelled). Needs consistent winding: every edge used as often in one
+//    direction as in the other by its triangles (an edge used twice the same way is rejected
+//    with Error). So bodies may share edges or faces (four triangles at such an edge), as
+//    parts of an assembly exported as one STL do; EvenOdd rejects those edges.
 // The mesh is snapped to a fixed-point lattice of 2^-16 voxel (vertices move by at most
 // 2^-17 voxel) and crossings, and their signs, are decided with exact integer predicates
 // and symbolic perturbation of the ray, so rays that pass exactly through vertices or along
@@ -24,7 +26,8 @@
 //
 // Input rules: the mesh is welded by exact position first (unwelded STL soup is fine);
 // triangles with a repeated vertex are ignored; then every edge must belong to exactly two
-// triangles. Open meshes (holes) and non-manifold edges are rejected with voxmesh::Error.
+// triangles (NonZero: to an even number, as often in each direction). Open meshes (holes) and
+// non-manifold edges are rejected with voxmesh::Error.
 #pragma once
 
 #include <voxmesh/voxmesh.hpp>
@@ -64,7 +67,8 @@ struct VoxelizeOptions {
 };
 
 // `mesh` must be closed (every edge in two triangles), and for FillRule::NonZero consistently
-// wound (its two triangles use each edge in opposite directions); open or non-manifold input,
+// wound (each edge used as often in one direction as in the other, by two triangles or, where
+// bodies share an edge or a face, by four or more); open or non-manifold input,
 // an empty mesh, non-finite positions or out-of-range indices are rejected with Error. So
 // are, before anything large is allocated, a grid whose bytes exceed the memory available
 // (MemAvailable in /proc/meminfo, else physical memory, as the volume readers check), a grid

@@ -102,18 +102,40 @@ Soup weld_and_check(const Mesh& mesh, FillRule fill) {
     if (open)
         throw Error("voxelize: the mesh is not closed: " + std::to_string(open) +
                     " edges belong to only one triangle (holes); a watertight mesh is needed to tell inside from outside");
-    if (nonmanifold)
-        throw Error("voxelize: the mesh is not manifold: " + std::to_string(nonmanifold) +
-                    " edges belong to more than two triangles");
-    // Each edge is in exactly two triangles now: they agree on the winding when they use it
-    // in opposite directions, so a directed edge seen twice is a flipped neighbour.
+    if (fill == FillRule::EvenOdd) {
+        if (nonmanifold)
+            throw Error("voxelize: the mesh is not manifold: " + std::to_string(nonmanifold) +
+                        " edges belong to more than two triangles; the NonZero fill rule accepts closed bodies "
+                        "that share edges or faces");
+        return soup;
+    }
+    // NonZero counts signed crossings, so what it needs is that every edge is used as often in
+    // one direction as in the other: two triangles that agree on the winding, or four where two
+    // bodies share an edge or a face (assemblies exported as one STL), which EvenOdd refuses.
     std::sort(directed.begin(), directed.end());
-    std::size_t flipped = 0;
-    for (std::size_t i = 1; i < directed.size(); ++i) flipped += directed[i] == directed[i - 1];
-    if (flipped)
-        throw Error("voxelize: the mesh is not consistently wound: " + std::to_string(flipped) +
-                    " edges are used in the same direction by both their triangles, so the NonZero fill rule "
-                    "cannot tell inside from outside; fix the winding, or use FillRule::EvenOdd (parity, which "
+    const auto uses = [&](std::uint64_t key) {
+        const auto run = std::equal_range(directed.begin(), directed.end(), key);
+        return static_cast<std::size_t>(run.second - run.first);
+    };
+    std::size_t odd = 0, unbalanced = 0;
+    for (std::size_t i = 0; i < directed.size();) {
+        std::size_t j = i;
+        while (j < directed.size() && directed[j] == directed[i]) ++j;
+        const std::uint64_t a = directed[i] >> 32, b = directed[i] & 0xffffffffu;
+        const std::size_t forward = j - i, backward = uses(b << 32 | a);
+        if (a < b || backward == 0) {  // each undirected edge counted once
+            if ((forward + backward) % 2) ++odd;
+            else if (forward != backward) ++unbalanced;
+        }
+        i = j;
+    }
+    if (odd)
+        throw Error("voxelize: the mesh is not closed: " + std::to_string(odd) +
+                    " edges belong to an odd number of triangles; a watertight mesh is needed to tell inside from outside");
+    if (unbalanced)
+        throw Error("voxelize: the mesh is not consistently wound: " + std::to_string(unbalanced) +
+                    " edges are used more often in one direction than in the other by their triangles, so the NonZero "
+                    "fill rule cannot tell inside from outside; fix the winding, or use FillRule::EvenOdd (parity, which "
                     "ignores the winding)");
     return soup;
 }
