@@ -888,6 +888,10 @@ TEST_CASE("cli: voxelize and sculpt --fill", "[cli]") {
     const std::string stack_out = s.path("stack.nrrd");
     expect_rejected(s, "voxelize " + quote(stacked) + " -o " + quote(stack_out) + " --resolution 16", "stack.stl", stack_out,
                     "not manifold: 5 edges belong to more than two triangles; --fill nonzero accepts");
+    const Result info = run(s, "info " + quote(stacked));
+    REQUIRE(info.code == 0);
+    CHECK(info.out.find("not manifold: 5 edges in three or more triangles, euler 5, 1 piece (voxelize takes it only "
+                        "with --fill nonzero") != std::string::npos);
     const Result st = run(s, "sculpt " + quote(stacked) + " --resolution 16 --fill nonzero -o " + quote(s.path("st.stl")));
     INFO(st.err);
     REQUIRE(st.code == 0);

@@ -84,6 +84,13 @@ int run_model_info(const InputPath& input) {
                   << "area:      " << format_double(area) << "\n"
                   << "volume:    " << format_double(volume)
                   << (volume < 0 ? " (negative: the triangles face inward)" : "") << "\n";
+    else if (t.boundary_edges == 0)
+        // No hole, but edges shared by more than two triangles: bodies that share a face or an
+        // edge, which the NonZero rule fills as their union (if the winding balances there).
+        std::cout << "topology:  not manifold: " << t.nonmanifold_edges << " edges in three or more triangles, euler "
+                  << t.euler << ", " << pieces_text(t.components)
+                  << " (voxelize takes it only with --fill nonzero: bodies sharing edges or faces, consistently wound)\n"
+                  << "area:      " << format_double(area) << "\n";
     else
         std::cout << "topology:  open: " << t.boundary_edges << " boundary edges, " << t.nonmanifold_edges
                   << " edges in three or more triangles, euler " << t.euler << ", " << pieces_text(t.components)
