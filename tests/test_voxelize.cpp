@@ -547,15 +547,23 @@ TEST_CASE("voxelize: open, non-manifold and empty meshes are rejected", "[voxeli
     open.indices.resize(open.indices.size() - 3);
     CHECK_THROWS_WITH(voxmesh::voxelize(open, vo), Catch::Contains("not closed"));
 
-    // Two closed tetrahedra sharing the edge 0-1: that edge is in four triangles.
-    voxmesh::Mesh nm;
-    nm.positions = {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 1, 0, -1, 0, 0, 0, -1, 0};
-    auto tet = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c, std::uint32_t d) {
-        for (std::uint32_t i : {a, b, c, a, d, b, b, d, c, c, d, a}) nm.indices.push_back(i);
-    };
-    tet(0, 1, 2, 3);
-    tet(0, 1, 4, 5);
-    CHECK_THROWS_WITH(voxmesh::voxelize(nm, vo), Catch::Contains("not manifold"));
+    // A box with a wall across it at x = 0.5, welded to its faces: the wall's rim edges are in
+    // three triangles, and which side of the wall is inside is undefined.
+    voxmesh::Mesh walled = subdivided_box({0, 0, 0}, {1, 1, 1}, 2);
+    const auto wall_base = static_cast<std::uint32_t>(walled.vertex_count());
+    for (int b = 0; b <= 2; ++b)
+        for (int a = 0; a <= 2; ++a) walled.positions.insert(walled.positions.end(), {0.5f, 0.5f * a, 0.5f * b});
+    for (std::uint32_t b = 0; b < 2; ++b)
+        for (std::uint32_t a = 0; a < 2; ++a) {
+            const std::uint32_t v = wall_base + a + 3 * b;
+            walled.indices.insert(walled.indices.end(), {v, v + 1, v + 4, v, v + 4, v + 3});
+        }
+    for (const auto fill : {voxmesh::FillRule::EvenOdd, voxmesh::FillRule::NonZero}) {
+        vo.fill = fill;
+        CHECK_THROWS_WITH(voxmesh::voxelize(walled, vo),
+                          Catch::Contains("not closed: 8 edges belong to an odd number of triangles, three or more"));
+    }
+    vo.fill = voxmesh::FillRule::EvenOdd;
 
     voxmesh::Mesh empty;
     CHECK_THROWS_WITH(voxmesh::voxelize(empty, vo), Catch::Contains("no triangles"));
@@ -816,29 +824,42 @@ TEST_CASE("voxelize: NonZero does not depend on the thread count", "[voxelize]")
 }
 
 // Bodies exported together that share faces or edges (an assembly in one STL): those edges are
-// in four triangles. NonZero only needs each edge used as often in each direction, so it fills
-// their union; EvenOdd refuses them as before.
-TEST_CASE("voxelize: bodies sharing a face or an edge: NonZero fills their union", "[voxelize]") {
+// in four triangles, and a shared face's two copies cancel. Both rules fill the union.
+TEST_CASE("voxelize: bodies sharing a face or an edge: both rules fill their union", "[voxelize]") {
     const voxmesh::Mesh face = joined(subdivided_box({0, 0, 0}, {1, 1, 1}, 2), subdivided_box({0, 0, 1}, {1, 1, 2}, 2));
     const voxmesh::Mesh edge = joined(subdivided_box({0, 0, 0}, {1, 1, 1}, 2), subdivided_box({1, 1, 0}, {2, 2, 1}, 2));
     for (const voxmesh::Mesh* model : {&face, &edge}) {
-        for (const auto field : {voxmesh::VoxelField::Distance, voxmesh::VoxelField::Occupancy}) {
-            INFO((model == &face ? "face" : "edge") << ", field " << int(field));
-            const Meshed u = voxelize_and_mesh(*model, voxmesh::FillRule::NonZero, field, 32);
-            CHECK(u.topology.closed());
-            CHECK(u.mesh_volume == Approx(2.0).epsilon(0.02));
-            if (model == &face) {
-                CHECK(u.topology.components == 1);
-                CHECK(u.topology.euler == 2);
+        for (const auto fill : {voxmesh::FillRule::EvenOdd, voxmesh::FillRule::NonZero})
+            for (const auto field : {voxmesh::VoxelField::Distance, voxmesh::VoxelField::Occupancy}) {
+                INFO((model == &face ? "face" : "edge") << ", fill " << int(fill) << ", field " << int(field));
+                const Meshed u = voxelize_and_mesh(*model, fill, field, 32);
+                CHECK(u.topology.closed());
+                CHECK(u.mesh_volume == Approx(2.0).epsilon(0.02));
+                if (model == &face) {
+                    CHECK(u.topology.components == 1);
+                    CHECK(u.topology.euler == 2);
+                }
             }
-        }
-        voxmesh::VoxelizeOptions vo;
-        vo.resolution = 16;
-        CHECK_THROWS_WITH(voxmesh::voxelize(*model, vo), Catch::Contains("not manifold") && Catch::Contains("NonZero"));
     }
+    // The shared face is gone, not buried: the distance inside is to the union's surface (the
+    // box [0,1]x[0,1]x[0,2]), exact in the band, not to the plane z = 1 the bodies meet on.
+    voxmesh::VoxelizeOptions vo;
+    vo.resolution = 32;
+    vo.fill = voxmesh::FillRule::NonZero;
+    const voxmesh::Volume field = voxmesh::voxelize(face, vo);
+    const auto* f = static_cast<const float*>(field.data);
+    const double h = field.spacing[0];
+    std::size_t near_the_seam = 0;
+    for_each_sample(field, [&](std::size_t i, double x, double y, double z) {
+        const double to_box = std::min({x, 1 - x, y, 1 - y, z, 2 - z});
+        if (to_box <= 0 || to_box > 2.5 * h || std::abs(z - 1) > h) return;
+        ++near_the_seam;
+        CHECK(f[i] == Approx(to_box).margin(1e-5));
+    });
+    CHECK(near_the_seam > 0);
 }
 
-TEST_CASE("voxelize: NonZero refuses edges used unevenly, and a cancelling pair changes nothing", "[voxelize]") {
+TEST_CASE("voxelize: coincident triangles cancel as their crossings do", "[voxelize]") {
     const voxmesh::Mesh box = subdivided_box({0, 0, 0}, {1, 1, 1}, 2);
     const auto with_copies = [&](std::size_t t, int same, int flipped) {
         voxmesh::Mesh m = box;
@@ -847,20 +868,41 @@ TEST_CASE("voxelize: NonZero refuses edges used unevenly, and a cancelling pair 
         for (int i = 0; i < flipped; ++i) m.indices.insert(m.indices.end(), {a, c, b});
         return m;
     };
+    const auto same_volume = [](const voxmesh::Mesh& a, const voxmesh::Mesh& b, voxmesh::VoxelizeOptions vo) {
+        for (const auto field : {voxmesh::VoxelField::Distance, voxmesh::VoxelField::Occupancy}) {
+            vo.field = field;
+            const voxmesh::Volume va = voxmesh::voxelize(a, vo), vb = voxmesh::voxelize(b, vo);
+            REQUIRE(va.byte_size() == vb.byte_size());
+            CHECK(std::memcmp(va.data, vb.data, va.byte_size()) == 0);
+        }
+    };
     voxmesh::VoxelizeOptions vo;
     vo.resolution = 16;
     vo.fill = voxmesh::FillRule::NonZero;
-    // One copy: its edges are in three triangles, an odd number (a fin, not a closed surface).
+    // One copy the same way: winding 2 across that face, but its edges are in three triangles.
     CHECK_THROWS_WITH(voxmesh::voxelize(with_copies(5, 1, 0), vo),
                       Catch::Contains("not closed: 3 edges belong to an odd number of triangles"));
-    // Two copies the same way: four triangles, three of them one way.
+    // Two copies the same way: four triangles at each edge, three of them one way.
     CHECK_THROWS_WITH(voxmesh::voxelize(with_copies(5, 2, 0), vo),
                       Catch::Contains("not consistently wound: 3 edges are used more often in one direction"));
     // A copy each way: a two-sided sheet on the surface, whose crossings cancel: the same volume.
-    for (const auto field : {voxmesh::VoxelField::Distance, voxmesh::VoxelField::Occupancy}) {
-        vo.field = field;
-        const voxmesh::Volume plain = voxmesh::voxelize(box, vo), sheet = voxmesh::voxelize(with_copies(5, 1, 1), vo);
-        REQUIRE(plain.byte_size() == sheet.byte_size());
-        CHECK(std::memcmp(plain.data, sheet.data, plain.byte_size()) == 0);
+    same_volume(box, with_copies(5, 1, 1), vo);
+    same_volume(box, with_copies(5, 2, 2), vo);
+
+    // Parity: any two coincident triangles cancel, whatever their winding.
+    vo.fill = voxmesh::FillRule::EvenOdd;
+    CHECK_THROWS_WITH(voxmesh::voxelize(with_copies(5, 1, 0), vo),
+                      Catch::Contains("not closed: 3 edges belong to only one triangle"));
+    same_volume(box, with_copies(5, 2, 0), vo);
+    same_volume(box, with_copies(5, 1, 1), vo);
+
+    // A sheet alone encloses nothing.
+    voxmesh::Mesh sheet;
+    sheet.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    sheet.indices = {0, 1, 2, 0, 2, 1};
+    for (const auto fill : {voxmesh::FillRule::EvenOdd, voxmesh::FillRule::NonZero}) {
+        vo.fill = fill;
+        CHECK_THROWS_WITH(voxmesh::voxelize(sheet, vo), Catch::Contains("has a coincident one") &&
+                                                            Catch::Contains("encloses nothing"));
     }
 }

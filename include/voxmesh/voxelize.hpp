@@ -17,17 +17,20 @@
 //    and is filled too; an inward shell inside an outward one cancels it: a cavity, as solids
 //    with voids are modelled). Needs consistent winding: every edge used as often in one
 //    direction as in the other by its triangles (an edge used twice the same way is rejected
-//    with Error). So bodies may share edges or faces (four triangles at such an edge), as
-//    parts of an assembly exported as one STL do; EvenOdd rejects those edges.
+//    with Error).
 // The mesh is snapped to a fixed-point lattice of 2^-16 voxel (vertices move by at most
 // 2^-17 voxel) and crossings, and their signs, are decided with exact integer predicates
 // and symbolic perturbation of the ray, so rays that pass exactly through vertices or along
 // edges count every surface crossing exactly once: no streaks.
 //
 // Input rules: the mesh is welded by exact position first (unwelded STL soup is fine);
-// triangles with a repeated vertex are ignored; then every edge must belong to exactly two
-// triangles (NonZero: to an even number, as often in each direction). Open meshes (holes) and
-// non-manifold edges are rejected with voxmesh::Error.
+// triangles with a repeated vertex are ignored; coincident triangles (the same three corners)
+// cancel as their crossings do: any two under EvenOdd, two wound opposite ways under NonZero
+// (a face two bodies share is such a pair, so it is not a surface inside the union). Then the
+// surface must be closed: every edge in an even number of triangles, two or, where bodies
+// share an edge, four or more (NonZero: as many using it one way as the other). Holes (an edge
+// in one triangle) and walls or fins (three or more, an odd number) are rejected with
+// voxmesh::Error.
 #pragma once
 
 #include <voxmesh/voxmesh.hpp>
@@ -66,9 +69,9 @@ struct VoxelizeOptions {
     unsigned threads = 0;          // 0 = all cores; the result does not depend on it
 };
 
-// `mesh` must be closed (every edge in two triangles), and for FillRule::NonZero consistently
-// wound (each edge used as often in one direction as in the other, by two triangles or, where
-// bodies share an edge or a face, by four or more); open or non-manifold input,
+// `mesh` must be closed (every edge in an even number of triangles once coincident ones cancel:
+// two, or four or more where bodies share an edge), and for FillRule::NonZero consistently wound
+// (each edge used as often in one direction as in the other); open input, walls or fins,
 // an empty mesh, non-finite positions or out-of-range indices are rejected with Error. So
 // are, before anything large is allocated, a grid whose bytes exceed the memory available
 // (MemAvailable in /proc/meminfo, else physical memory, as the volume readers check), a grid

@@ -223,7 +223,7 @@ typedef enum voxmesh_voxel_field {
 } voxmesh_voxel_field;
 typedef enum voxmesh_fill_rule {
     VOXMESH_FILL_EVENODD = 0, /* inside after an odd number of crossings (any winding) */
-    VOXMESH_FILL_NONZERO = 1  /* the union of closed shells (overlapping bodies, shared faces); needs consistent winding */
+    VOXMESH_FILL_NONZERO = 1  /* the union of closed shells (overlapping bodies); needs consistent winding */
 } voxmesh_fill_rule;
 typedef struct voxmesh_voxelize_options {
     size_t resolution; /* voxels along the longest side of the bounding box (2..4096) */

@@ -665,8 +665,7 @@ def voxelize(mesh, resolution=128, padding=2, field="distance", band=3.0, thread
     field "distance" (float32, positive inside: extract it at iso 0) or "occupancy" (uint8, 255
     inside: extract it at iso 127.5); spacing and origin put its mesh back in the model's units.
     fill "evenodd" (inside after an odd number of crossings, any winding) or "nonzero" (the union
-    of overlapping or nested closed shells, which may share edges and faces; needs consistent
-    winding)."""
+    of overlapping or nested closed shells; needs consistent winding)."""
     if not isinstance(mesh, Mesh):
         mesh = Mesh.from_arrays(*mesh)
     options = _voxelize_options(resolution, padding, field, band, threads, fill)

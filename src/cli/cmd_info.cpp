@@ -86,10 +86,10 @@ int run_model_info(const InputPath& input) {
                   << (volume < 0 ? " (negative: the triangles face inward)" : "") << "\n";
     else if (t.boundary_edges == 0)
         // No hole, but edges shared by more than two triangles: bodies that share a face or an
-        // edge, which the NonZero rule fills as their union (if the winding balances there).
+        // edge, whose union voxelize fills, or a wall or fin (an odd number), which it refuses.
         std::cout << "topology:  not manifold: " << t.nonmanifold_edges << " edges in three or more triangles, euler "
                   << t.euler << ", " << pieces_text(t.components)
-                  << " (voxelize takes it only with --fill nonzero: bodies sharing edges or faces, consistently wound)\n"
+                  << " (voxelize takes bodies sharing edges or faces, each edge in an even number of triangles)\n"
                   << "area:      " << format_double(area) << "\n";
     else
         std::cout << "topology:  open: " << t.boundary_edges << " boundary edges, " << t.nonmanifold_edges

@@ -322,8 +322,7 @@ void add_fill_option(CLI::App* sub, std::string& fill) {
     sub->add_option("--fill", fill,
                     "which samples are inside: evenodd, after an odd number of surface crossings (default; any "
                     "winding, but overlapping shells leave their overlap out and nested shells a hollow); nonzero, "
-                    "the union of the closed shells (overlapping CAD bodies, or bodies sharing edges and faces; needs "
-                    "consistent winding)")
+                    "the union of the closed shells (overlapping CAD bodies; needs consistent winding)")
         ->check(CLI::IsMember({"evenodd", "nonzero"}));
 }
 

@@ -49,8 +49,50 @@ using detail::whole_range;
 // A welded, validated triangle list.
 struct Soup {
     std::vector<Vec3> points;                        // model coordinates, welded
-    std::vector<std::array<std::uint32_t, 3>> tris;  // non-degenerate (three distinct ids)
+    std::vector<std::array<std::uint32_t, 3>> tris;  // non-degenerate (three distinct ids), none cancelled
 };
+
+using Triangle = std::array<std::uint32_t, 3>;
+
+// Coincident triangles (the same three corners) cancel as their crossings do: any two under
+// EvenOdd (parity), two wound opposite ways under NonZero (winding). A face that two bodies
+// share is such a pair: left in, it was a surface inside the union that the distance field
+// measured to. What is left keeps the mesh's order.
+std::vector<Triangle> cancel_coincident(const std::vector<Triangle>& tris, FillRule fill) {
+    struct Entry {
+        Triangle corners;  // smallest id first, then the other two ascending
+        int sign;          // +1 where (smallest, next, last) in the triangle's own order ascends
+        std::size_t index;
+    };
+    std::vector<Entry> entries(tris.size());
+    for (std::size_t i = 0; i < tris.size(); ++i) {
+        const Triangle& t = tris[i];
+        const int m = t[0] < t[1] ? (t[0] < t[2] ? 0 : 2) : (t[1] < t[2] ? 1 : 2);
+        const std::uint32_t b = t[(m + 1) % 3], c = t[(m + 2) % 3];
+        entries[i] = {{t[m], std::min(b, c), std::max(b, c)}, b < c ? 1 : -1, i};
+    }
+    std::sort(entries.begin(), entries.end(), [](const Entry& x, const Entry& y) {
+        return x.corners != y.corners ? x.corners < y.corners : x.index < y.index;
+    });
+    std::vector<char> keep(tris.size(), 0);
+    for (std::size_t i = 0; i < entries.size();) {
+        std::size_t j = i;
+        long net = 0;
+        for (; j < entries.size() && entries[j].corners == entries[i].corners; ++j) net += entries[j].sign;
+        if (fill == FillRule::EvenOdd) {
+            if ((j - i) % 2) keep[entries[i].index] = 1;
+        } else {
+            const int sign = net > 0 ? 1 : -1;
+            for (std::size_t k = i; k < j && net != 0; ++k)
+                if (entries[k].sign == sign) keep[entries[k].index] = 1, net -= sign;
+        }
+        i = j;
+    }
+    std::vector<Triangle> kept;
+    for (std::size_t i = 0; i < tris.size(); ++i)
+        if (keep[i]) kept.push_back(tris[i]);
+    return kept;
+}
 
 Soup weld_and_check(const Mesh& mesh, FillRule fill) {
     detail::check_mesh_arrays(mesh, "voxelize: ");
@@ -74,64 +116,64 @@ Soup weld_and_check(const Mesh& mesh, FillRule fill) {
         remap[order[i]] = static_cast<std::uint32_t>(soup.points.size() - 1);
     }
 
-    std::vector<std::uint64_t> edges, directed;  // directed: only NonZero needs the winding
-    edges.reserve(mesh.indices.size());
-    if (fill == FillRule::NonZero) directed.reserve(mesh.indices.size());
+    std::vector<Triangle> tris;
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-        const std::array<std::uint32_t, 3> tri{remap[mesh.indices[3 * t]], remap[mesh.indices[3 * t + 1]],
-                                               remap[mesh.indices[3 * t + 2]]};
-        if (tri[0] == tri[1] || tri[1] == tri[2] || tri[2] == tri[0]) continue;  // no area, no edges
-        soup.tris.push_back(tri);
+        const Triangle tri{remap[mesh.indices[3 * t]], remap[mesh.indices[3 * t + 1]], remap[mesh.indices[3 * t + 2]]};
+        if (tri[0] != tri[1] && tri[1] != tri[2] && tri[2] != tri[0]) tris.push_back(tri);  // else no area, no edges
+    }
+    if (tris.empty()) throw Error("voxelize: every triangle of the mesh is degenerate (no area)");
+    soup.tris = cancel_coincident(tris, fill);
+    if (soup.tris.empty())
+        throw Error(std::string("voxelize: every triangle of the mesh has a coincident one (the same corners") +
+                    (fill == FillRule::NonZero ? ", wound the other way" : "") +
+                    ") that cancels it: a two-sided sheet, which encloses nothing");
+    if (soup.tris.size() > 0xffffffffull) throw Error("voxelize: the mesh has too many triangles (more than 2^32)");
+
+    std::vector<std::uint64_t> edges, directed;  // directed: only NonZero needs the winding
+    edges.reserve(3 * soup.tris.size());
+    if (fill == FillRule::NonZero) directed.reserve(3 * soup.tris.size());
+    for (const Triangle& tri : soup.tris)
         for (int e = 0; e < 3; ++e) {
             const std::uint64_t a = tri[e], b = tri[(e + 1) % 3];
             edges.push_back(a < b ? (a << 32 | b) : (b << 32 | a));
             if (fill == FillRule::NonZero) directed.push_back(a << 32 | b);
         }
-    }
-    if (soup.tris.empty()) throw Error("voxelize: every triangle of the mesh is degenerate (no area)");
-    if (soup.tris.size() > 0xffffffffull) throw Error("voxelize: the mesh has too many triangles (more than 2^32)");
+    // The surface must be closed: every edge in an even number of triangles, two or, where
+    // bodies share an edge or a face, four or more. An odd number is a hole (one) or a wall or
+    // fin meeting the surface (three or more), across which inside and outside are undefined.
     std::sort(edges.begin(), edges.end());
-    std::size_t open = 0, nonmanifold = 0;
+    std::size_t open = 0, odd = 0;
     for (std::size_t i = 0; i < edges.size();) {
         std::size_t j = i;
         while (j < edges.size() && edges[j] == edges[i]) ++j;
         if (j - i == 1) ++open;
-        if (j - i > 2) ++nonmanifold;
+        else if ((j - i) % 2) ++odd;
         i = j;
     }
     if (open)
         throw Error("voxelize: the mesh is not closed: " + std::to_string(open) +
                     " edges belong to only one triangle (holes); a watertight mesh is needed to tell inside from outside");
-    if (fill == FillRule::EvenOdd) {
-        if (nonmanifold)
-            throw Error("voxelize: the mesh is not manifold: " + std::to_string(nonmanifold) +
-                        " edges belong to more than two triangles; the NonZero fill rule accepts closed bodies "
-                        "that share edges or faces");
-        return soup;
-    }
-    // NonZero counts signed crossings, so what it needs is that every edge is used as often in
-    // one direction as in the other: two triangles that agree on the winding, or four where two
-    // bodies share an edge or a face (assemblies exported as one STL), which EvenOdd refuses.
+    if (odd)
+        throw Error("voxelize: the mesh is not closed: " + std::to_string(odd) +
+                    " edges belong to an odd number of triangles, three or more (a wall or a fin meeting the surface); "
+                    "a watertight mesh is needed to tell inside from outside");
+    if (fill == FillRule::EvenOdd) return soup;
+    // NonZero counts signed crossings: every edge must be used as often in one direction as in
+    // the other (two triangles that agree on the winding, or two such pairs where bodies meet).
     std::sort(directed.begin(), directed.end());
     const auto uses = [&](std::uint64_t key) {
         const auto run = std::equal_range(directed.begin(), directed.end(), key);
         return static_cast<std::size_t>(run.second - run.first);
     };
-    std::size_t odd = 0, unbalanced = 0;
+    std::size_t unbalanced = 0;
     for (std::size_t i = 0; i < directed.size();) {
         std::size_t j = i;
         while (j < directed.size() && directed[j] == directed[i]) ++j;
         const std::uint64_t a = directed[i] >> 32, b = directed[i] & 0xffffffffu;
-        const std::size_t forward = j - i, backward = uses(b << 32 | a);
-        if (a < b || backward == 0) {  // each undirected edge counted once
-            if ((forward + backward) % 2) ++odd;
-            else if (forward != backward) ++unbalanced;
-        }
+        const std::size_t backward = uses(b << 32 | a);
+        if ((a < b || backward == 0) && j - i != backward) ++unbalanced;  // each edge counted once
         i = j;
     }
-    if (odd)
-        throw Error("voxelize: the mesh is not closed: " + std::to_string(odd) +
-                    " edges belong to an odd number of triangles; a watertight mesh is needed to tell inside from outside");
     if (unbalanced)
         throw Error("voxelize: the mesh is not consistently wound: " + std::to_string(unbalanced) +
                     " edges are used more often in one direction than in the other by their triangles, so the NonZero "
