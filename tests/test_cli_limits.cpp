@@ -379,8 +379,8 @@ TEST_CASE("cli: an unknown VOXMESH_ISA is named, portable in any case is not", "
     const std::string args = "mesh " + quote(data_file("headsq.nrrd")) + " --iso 499.5 --backend cpu -o " + quote(s.dir + "/o.stl");
     const vmtest::ProgramResult typo = vmtest::run_program(VOXMESH_CLI_PATH, args, s.dir, "VOXMESH_ISA=portble");
     CHECK(typo.code == 0);
-    CHECK(typo.err.find("VOXMESH_ISA='portble' is not 'portable' or 'native'; ignored") != std::string::npos);
-    for (const char* fine : {"PORTABLE", "portable", "native", ""}) {
+    CHECK(typo.err.find("VOXMESH_ISA='portble' is not 'portable', 'popcnt' or 'native'; ignored") != std::string::npos);
+    for (const char* fine : {"PORTABLE", "portable", "Popcnt", "native", ""}) {
         const vmtest::ProgramResult r =
             vmtest::run_program(VOXMESH_CLI_PATH, args, s.dir, "VOXMESH_ISA=" + quote(fine));
         INFO(fine);

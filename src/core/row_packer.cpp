@@ -38,21 +38,26 @@ Word pack_tail(const T* values, std::size_t n, T threshold, bool& bad) {
     return w;
 }
 
-// VOXMESH_ISA: "portable" (any case) forces the portable code; unset, empty or "native" leaves
-// the choice to the processor. Another value (a typo) is named once on stderr rather than
-// silently timing the AVX2 code as if it were the portable one.
-bool portable_forced() {
-    static const bool forced = [] {
+// VOXMESH_ISA (any case): "portable" forces the portable code; "popcnt" allows POPCNT but no
+// AVX2, as an older x86-64 processor runs (classify's POPCNT copy beside the portable packers
+// and generator, a mix no AVX2 machine runs otherwise); unset, empty or "native" leaves the
+// choice to the processor. Another value (a typo) is named once on stderr rather than silently
+// timing the AVX2 code as if it were the portable one.
+enum class IsaLimit { None, Popcnt, Portable };
+
+IsaLimit isa_limit() {
+    static const IsaLimit limit = [] {
         const char* isa = std::getenv("VOXMESH_ISA");
-        if (!isa) return false;
+        if (!isa) return IsaLimit::None;
         std::string value(isa);
         std::transform(value.begin(), value.end(), value.begin(), [](unsigned char c) { return std::tolower(c); });
-        if (value == "portable") return true;
+        if (value == "portable") return IsaLimit::Portable;
+        if (value == "popcnt") return IsaLimit::Popcnt;
         if (!value.empty() && value != "native")
-            std::fprintf(stderr, "voxmesh: warning: VOXMESH_ISA='%s' is not 'portable' or 'native'; ignored\n", isa);
-        return false;
+            std::fprintf(stderr, "voxmesh: warning: VOXMESH_ISA='%s' is not 'portable', 'popcnt' or 'native'; ignored\n", isa);
+        return IsaLimit::None;
     }();
-    return forced;
+    return limit;
 }
 
 }  // namespace
@@ -190,7 +195,7 @@ RowPacker<T> row_packer() {
 
 bool use_avx2() {
 #ifdef VOXMESH_X86_DISPATCH
-    static const bool use = !portable_forced() && __builtin_cpu_supports("avx2");
+    static const bool use = isa_limit() == IsaLimit::None && __builtin_cpu_supports("avx2");
     return use;
 #else
     return false;
@@ -199,7 +204,7 @@ bool use_avx2() {
 
 bool cpu_has_popcnt() {
 #ifdef VOXMESH_X86_DISPATCH
-    static const bool has = !portable_forced() && __builtin_cpu_supports("popcnt");
+    static const bool has = isa_limit() != IsaLimit::Portable && __builtin_cpu_supports("popcnt");
     return has;
 #else
     return false;

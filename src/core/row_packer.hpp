@@ -26,20 +26,22 @@ bool pack_row_portable(const T* values, std::size_t nx, T threshold, Word* out);
 template <class T>
 RowPacker<T> avx2_row_packer();
 
-// The fastest packer this processor runs; the environment variable VOXMESH_ISA=portable
-// forces the portable one (to compare, or to rule the vector code out).
+// The fastest packer this processor runs; the environment variable VOXMESH_ISA=portable (or
+// popcnt) forces the portable one (to compare, or to rule the vector code out).
 template <class T>
 RowPacker<T> row_packer();
 
-// True when the processor has AVX2 and VOXMESH_ISA does not say portable: other AVX2 copies
+// True when the processor has AVX2 and VOXMESH_ISA does not limit it: other AVX2 copies
 // (value_range's) follow the packers' choice, so that the portable run tests them too.
 bool use_avx2();
 
-// True when the processor has POPCNT (and the build may use it): see cpu_engine.cpp.
+// True when the processor has POPCNT (and the build may use it), unless VOXMESH_ISA=portable:
+// see cpu_engine.cpp.
 bool cpu_has_popcnt();
 
 // True when the processor has POPCNT, AVX2, BMI1 and BMI2 (and the build may use them): the
-// generator has a copy compiled for them (cpu_engine.cpp). VOXMESH_ISA=portable turns it off too.
+// generator has a copy compiled for them (cpu_engine.cpp). VOXMESH_ISA=portable or popcnt turns
+// it off too.
 bool cpu_has_avx2_bmi2();
 
 }  // namespace voxmesh::detail
