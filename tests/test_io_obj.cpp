@@ -125,6 +125,27 @@ TEST_CASE("obj: normals are kept only when each vertex's corners name its own no
     CHECK(read_text(s, vs + "vn 0 0 1\nvn nan 1 0\nvn 1 0 inf\nf 1//1 2//2 3//3\n").normals.empty());
 }
 
+// Found by a differential review: a lone '\r' did not end a line (the file was one long
+// statement), and a UTF-8 byte order mark made the first "v" an unknown statement, silently
+// shifting every vertex index after it.
+TEST_CASE("obj: lines ending in a lone CR, and a byte order mark, read as with LF", "[io][obj]") {
+    Scratch s;
+    const std::string lf = std::string(kSquare) + "# quad\no q\nf 1 2 \\\n3 4\nf -4 -2 -1\n";
+    const Mesh expected = read_text(s, lf);
+    REQUIRE(expected.triangle_count() == 3);
+    REQUIRE(expected.positions[0] == 0.0f);
+    std::string cr = lf;
+    for (char& c : cr)
+        if (c == '\n') c = '\r';
+    for (const std::string& text : {cr, "\xEF\xBB\xBF" + lf, "\xEF\xBB\xBF" + cr, lf + "\r\r\n\r"}) {
+        const Mesh m = read_text(s, text);
+        CHECK(m.positions == expected.positions);
+        CHECK(m.indices == expected.indices);
+    }
+    // Line numbers in errors count lone-CR lines.
+    check_fails(s, std::string(kSquare) + "\r\rf 1 2 9\r", 7, "out of range");
+}
+
 TEST_CASE("obj: bad files are errors naming the file, the line and the problem", "[io][obj][errors]") {
     Scratch s;
     const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";

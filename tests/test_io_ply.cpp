@@ -215,6 +215,38 @@ TEST_CASE("ply: a NaN or infinite normal drops the normals, as in read_obj; the 
     }
 }
 
+// Found by a differential review: a header whose lines end in a lone '\r' (classic Mac OS
+// exporters) was "not a PLY file", and so was one after a UTF-8 byte order mark.
+TEST_CASE("ply: header lines ending in a lone CR, and a byte order mark, read as with LF", "[io][ply]") {
+    Scratch s;
+    // The first body byte is '\n' (flags 10): after "end_header\r" it is data, not a CRLF's end.
+    Elem vertex{"vertex", {{"uchar", "flags", ""}, {"float", "x", ""}, {"float", "y", ""}, {"float", "z", ""}},
+                {{{10}, {0}, {0}, {0}}, {{13}, {1}, {0}, {0}}, {{10}, {0}, {1}, {0}}, {{13}, {1}, {1}, {0}}}};
+    Elem face{"face", {{"int", "vertex_indices", "uchar"}}, {{{0, 1, 3, 2}}}};
+    for (const char* format : {"ascii", "binary_little_endian", "binary_big_endian"}) {
+        INFO(format);
+        const std::string lf = encode({vertex, face}, format, "comment made on a Mac\nobj_info x\n");
+        const Mesh expected = read_ply(s.file("lf.ply", lf));
+        REQUIRE(expected.indices == std::vector<std::uint32_t>{0, 1, 3, 0, 3, 2});
+        const std::size_t body = lf.find("end_header\n") + 11;
+        std::string cr = lf;
+        std::replace(cr.begin(), cr.begin() + static_cast<std::ptrdiff_t>(body), '\n', '\r');
+        if (std::string(format) == "ascii") std::replace(cr.begin(), cr.end(), '\n', '\r');
+        for (const std::string& text : {cr, "\xEF\xBB\xBF" + lf, "\xEF\xBB\xBF" + cr}) {
+            const Mesh m = read_ply(s.file("other.ply", text));
+            CHECK(same_bits(m.positions, expected.positions));
+            CHECK(m.indices == expected.indices);
+        }
+    }
+    // Errors count lone-CR lines, in the header and in ASCII data.
+    const std::string header = "ply\rformat ascii 1.0\relement vertex 1\rproperty float x\rproperty float y\r"
+                               "property float z\r";
+    CHECK_THROWS_WITH(read_ply(s.file("bad.ply", header + "bogus\rend_header\r0 0 0\r")),
+                      Contains("line 7: unknown header line"));
+    CHECK_THROWS_WITH(read_ply(s.file("bad.ply", header + "end_header\r\r0 0 q\r")),
+                      Contains("line 9: vertex 0: property 'z': 'q'"));
+}
+
 TEST_CASE("ply: point clouds and empty meshes", "[io][ply]") {
     Scratch s;
     Elem vertex{"vertex", {{"float", "x", ""}, {"float", "y", ""}, {"float", "z", ""}}, {{{1}, {2}, {3}}, {{4}, {5}, {6}}}};

@@ -85,6 +85,28 @@ TEST_CASE("stl: ASCII reads to the same welded mesh", "[io][stl]") {
     CHECK(two.vertex_count() == 4);  // -0 and +0 weld
 }
 
+// Found by a differential review: a lone '\r' (classic Mac OS) did not end the solid's name,
+// which then ran over the whole file; a UTF-8 byte order mark hid "solid".
+TEST_CASE("stl: ASCII lines ending in a lone CR, and a byte order mark, read as with LF", "[io][stl]") {
+    Scratch s;
+    const std::string lf = "solid My Part facet 1\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+                           "vertex 0 1 0\nendloop\nendfacet\nendsolid My Part\nsolid\nendsolid\n";
+    const Mesh expected = read_stl(s.file("lf.stl", lf));
+    REQUIRE(expected.triangle_count() == 1);
+    std::string cr = lf, crlf;
+    for (char& c : cr)
+        if (c == '\n') c = '\r';
+    for (char c : lf) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+    for (const std::string& text : {cr, crlf, "\xEF\xBB\xBF" + lf, "\xEF\xBB\xBF" + cr}) {
+        const Mesh m = read_stl(s.file("other.stl", text));
+        CHECK(m.positions == expected.positions);
+        CHECK(m.indices == expected.indices);
+    }
+    // Errors count lone-CR lines too.
+    const std::string path = s.file("bad.stl", "solid x\rfacet normal 0 0 1\router loop\rvertex 0 0 zero\r");
+    CHECK_THROWS_WITH(read_stl(path), Contains("ASCII STL line 4: 'zero' is not a number"));
+}
+
 TEST_CASE("stl: bad files are errors naming the file", "[io][stl][errors]") {
     Scratch s;
     auto fails = [&](const std::string& name, const std::string& bytes, const std::string& what) {

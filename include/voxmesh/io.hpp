@@ -183,7 +183,8 @@ std::vector<unsigned char> write_nrrd_to_memory(const VolumeView& volume, const 
 // filled, normals empty. Triangles keep the file's order and winding; non-finite
 // coordinates are an error, and so is an ASCII number beyond the float range (one too small
 // for a float reads as 0). No triangles (an 84-byte binary file, "solid"/"endsolid") is an
-// empty mesh, as write_mesh writes one.
+// empty mesh, as write_mesh writes one. ASCII lines may end in "\n", "\r\n" or a lone "\r",
+// after a UTF-8 byte order mark or none.
 Mesh read_stl(const std::string& path);
 // PLY: ascii, binary_little_endian or binary_big_endian 1.0. The "vertex" element's x, y, z
 // (any PLY scalar type, read as float) become positions, and its nx, ny, nz normals where all
@@ -194,7 +195,8 @@ Mesh read_stl(const std::string& path);
 // them (not welded). A file with vertices and no faces (a point cloud) reads as vertices with
 // no triangles. Element counts are checked against the file's size before anything is
 // allocated; a face with fewer than three corners, an index outside the vertices, and a
-// non-finite or beyond-float coordinate are errors.
+// non-finite or beyond-float coordinate are errors. Header lines end in "\n", "\r\n" or, when
+// the first line does, a lone "\r"; a UTF-8 byte order mark before "ply" is skipped.
 Mesh read_ply(const std::string& path);
 // Wavefront OBJ: "v x y z" positions (a w or r g b [a] after them is ignored) and "f" faces
 // (v, v/vt, v/vt/vn, v//vn; negative indices count back from the latest item), polygons
@@ -203,13 +205,15 @@ Mesh read_ply(const std::string& path);
 // "v" and every corner names the normal of its own vertex (as write_mesh writes them);
 // otherwise they are left empty. Other statements (vt, vp, o, g, s, usemtl, mtllib, l, p,
 // free-form geometry's and unknown ones) are skipped; '#' comments end with their line, and a '\' ending a line
-// continues the statement. Errors name the line: a face with fewer than three corners, an
+// continues the statement; lines end in "\n", "\r\n" or a lone "\r", and a UTF-8 byte order
+// mark before the first is skipped. Errors name the line: a face with fewer than three corners, an
 // index 0 or beyond the items read so far (no forward references), a malformed corner, a
 // non-finite or beyond-float coordinate, and a file without faces that holds a statement
 // OBJ does not have (other text, not a model). Without faces it is otherwise vertices with no
 // triangles (write_mesh's empty mesh, a point cloud), as in read_ply.
 Mesh read_obj(const std::string& path);
-// read_stl, read_ply or read_obj, chosen by the extension (.stl, .ply, .obj; any case).
+// read_stl, read_ply or read_obj, chosen by the extension (.stl, .ply, .obj; any case). In
+// each, a file of no bytes at all is an Error, not an empty mesh.
 Mesh read_mesh(const std::string& path);
 
 // Reading from memory: the readers above over `size` bytes at `data` (a download, a blob from

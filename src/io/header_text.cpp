@@ -61,6 +61,17 @@ bool next_line(std::string_view text, std::size_t& pos, std::string_view& line) 
     return true;
 }
 
+bool next_text_line(std::string_view text, std::size_t& pos, std::string_view& line) {
+    if (pos >= text.size()) return false;
+    std::size_t end = pos;  // a plain loop: find_first_of makes a call per character
+    while (end < text.size() && text[end] != '\n' && text[end] != '\r') ++end;
+    line = text.substr(pos, end - pos);
+    pos = end == text.size() ? end : end + (text[end] == '\r' && end + 1 < text.size() && text[end + 1] == '\n' ? 2 : 1);
+    return true;
+}
+
+std::size_t bom_size(std::string_view text) { return text.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0; }
+
 long long parse_integer(const std::string& path, std::string_view field, std::string_view token) {
     long long value = 0;
     const auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);

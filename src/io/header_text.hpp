@@ -26,6 +26,16 @@ std::vector<std::string_view> split_words(std::string_view text);
 
 // The next line of `text` from `pos` (without "\n" or "\r\n"); false at the end.
 bool next_line(std::string_view text, std::size_t& pos, std::string_view& line);
+// The same for the text mesh formats, where a lone "\r" (classic Mac OS exporters) ends a
+// line too.
+bool next_text_line(std::string_view text, std::size_t& pos, std::string_view& line);
+// Whether text[i] ends a line as next_text_line counts them ("\r\n" once, at its '\n').
+inline bool ends_text_line(std::string_view text, std::size_t i) {
+    return text[i] == '\n' || (text[i] == '\r' && (i + 1 == text.size() || text[i + 1] != '\n'));
+}
+// 3 when `text` starts with a UTF-8 byte order mark (Windows tools write one before the
+// text), else 0.
+std::size_t bom_size(std::string_view text);
 
 std::size_t parse_size(const std::string& path, std::string_view field, std::string_view token);
 long long parse_integer(const std::string& path, std::string_view field, std::string_view token);

@@ -11,6 +11,8 @@
 //    [a]), which must be numbers and are ignored. "vn" takes exactly three numbers; a
 //    non-finite one is not an error, but the normals are then dropped.
 //  * Keywords are case-sensitive, as the format defines them (lower case).
+//  * Lines end with "\n", "\r\n" or a lone "\r"; a UTF-8 byte order mark before the first
+//    line is skipped.
 #include "header_text.hpp"
 #include "input_file.hpp"
 #include "mesh_readers.hpp"
@@ -218,13 +220,15 @@ private:
 Mesh io::read_obj_from(const InputFile& input) {
     const std::string& path = input.path();
     const io::MappedFile file = io::map_whole_file(input);
-    const std::string_view text = file.text;
+    // A byte order mark left in place would hide the first statement's keyword: a first "v"
+    // skipped shifts every index after it.
+    const std::string_view text = file.text.substr(io::bom_size(file.text));
 
     ObjParser parser(path);
     std::string joined;  // a statement continued over several lines (rare), reused
     std::size_t pos = 0, line = 0;
     std::string_view raw;
-    while (io::next_line(text, pos, raw)) {
+    while (io::next_text_line(text, pos, raw)) {
         const std::size_t first_line = ++line;
         std::string_view part = strip_comment(raw);
         if (!continues(part)) {
@@ -232,7 +236,7 @@ Mesh io::read_obj_from(const InputFile& input) {
             continue;
         }
         joined.assign(part).append(" ");
-        while (io::next_line(text, pos, raw)) {
+        while (io::next_text_line(text, pos, raw)) {
             ++line;
             part = strip_comment(raw);
             const bool more = continues(part);

@@ -5,6 +5,8 @@
 // Decisions beyond the PLY text itself:
 //  * Keywords, type names and property names are case-sensitive, as the format defines them;
 //    blank header lines are skipped; the version must be "1.0" (or "1").
+//  * Header lines end with "\n", "\r\n", or a lone "\r" when the first line does; a UTF-8
+//    byte order mark before "ply" is skipped.
 //  * ASCII data is a stream of whitespace-separated words: line breaks are not significant
 //    (records split or joined across lines read the same). After the last element only
 //    whitespace may follow; binary data must end exactly at the file's end.
@@ -180,19 +182,34 @@ void assign_roles(const std::string& path, Header& h) {
 
 Header parse_header(const std::string& path, std::string_view file) {
     const std::string_view text = file.substr(0, kMaxHeader);
-    std::size_t pos = 0, line_number = 1;
+    std::size_t pos = io::bom_size(text), line_number = 1;
+    // The first line's end says how every header line ends: a lone '\r' (classic Mac OS) or
+    // '\n' (or "\r\n"). Decided once, so that "end_header\r" before a binary body whose first
+    // byte is '\n' is not taken for a "\r\n".
+    std::size_t first_end = pos;
+    while (first_end < text.size() && text[first_end] != '\n' && text[first_end] != '\r') ++first_end;
+    const bool lone_cr = first_end < text.size() && text[first_end] == '\r' && io::ends_text_line(text, first_end);
+    const char line_end = lone_cr ? '\r' : '\n';
     std::string_view line;
-    if (!io::next_line(text, pos, line) || io::trim(line) != "ply")
+    auto next = [&] {
+        if (!lone_cr) return io::next_line(text, pos, line);
+        if (pos >= text.size()) return false;
+        const std::size_t end = std::min(text.find('\r', pos), text.size());
+        line = text.substr(pos, end - pos);
+        pos = std::min(end + 1, text.size());
+        return true;
+    };
+    if (!next() || io::trim(line) != "ply")
         fail(path, "not a PLY file (the first line is not 'ply')");
     Header h;
     bool have_format = false;
     while (true) {
-        if (!io::next_line(text, pos, line)) {
+        if (!next()) {
             if (file.size() > kMaxHeader) fail(path, "header too long: no 'end_header' in its first 1 MiB");
             fail(path, "no 'end_header' line: the header is incomplete");
         }
         ++line_number;
-        if (pos == text.size() && text.back() != '\n' && text.size() < file.size())
+        if (pos == text.size() && text.back() != line_end && text.size() < file.size())
             fail(path, "header too long: no 'end_header' in its first 1 MiB");  // a line cut by the cap
         const std::string at = "line " + std::to_string(line_number) + ": ";
         const std::vector<std::string_view> words = io::split_words(line);
@@ -434,7 +451,7 @@ private:
     // The line of the latest word, counted only when an error needs it.
     std::size_t line() const {
         std::size_t n = 1;
-        for (std::size_t i = 0; i < word_; ++i) n += text_[i] == '\n';
+        for (std::size_t i = 0; i < word_; ++i) n += io::ends_text_line(text_, i);
         return n;
     }
     // A value nothing keeps must still be one of its type: an integer in range, or a number

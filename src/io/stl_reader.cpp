@@ -79,15 +79,16 @@ public:
     // The next whitespace-separated word, empty at the end.
     std::string_view next() {
         while (pos_ < text_.size() && is_space(text_[pos_])) {
-            if (text_[pos_] == '\n') ++line_;
+            if (io::ends_text_line(text_, pos_)) ++line_;
             ++pos_;
         }
         const std::size_t start = pos_;
         while (pos_ < text_.size() && !is_space(text_[pos_])) ++pos_;
         return text_.substr(start, pos_ - start);
     }
+    // Up to the line's end: "\n", "\r\n" or a lone "\r" (classic Mac OS exporters).
     void skip_line() {
-        while (pos_ < text_.size() && text_[pos_] != '\n') ++pos_;
+        while (pos_ < text_.size() && text_[pos_] != '\n' && text_[pos_] != '\r') ++pos_;
     }
     std::size_t line() const { return line_; }
 
@@ -147,7 +148,7 @@ void read_ascii(const std::string& path, std::string_view text, Mesh& mesh) {
 }
 
 bool starts_with_solid(std::string_view text) {
-    std::size_t i = 0;
+    std::size_t i = io::bom_size(text);
     while (i < text.size() && (text[i] == ' ' || text[i] == '\t' || text[i] == '\r' || text[i] == '\n')) ++i;
     return io::lower(text.substr(i, 5)) == "solid";
 }
@@ -180,7 +181,7 @@ Mesh io::read_stl_from(const InputFile& input) {
     const std::string_view text = file.text;
     if (!starts_with_solid(text)) fail(path, "not an STL file: " + binary_problem + ", and it does not start with 'solid'");
     try {
-        read_ascii(path, text, mesh);
+        read_ascii(path, text.substr(io::bom_size(text)), mesh);  // a UTF-8 byte order mark is skipped
     } catch (const Error& e) {
         detail::rethrow_with_message(e, std::string(e.what()) + " (" + binary_problem + ")");
     }
