@@ -2,8 +2,8 @@
 // before allocating and throws voxmesh::Error whose message starts with the file's path
 // ('path': problem). Nothing is allocated from an unchecked header field: the sample
 // count is overflow-checked, compared with the file size (or, for gzip, the decompressed
-// stream must be exactly as long as the header says), and refused when larger than the
-// memory available.
+// stream must be exactly as long as the header says; NIfTI's may go on past the samples), and
+// refused when larger than the memory available.
 //
 // Samples: uncompressed data in host byte order at a suitably aligned offset is
 // memory-mapped (Volume::storage owns the mapping; MAP_PRIVATE, so writes through
@@ -29,13 +29,13 @@
 // its position and meshes land where the file says, unmirrored. VolumeInfo::flipped says
 // which axes. A negative spacing (NRRD `spacings`, MetaImage ElementSpacing,
 // RawLayout::spacing) runs its axis the other way and is flipped alike; the sign of NIfTI's
-// pixdim[1..3] is ignored, its magnitude being the spacing (nifti1_io's qform takes a pixdim
-// <= 0 as 1 and nibabel refuses a negative one; a zero or NaN pixdim, where used, is an error
-// here). The rest of a direction (an oblique axis's off-axis part, a rotation, an axis
-// permutation, which is never flipped) is not applied to the samples: the axis keeps its
-// spacing (the direction's length) and the origin as written, apart from the flip, and
-// VolumeInfo::rotation_dropped says so. It is kept as the volume's world transform instead
-// (to_world places a mesh with it):
+// pixdim[1..3] is ignored, its magnitude being the spacing (as nibabel fixes it; nifti1_io's
+// qform takes a pixdim <= 0 as 1), and a pixdim of 0 or not finite, where used, is 1 (as
+// nifti1_io reads it, and nibabel a 0). The rest of a direction (an oblique axis's off-axis
+// part, a rotation, an axis permutation, which is never flipped) is not applied to the
+// samples: the axis keeps its spacing (the direction's length) and the origin as written,
+// apart from the flip, and VolumeInfo::rotation_dropped says so. It is kept as the volume's
+// world transform instead (to_world places a mesh with it):
 //   world(i,j,k) = world_origin + D * ((i,j,k) * spacing)     (i,j,k: the loaded Volume's index)
 // D (VolumeInfo::directions) has the unit direction of loaded index axis a as column a: the
 // file's direction for axis a (NRRD vector, sform column, qform rotation column, MetaImage
@@ -144,6 +144,11 @@ std::optional<double> recorded_iso(const VolumeInfo& info, const std::string& na
 // char; ASCII writes byte b as b/255) of one component, or a FIELD's first array, is the
 // volume (VECTORS, NORMALS, ... before it are skipped); BINARY (big-endian, copied) or ASCII (numbers that must fit the type); arrays
 // after it are ignored. read_volume_info checks ASCII data only for length.
+// NIfTI-1: one file (magic n+1; a .hdr/.img pair is refused), its byte order told by
+// sizeof_hdr; dim[1..dim[0]] must be at least 1 (nifti1_io takes 0 as 1, nibabel as an empty
+// axis); bitpix must agree with datatype; vox_offset a whole number >= 348; bytes after the
+// samples (in a .nii.gz's stream too) are ignored, as nibabel and nifti1_io do; the sform or
+// qform used must be finite (nibabel's affine would be NaN).
 // NRRD: 'line skip' then 'byte skip' (-1: samples end the file; raw only) as teem applies
 // them, from the data file's start or, for attached data, from just past the blank line.
 // MetaImage: ElementDataFile LOCAL (also Local, local, as MetaIO) or one data file; HeaderSize

@@ -1,6 +1,7 @@
 // NIfTI-1 single files (.nii, and .nii.gz detected by the gzip magic): the 348-byte binary
 // header, in either byte order (sizeof_hdr tells which), then samples at vox_offset.
 // scl_slope/scl_inter are reported, not applied (see io.hpp).
+#include "header_text.hpp"
 #include "inflate.hpp"
 #include "input_file.hpp"
 #include "readers.hpp"
@@ -55,17 +56,28 @@ ScalarType nifti_type(const std::string& path, int datatype) {
 }
 
 // Index axis a's direction is column a of the sform's 3x3 part (srow_x, srow_y, srow_z).
-std::array<std::vector<double>, 3> sform_axes(const HeaderBytes& hdr) {
+// A NaN would otherwise read as a zero column (spacing from pixdim, direction dropped).
+std::array<std::vector<double>, 3> sform_axes(const std::string& path, const HeaderBytes& hdr) {
     std::array<std::vector<double>, 3> axes;
     for (std::size_t a = 0; a < 3; ++a)
-        for (std::size_t row = 0; row < 3; ++row) axes[a].push_back(hdr.f32(280 + 16 * row + 4 * a));
+        for (std::size_t row = 0; row < 3; ++row) {
+            const double v = hdr.f32(280 + 16 * row + 4 * a);
+            if (!std::isfinite(v))
+                fail(path, std::string("srow_") + "xyz"[row] + "[" + std::to_string(a) + "] is " + shortest_text(v) +
+                               "; the sform must be finite");
+            axes[a].push_back(v);
+        }
     return axes;
 }
 
 // Columns of the qform rotation: the quaternion (b, c, d; a = sqrt(1 - b^2 - c^2 - d^2)),
 // its third column times qfac (-1 when pixdim[0] < 0, else 1), as nifti1_io computes them.
-std::array<std::vector<double>, 3> qform_axes(const HeaderBytes& hdr) {
+std::array<std::vector<double>, 3> qform_axes(const std::string& path, const HeaderBytes& hdr) {
     double b = hdr.f32(256), c = hdr.f32(260), d = hdr.f32(264);
+    // Not finite, the rotation would be NaN, which reads as no rotation at all.
+    if (!std::isfinite(b) || !std::isfinite(c) || !std::isfinite(d))
+        fail(path, "quatern_b/c/d (" + shortest_text(b) + ", " + shortest_text(c) + ", " + shortest_text(d) +
+                       ") are not finite");
     double a = 1 - (b * b + c * c + d * d);
     if (a < 1e-7) {  // a 180-degree rotation, stored slightly denormalized: normalize b, c, d
         const double scale = 1 / std::sqrt(b * b + c * c + d * d);
@@ -165,18 +177,21 @@ VolumeHeader read_nifti_header(const InputFile& file) {
     std::array<std::vector<double>, 3> axes;
     if (sform_code > 0) {
         for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "srow", hdr.f32(280 + 16 * a + 12));
-        axes = sform_axes(hdr);
+        axes = sform_axes(path, hdr);
     } else if (qform_code > 0) {
         for (std::size_t a = 0; a < 3; ++a) info.origin[a] = checked_origin(path, "qoffset", hdr.f32(268 + 4 * a));
-        axes = qform_axes(hdr);
+        axes = qform_axes(path, hdr);
     }
     // Samples lie where the sform puts them, so its column lengths are the spacing even where
-    // pixdim says otherwise (as in nibabel's affine); pixdim is read, and checked, only where
-    // used: without an sform, or for a zero sform column, which says nothing.
+    // pixdim says otherwise (as in nibabel's affine); pixdim is read only where used: without
+    // an sform, or for a zero sform column, which says nothing. There a pixdim of 0 or not
+    // finite is 1, as nifti1_io (and nibabel, for 0) read it.
     for (std::size_t a = 0; a < 3; ++a) {
         const double column = sform_code > 0 ? vector_length(axes[a]) : 0;
+        const double pixdim = hdr.f32(80 + 4 * a);
         info.spacing[a] = column > 0 ? checked_spacing(path, "srow", column)
-                                     : checked_spacing(path, "pixdim", hdr.f32(80 + 4 * a));
+                          : pixdim == 0 || !std::isfinite(pixdim) ? 1.0
+                                                                  : std::fabs(pixdim);
     }
     apply_directions(h, axis_directions(axes));
 
@@ -185,6 +200,7 @@ VolumeHeader read_nifti_header(const InputFile& file) {
     layout.big_endian = info.big_endian;
     layout.data_path = path;
     layout.compressed = gzip;
+    layout.more_may_follow = true;  // bytes after the samples are ignored, as nibabel and nifti1_io do
     if (gzip) layout.skip = static_cast<std::size_t>(vox_offset);
     else layout.offset = static_cast<std::size_t>(vox_offset);
     info.data_file = path;

@@ -294,7 +294,12 @@ Volume load_samples(const InputFile& header, const SampleLayout& layout) {
             fail(file.path(), "decompressed data holds " + std::to_string(got) + " bytes of samples but " +
                                   dims_text(layout.dims) + " " + scalar_name(layout.type) + " needs " +
                                   std::to_string(bytes) + " (truncated data, or dims that do not match it)" + ctx);
-        if (!inflater.at_end())
+        // Data after the samples, where allowed, is read through so that the gzip CRC is still
+        // checked, but only so far: a small compressed tail can inflate to gigabytes.
+        constexpr std::size_t kTailChecked = std::size_t{64} << 20;
+        if (layout.more_may_follow) {
+            if (inflater.skip(kTailChecked) < kTailChecked) (void)inflater.at_end();  // input after the stream
+        } else if (!inflater.at_end())
             fail(file.path(), "decompressed data is longer than the " + std::to_string(bytes) + " bytes that " +
                                   dims_text(layout.dims) + " " + scalar_name(layout.type) +
                                   " samples need (dims do not match the data)" + ctx);

@@ -22,7 +22,7 @@ struct SampleLayout {
     std::size_t offset = 0;       // raw: first sample; compressed: start of the stream
     bool at_end = false;          // raw: the samples are the file's last bytes ...
     std::size_t min_start = 0;    // ... and start no sooner than this (the header's end, in its own file)
-    bool more_may_follow = false; // raw or text: other data may follow the samples
+    bool more_may_follow = false; // other data may follow the samples (compressed: in the stream)
     bool text = false;            // numbers as text, separated by whitespace (legacy VTK ASCII)
     bool unit_colors = false;     // text, u8: each a number 0..1 standing for round(255 x)
     bool compressed = false;      // zlib or gzip stream
