@@ -203,6 +203,34 @@ TEST_CASE("C API: the world transform and mesh_to_world are the C++ library's", 
     CHECK_THAT(std::string(voxmesh_last_error()), Catch::Contains("the volume"));
 }
 
+// A world frame beyond the float range: an error, the mesh left as extracted (it was filled
+// with inf, and voxmesh_mesh_to_world said VOXMESH_OK).
+TEST_CASE("C API: mesh_to_world refuses a world beyond floats and keeps the mesh", "[capi]") {
+    iotest::Scratch scratch;
+    std::vector<float> samples(6 * 6 * 6, 0.f);
+    for (std::size_t k = 1; k < 5; ++k)
+        for (std::size_t j = 1; j < 5; ++j)
+            for (std::size_t i = 1; i < 5; ++i) samples[i + 6 * (j + 6 * k)] = 1.f;
+    // World x: 2.9e38 + 8e36 * i + 6e36 * j, past FLT_MAX at the box's far corner (i = j = 4.5).
+    std::string text = "NRRD0004\ntype: float\ndimension: 3\nsizes: 6 6 6\nendian: little\nencoding: raw\n"
+                       "space: right-anterior-superior\nspace directions: (8e36,0,0) (6e36,8e36,0) (0,0,1)\n"
+                       "space origin: (2.9e38,0,0)\n\n";
+    text.append(reinterpret_cast<const char*>(samples.data()), samples.size() * sizeof(float));
+    const std::string path = scratch.file("far.nrrd", text);
+    voxmesh_volume* made = nullptr;
+    REQUIRE(voxmesh_read_volume(path.c_str(), &made) == VOXMESH_OK);
+    VolumePtr volume(made, voxmesh_volume_free);
+    voxmesh_options options = voxmesh_default_options();
+    options.iso = 0.5;
+    MeshPtr mesh = extract_c(voxmesh_volume_get_view(volume.get()), options);
+    const std::size_t n = 3 * voxmesh_mesh_vertex_count(mesh.get());
+    REQUIRE(n > 0);
+    const std::vector<float> before(voxmesh_mesh_positions(mesh.get()), voxmesh_mesh_positions(mesh.get()) + n);
+    CHECK(voxmesh_mesh_to_world(mesh.get(), volume.get()) == VOXMESH_ERROR);
+    CHECK_THAT(std::string(voxmesh_last_error()), Catch::Contains("beyond the range of float"));
+    CHECK(std::equal(before.begin(), before.end(), voxmesh_mesh_positions(mesh.get())));
+}
+
 TEST_CASE("C API: keep_largest_components is the C++ call's", "[capi]") {
     // Two balls, the larger one second: it alone is kept, then both in their order.
     std::vector<float> samples(40 * 24 * 24);

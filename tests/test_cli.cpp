@@ -525,6 +525,47 @@ TEST_CASE("cli: mesh --world places the mesh by the file's direction matrix", "[
     CHECK(iotest::read_file(s.path("f1.stl")) == iotest::read_file(s.path("f2.stl")));
 }
 
+// --world's edge cases: a file whose affine puts the mesh beyond the float range is an error
+// naming the file (no inf in the output, none written); directions that do not span 3-D cannot
+// be applied, so info and mesh --world say the rotation stays dropped instead of promising it.
+TEST_CASE("cli: mesh --world refuses a world beyond floats; unusable directions are said so", "[cli]") {
+    Scratch s;
+    std::vector<float> samples(6 * 6 * 6, 0.f);
+    for (std::size_t k = 1; k < 5; ++k)
+        for (std::size_t j = 1; j < 5; ++j)
+            for (std::size_t i = 1; i < 5; ++i) samples[i + 6 * (j + 6 * k)] = 1.f;
+    const std::string head = "NRRD0004\ntype: float\ndimension: 3\nsizes: 6 6 6\nendian: little\nencoding: raw\n"
+                             "space: right-anterior-superior\n";
+    // World x of sample (i, j, k): 2.9e38 + 8e36 * i + 6e36 * j, past FLT_MAX at the box's far
+    // corner (i = j = 4.5); loaded x stays within 2.9e38 + 8e36 * 5.
+    const std::string far = s.write("far.nrrd", head + "space directions: (8e36,0,0) (6e36,8e36,0) (0,0,1)\n"
+                                                       "space origin: (2.9e38,0,0)\n\n" + f32_bytes(samples));
+    const Result plain = run(s, "mesh " + quote(far) + " -o " + quote(s.path("far.stl")) + " --iso 0.5 --backend cpu");
+    INFO(plain.err);
+    REQUIRE(plain.code == 0);  // in index axes the grid fits floats
+    const Result world = run(s, "mesh " + quote(far) + " -o " + quote(s.path("w.stl")) + " --iso 0.5 --world --backend cpu");
+    INFO(world.err);
+    CHECK(world.code != 0);
+    CHECK(world.err.find("far.nrrd") != std::string::npos);
+    CHECK(world.err.find("beyond the range of float") != std::string::npos);
+    CHECK_FALSE(fs::exists(s.path("w.stl")));
+
+    // Coplanar directions: axis z along x + y.
+    const std::string flat =
+        s.write("flat.nrrd", head + "space directions: (1,0,0) (0,1,0) (1,1,0)\n\n" + f32_bytes(samples));
+    const Result info = run(s, "info " + quote(flat));
+    INFO(info.out);
+    REQUIRE(info.code == 0);
+    CHECK(info.out.find("rotation:  dropped") != std::string::npos);
+    CHECK(info.out.find("do not span 3-D") != std::string::npos);
+    CHECK(info.out.find("world:") == std::string::npos);
+    const Result flat_world =
+        run(s, "mesh " + quote(flat) + " -o " + quote(s.path("f.stl")) + " --iso 0.5 --world --backend cpu");
+    INFO(flat_world.err);
+    REQUIRE(flat_world.code == 0);
+    CHECK(flat_world.err.find("rotation is dropped") != std::string::npos);
+}
+
 // The AVX2 row packers, the AVX2/BMI copy of the generator and the batched normals must give
 // the portable code's bits (no fused multiply-adds; IEEE divide and square root), for every
 // sample type's packer: the [core] tests under VOXMESH_ISA=portable only compare with the

@@ -5,6 +5,7 @@
 #include <voxmesh/io.hpp>
 
 #include <array>
+#include <cfloat>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -297,4 +298,98 @@ TEST_CASE("world: MetaImage with a rotated TransformMatrix and a negative spacin
     CHECK(info.flipped == std::array<bool, 3>{false, true, false});
     check_samples_placed(info, file);
     check_sphere(path, centre, 8, 0.25);
+}
+
+// Every position fits a float in the loaded grid (read_volume checks that), but the file's
+// affine puts some past FLT_MAX: to_world must refuse before touching the mesh, not write inf.
+TEST_CASE("world: to_world refuses positions beyond the float range, leaving the mesh", "[world][nrrd]") {
+    Scratch s;
+    const Dims n{4, 5, 3};
+    Affine file;
+    file.origin = {3e38, 0, 0};
+    file.step = {{{0, 1, 0}, {2e37, 0, 0}, {0, 0, 1}}};  // y's last sample: 3e38 + 8e37 in world x
+    const Vec far = file.at({0, double(n[1] - 1), 0});
+    REQUIRE(far[0] > double(FLT_MAX));
+    const std::string path = s.file("far.nrrd", nrrd_file(n, file, sphere_samples(n, file, file.origin, 1)));
+    const VolumeInfo info = read_volume_info(path);
+    REQUIRE(info.rotation_dropped);
+    Mesh corners;  // the loaded grid's corners, as extract would place them
+    for (std::size_t c = 0; c < 8; ++c)
+        for (std::size_t a = 0; a < 3; ++a)
+            corners.positions.push_back(float(info.origin[a] + ((c >> a & 1) ? double(n[a] - 1) * info.spacing[a] : 0)));
+    corners.normals.assign(corners.positions.size(), 0.5f);
+    corners.indices = {0, 1, 2, 3, 4, 5};
+    const Mesh before = corners;
+    CHECK_THROWS_WITH(to_world(corners, info), Catch::Contains("beyond the range of float"));
+    CHECK(vmtest::same_bits(corners.positions, before.positions));
+    CHECK(vmtest::same_bits(corners.normals, before.normals));
+    CHECK(corners.indices == before.indices);
+
+    // Only the far corners overflow: the grid's first y slab still moves.
+    Mesh near;
+    for (std::size_t c = 0; c < 8; ++c)
+        for (std::size_t a = 0; a < 3; ++a)
+            near.positions.push_back(float(info.origin[a] + ((c >> a & 1) && a != 1 ? double(n[a] - 1) * info.spacing[a] : 0)));
+    REQUIRE_NOTHROW(to_world(near, info));
+    for (const float p : near.positions) CHECK(std::isfinite(p));
+
+    // The same for a transform given directly, and for a mesh that is already not finite.
+    VolumeInfo shifted;
+    shifted.directions = {0, 1, 0, 1, 0, 0, 0, 0, 1};
+    shifted.world_origin = {0, -3.3e38, 0};
+    Mesh one;
+    one.positions = {0, 0, 0, -2e37f, 0, 0};  // world y: -3.3e38 - 2e37
+    const Mesh one_before = one;
+    CHECK_THROWS_WITH(to_world(one, shifted), Catch::Contains("beyond the range of float"));
+    CHECK(vmtest::same_bits(one.positions, one_before.positions));
+    one.positions = {0, 0, 0, 1, INFINITY, 0};
+    CHECK_THROWS_WITH(to_world(one, shifted), Catch::Contains("non-finite position"));
+}
+
+// A NaN or inf TransformMatrix component used to be skipped, so the mesh landed unrotated
+// without a word (NIfTI's sform and quaternion: test_io_nifti.cpp).
+TEST_CASE("world: a non-finite MetaImage direction is an error naming its field", "[world][metaimage][errors]") {
+    Scratch s;
+    const Dims n{4, 4, 4};
+    Affine file;
+    file.step = {{{2, 0, 0}, {0, 2, 0}, {0, 0, 2}}};
+    const std::string samples = sphere_samples(n, file, {3, 3, 3}, 2);
+    for (const char* matrix : {"nan 0 0 0 1 0 0 0 1", "0 1 0 inf 0 0 0 0 1"}) {
+        const std::string path =
+            s.file("nan.mha", std::string("ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_FLOAT\n"
+                                          "TransformMatrix = ") +
+                                  matrix + "\nElementByteOrderMSB = False\nElementDataFile = LOCAL\n" + samples);
+        INFO(matrix);
+        CHECK_THROWS_WITH(read_volume_info(path), Catch::Contains("TransformMatrix") && Catch::Contains("non-finite"));
+    }
+}
+
+// VTK's reader keeps the last SPACING; its sign was applied once per line, so a second
+// negative SPACING undid the first's reversal and mirrored the volume.
+TEST_CASE("world: a legacy VTK file's last SPACING holds, sign included", "[world][vtk]") {
+    Scratch s;
+    const Dims n{5, 4, 3};
+    Affine file;
+    file.origin = {1, 2, 3};
+    file.step = {{{-2, 0, 0}, {0, 1.5, 0}, {0, 0, -1}}};
+    std::string samples;  // big-endian floats: file sample f holds its flat index
+    for (std::size_t i = 0; i < n[0] * n[1] * n[2]; ++i) {
+        const float v = float(i);
+        unsigned char b[4];
+        std::memcpy(b, &v, 4);
+        for (int k = 3; k >= 0; --k) samples += char(b[k]);
+    }
+    const std::string head = "# vtk DataFile Version 3.0\nx\nBINARY\nDATASET STRUCTURED_POINTS\nDIMENSIONS 5 4 3\n"
+                             "SPACING -1 1 -1\nSPACING -2 1.5 -1\nORIGIN 1 2 3\nPOINT_DATA 60\nSCALARS v float 1\n"
+                             "LOOKUP_TABLE default\n";
+    const std::string path = s.file("twice.vtk", head + samples);
+    VolumeInfo info;
+    const Volume v = read_volume(path, info);
+    CHECK(info.flipped == std::array<bool, 3>{true, false, true});
+    check_samples_placed(info, file);
+    // Each loaded sample holds the file sample placed there.
+    const float* values = static_cast<const float*>(v.data);
+    iotest::for_each_sample_of_file(info.dims, info.flipped, [&](std::size_t at, std::array<std::size_t, 3> f) {
+        REQUIRE(values[at] == float(f[0] + n[0] * (f[1] + n[1] * f[2])));
+    });
 }

@@ -126,8 +126,10 @@ struct VolumeInfo {
 // normals by the inverse-transpose of `directions` (renormalised, so still unit and outward),
 // and, where its determinant is negative (a mirroring), every triangle's winding reversed so
 // that it stays counter-clockwise seen from outside. Nothing changes where the transform is
-// the identity (no rotation_dropped). Throws Error for arrays that are not whole triples,
-// normals for a different number of vertices, and a singular or non-finite transform.
+// the identity (no rotation_dropped). Throws Error, leaving the mesh as it was, for arrays
+// that are not whole triples, normals for a different number of vertices, a singular or
+// non-finite transform, a non-finite position, and a transform that would put a position
+// beyond the float range (a far world_origin: floats would turn it into inf).
 void to_world(Mesh& mesh, const VolumeInfo& info);
 
 // The iso voxmesh recorded for meshing a volume it wrote: the NRRD line "voxmesh_iso:=value"

@@ -276,7 +276,9 @@ typedef struct voxmesh_volume_info {
 voxmesh_volume_info voxmesh_volume_get_info(const voxmesh_volume* volume);
 /* A mesh extracted from `volume` moved into its file's world frame (voxmesh::to_world):
  * positions by the affine, normals by its inverse-transpose, the winding reversed under a
- * mirroring; nothing changes for a volume without a rotation (or one not read from a file). */
+ * mirroring; nothing changes for a volume without a rotation (or one not read from a file).
+ * VOXMESH_ERROR, the mesh unchanged, where the transform would put a position beyond the float
+ * range or a position is not finite. */
 voxmesh_status voxmesh_mesh_to_world(voxmesh_mesh* mesh, const voxmesh_volume* volume);
 
 /* NRRD (raw, host byte order) through a temporary renamed into place (voxmesh::write_nrrd). */

@@ -444,7 +444,9 @@ class Mesh:
         """Moves this mesh, extracted from `volume` (a Volume read from a file), into the file's
         world frame, in place (voxmesh::to_world): positions by volume.info's affine, normals by
         its inverse-transpose, the winding reversed where it mirrors. Nothing changes for a
-        volume without a rotation (info["rotation_dropped"] false) or one not read from a file."""
+        volume without a rotation (info["rotation_dropped"] false) or one not read from a file.
+        Raises VoxmeshError, leaving the mesh as it was, where a position is not finite or the
+        transform would move one beyond the float range."""
         if not isinstance(volume, Volume):
             raise VoxmeshError(f"volume must be a voxmesh.Volume (read_volume's); got {type(volume).__name__}")
         _check(_lib.voxmesh_mesh_to_world(self._handle.pointer, volume._handle.pointer))

@@ -124,7 +124,10 @@ int run_info(const InfoArgs& a) {
     if (const std::string axes = flipped_axes(info.flipped); !axes.empty())
         std::cout << "flipped:   " << axes
                   << " (stored in the negative direction; reversed on load, origin is the minimum corner)\n";
-    if (info.rotation_dropped) {
+    if (info.rotation_dropped && !world_transform_applies(info)) {
+        std::cout << "rotation:  dropped (the direction matrix is not axis-aligned and its directions do not span "
+                     "3-D; mesh --world cannot apply it)\n";
+    } else if (info.rotation_dropped) {
         // The loaded axes' directions (columns of D), so the user can see what --world applies.
         const auto column = [&](std::size_t a) {  // + 0.0: a negated zero prints as 0, not -0
             const auto& d = info.directions;

@@ -125,7 +125,8 @@ int run_mesh(const MeshArgs& a) {
     Mesh mesh = extract(volume.view(), options, stats);  // errors here are not about the file
     const std::size_t extracted_triangles = mesh.triangle_count();
     if (a.largest > 0) mesh = keep_largest_components(mesh, a.largest);
-    if (a.world) to_world(mesh, info);  // after extract and the pieces: they work in index axes
+    if (a.world)  // after extract and the pieces: they work in index axes
+        about_file(input_name(a.input), [&] { to_world(mesh, info); });  // errors name the file
     const MeshTopology topo = analyze_topology(mesh);
     if (mesh.triangle_count() == 0) {
         // Nearly always an iso outside the data (a typo, stored vs scaled values): say which side.

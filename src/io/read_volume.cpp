@@ -73,6 +73,14 @@ double vector_length(const std::vector<double>& v) {
     return largest * std::sqrt(norm2);
 }
 
+void check_directions(const std::string& path, const char* field, const std::array<std::vector<double>, 3>& axes) {
+    for (std::size_t a = 0; a < 3; ++a)
+        for (const double c : axes[a])
+            if (!std::isfinite(c))
+                fail(path, std::string("'") + field + "' gives index axis " + std::to_string(a) +
+                               " a non-finite direction component (" + shortest_text(c) + ")");
+}
+
 AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes) {
     AxisDirections d;
     for (std::size_t a = 0; a < 3; ++a) {

@@ -50,6 +50,9 @@ struct AxisDirections {
 // `axes[a]` is index axis a's direction vector in world components (any length; components
 // past the third count as off-axis). A zero vector says nothing and is left alone.
 AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes);
+// Fails naming `field` where a direction component is NaN or infinite (axis_directions would
+// otherwise skip that axis, silently keeping the samples unrotated).
+void check_directions(const std::string& path, const char* field, const std::array<std::vector<double>, 3>& axes);
 // A direction vector's length (an axis's spacing where the header gives vectors).
 double vector_length(const std::vector<double>& v);
 // A negative spacing along index axis a: its direction reversed, or, where the header gives

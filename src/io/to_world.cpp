@@ -2,6 +2,11 @@
 // Geometry in include/voxmesh/io.hpp).
 #include <voxmesh/io.hpp>
 
+#include "header_text.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cfloat>
 #include <cmath>
 #include <utility>
 
@@ -26,6 +31,29 @@ void to_world(Mesh& mesh, const VolumeInfo& info) {
     for (std::size_t c = 0; c < 3; ++c) finite = finite && std::isfinite(info.origin[c]) && std::isfinite(info.world_origin[c]);
     if (!finite || det == 0) throw Error("to_world: the volume's direction matrix is singular or not finite");
     const double sign = det < 0 ? -1 : 1;
+
+    // Positions are floats: a far world_origin (or origin) would turn them into inf, so check
+    // before changing anything. The map is affine, so each world component is largest and
+    // smallest at corners of the positions' bounding box (computed in double, as below).
+    std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
+    for (std::size_t v = 0; v < mesh.positions.size(); v += 3)
+        for (std::size_t c = 0; c < 3; ++c) {
+            const double q = double(mesh.positions[v + c]) - info.origin[c];
+            if (!std::isfinite(q)) throw Error("to_world: the mesh has a non-finite position");
+            lo[c] = v == 0 ? q : std::min(lo[c], q);
+            hi[c] = v == 0 ? q : std::max(hi[c], q);
+        }
+    if (!mesh.positions.empty())
+        for (std::size_t corner = 0; corner < 8; ++corner) {
+            double q[3];
+            for (std::size_t a = 0; a < 3; ++a) q[a] = (corner >> a & 1) ? hi[a] : lo[a];
+            for (std::size_t c = 0; c < 3; ++c) {
+                const double w = info.world_origin[c] + m[3 * c] * q[0] + m[3 * c + 1] * q[1] + m[3 * c + 2] * q[2];
+                if (!(std::fabs(w) <= FLT_MAX))
+                    throw Error("to_world: the volume's world transform puts mesh coordinates at " +
+                                io::shortest_text(w) + ", beyond the range of float coordinates");
+            }
+        }
 
     for (std::size_t v = 0; v < mesh.positions.size(); v += 3) {
         const double q[3] = {mesh.positions[v] - info.origin[0], mesh.positions[v + 1] - info.origin[1],

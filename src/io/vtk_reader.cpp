@@ -382,8 +382,7 @@ VolumeHeader read_vtk_header(const InputFile& file) {
             for (std::size_t a = 0; a < 3; ++a) {
                 const double s = parse_double(path, k, w[a + 1]);
                 info.spacing[a] = checked_spacing(path, k.c_str(), s);
-                signed_spacing[a] = s;
-                if (s < 0) reverse_direction(axes, a);
+                signed_spacing[a] = s;  // the last SPACING holds: its sign is applied after the loop
             }
         } else if (k == "ORIGIN") {
             expect_count(path, w, 4);
@@ -451,6 +450,8 @@ VolumeHeader read_vtk_header(const InputFile& file) {
         if (extent_first[a] != 0)
             info.origin[a] = checked_origin(path, "EXTENT",
                                             info.origin[a] + static_cast<double>(extent_first[a]) * signed_spacing[a]);
+    for (std::size_t a = 0; a < 3; ++a)
+        if (signed_spacing[a] < 0) reverse_direction(axes, a);
     apply_directions(h, axis_directions(axes));
     layout.dims = info.dims;
     layout.big_endian = info.big_endian;
