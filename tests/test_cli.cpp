@@ -489,13 +489,20 @@ TEST_CASE("cli: info reports an axis stored in the negative direction", "[cli]")
     CHECK(mesh_flip.err.find("rotation") == std::string::npos);
 }
 
-TEST_CASE("cli: mesh --world places the mesh by the file's direction matrix", "[cli]") {
-    Scratch s;
-    // A box of 1s (index 1..4 of 6) in 0s: at iso 0.5 its faces lie at index 0.5 and 4.5.
+namespace {
+// A box of 1s (index 1..4 of 6^3) in 0s: at iso 0.5 its faces lie at index 0.5 and 4.5.
+std::vector<float> box_of_six() {
     std::vector<float> samples(6 * 6 * 6, 0.f);
     for (std::size_t k = 1; k < 5; ++k)
         for (std::size_t j = 1; j < 5; ++j)
             for (std::size_t i = 1; i < 5; ++i) samples[i + 6 * (j + 6 * k)] = 1.f;
+    return samples;
+}
+}  // namespace
+
+TEST_CASE("cli: mesh --world places the mesh by the file's direction matrix", "[cli]") {
+    Scratch s;
+    const std::vector<float> samples = box_of_six();
     const std::string head = "NRRD0004\ntype: float\ndimension: 3\nsizes: 6 6 6\nendian: little\nencoding: raw\n"
                              "space: left-posterior-superior\nspace origin: (5,-3,7)\n";
     const std::string rotated =
@@ -530,10 +537,7 @@ TEST_CASE("cli: mesh --world places the mesh by the file's direction matrix", "[
 // be applied, so info and mesh --world say the rotation stays dropped instead of promising it.
 TEST_CASE("cli: mesh --world refuses a world beyond floats; unusable directions are said so", "[cli]") {
     Scratch s;
-    std::vector<float> samples(6 * 6 * 6, 0.f);
-    for (std::size_t k = 1; k < 5; ++k)
-        for (std::size_t j = 1; j < 5; ++j)
-            for (std::size_t i = 1; i < 5; ++i) samples[i + 6 * (j + 6 * k)] = 1.f;
+    const std::vector<float> samples = box_of_six();
     const std::string head = "NRRD0004\ntype: float\ndimension: 3\nsizes: 6 6 6\nendian: little\nencoding: raw\n"
                              "space: right-anterior-superior\n";
     // World x of sample (i, j, k): 2.9e38 + 8e36 * i + 6e36 * j, past FLT_MAX at the box's far
