@@ -28,6 +28,7 @@
 #include <limits>
 #include <numeric>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace voxmesh {
@@ -57,8 +58,9 @@ using Triangle = std::array<std::uint32_t, 3>;
 // Coincident triangles (the same three corners) cancel as their crossings do: any two under
 // EvenOdd (parity), two wound opposite ways under NonZero (winding). A face that two bodies
 // share is such a pair: left in, it was a surface inside the union that the distance field
-// measured to. What is left keeps the mesh's order.
-std::vector<Triangle> cancel_coincident(const std::vector<Triangle>& tris, FillRule fill) {
+// measured to. What is left keeps the mesh's order, in the same storage (its peak stays the
+// edge lists' below).
+std::vector<Triangle> cancel_coincident(std::vector<Triangle> tris, FillRule fill) {
     struct Entry {
         Triangle corners;  // smallest id first, then the other two ascending
         int sign;          // +1 where (smallest, next, last) in the triangle's own order ascends
@@ -88,10 +90,11 @@ std::vector<Triangle> cancel_coincident(const std::vector<Triangle>& tris, FillR
         }
         i = j;
     }
-    std::vector<Triangle> kept;
+    std::size_t kept = 0;
     for (std::size_t i = 0; i < tris.size(); ++i)
-        if (keep[i]) kept.push_back(tris[i]);
-    return kept;
+        if (keep[i]) tris[kept++] = tris[i];
+    tris.resize(kept);
+    return tris;
 }
 
 Soup weld_and_check(const Mesh& mesh, FillRule fill) {
@@ -122,7 +125,7 @@ Soup weld_and_check(const Mesh& mesh, FillRule fill) {
         if (tri[0] != tri[1] && tri[1] != tri[2] && tri[2] != tri[0]) tris.push_back(tri);  // else no area, no edges
     }
     if (tris.empty()) throw Error("voxelize: every triangle of the mesh is degenerate (no area)");
-    soup.tris = cancel_coincident(tris, fill);
+    soup.tris = cancel_coincident(std::move(tris), fill);
     if (soup.tris.empty())
         throw Error(std::string("voxelize: every triangle of the mesh has a coincident one (the same corners") +
                     (fill == FillRule::NonZero ? ", wound the other way" : "") +
