@@ -137,6 +137,18 @@ inline int pack_row(__global const voxel* s, const voxel thr, const uint nx, con
     return finite;
 }
 
+// On CPU devices the packing kernels ask for the lines of the row rows_ahead(nx) rows (about
+// 8 KiB) after their own, which a work-item a little later packs (a work-group's items run
+// in order), as the CPU engine's packer does: the packs' loads otherwise waited on memory
+// (perf, sphere u8 512³: three quarters of classify_pack's samples on its compare).
+// Nothing on other devices.
+inline uint rows_ahead(const uint nx) { return max(1u, 8192u / (nx * (uint)sizeof(voxel))); }
+
+inline void prefetch_row(__global const voxel* row, const uint nx) {
+    __global const uchar* line = (__global const uchar*)row;
+    for (uint b = 0; b < nx * (uint)sizeof(voxel); b += 64) PREFETCH(line + b);
+}
+
 // One work-item per bit row: its nx samples into `words` words, and its ROW_ kind.
 __kernel void classify_pack(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint words,
                             const uint begin, const uint first_sample, const uint rows, __global uint* bits,
@@ -144,6 +156,10 @@ __kernel void classify_pack(__global const voxel* data, const voxel thr, const u
     const uint r = (uint)get_global_id(0);
     if (r >= rows) return;
     uint state;
+#ifdef CPU_PREFETCH
+    const uint ahead = r + rows_ahead(nx);
+    if (ahead < rows) prefetch_row(data + first_sample + ahead * nx, nx);
+#endif
     if (!pack_row(data + first_sample + r * nx, thr, nx, words, bits + r * words, &state))
         atomic_min(nan_plane, (int)(begin + r / ny));
     row_state[r] = (uchar)state;
@@ -295,6 +311,11 @@ __kernel void classify_repack(__global const voxel* data, const voxel thr, const
     if (r >= rows) return;
     __global const voxel* s = data + first_sample + r * nx;
     __global uint* out = bits + r * words;
+#ifdef CPU_PREFETCH
+    const uint ahead = r + rows_ahead(nx);  // only a row that will be packed
+    if (ahead < rows && (ahead >= meta_rows || scanned_count(vbase, ahead, meta_rows, vend) != 0))
+        prefetch_row(data + first_sample + ahead * nx, nx);
+#endif
     if (r >= meta_rows || scanned_count(vbase, r, meta_rows, vend) != 0) {
         uint state;
         pack_row(s, thr, nx, words, out, &state);
