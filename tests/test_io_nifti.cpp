@@ -359,7 +359,10 @@ TEST_CASE("nifti: a transform that is not finite is an error naming its field", 
             Nifti n(false);
             put_sform(n, {1.5, 0, 0, 1, 0, 2, bad, 2, 0, 0, 2.5, 3});
             const std::string path = s.file("s.nii", n.file());
-            CHECK_THROWS_WITH(read_volume_info(path), Contains(path) && Contains("srow_y[2]"));
+            // srow_y[2]: row y of the sform, column 2, so index axis 2's direction.
+            CHECK_THROWS_WITH(read_volume_info(path),
+                              Contains(path) && Contains("srow_y[2] is ") &&
+                                  Contains("a non-finite direction component of index axis 2"));
         }
     }
     SECTION("qform") {

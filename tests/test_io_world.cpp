@@ -181,6 +181,7 @@ TEST_CASE("world: NRRD with permuted space directions (determinant -1)", "[world
     CHECK(info.flipped == std::array<bool, 3>{false, false, false});  // a permutation is never flipped
     CHECK(info.directions == std::array<double, 9>{0, 1, 0, 0, 0, -1, 1, 0, 0});
     CHECK(info.world_origin == file.origin);
+    CHECK(has_world_transform(info));
     check_samples_placed(info, file);
     check_sphere(path, centre, 7, 0.2);
 }
@@ -239,6 +240,7 @@ TEST_CASE("world: flips only leave the transform the identity", "[world][nrrd]")
     CHECK_FALSE(info.rotation_dropped);
     CHECK(info.directions == std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1});
     CHECK(info.world_origin == info.origin);
+    CHECK_FALSE(has_world_transform(info));
     check_samples_placed(info, file);
     const Mesh mesh = extract(v.view(), vmtest::cpu_options(0, 1));
     Mesh moved = mesh;
@@ -354,13 +356,17 @@ TEST_CASE("world: a non-finite MetaImage direction is an error naming its field"
     Affine file;
     file.step = {{{2, 0, 0}, {0, 2, 0}, {0, 0, 2}}};
     const std::string samples = sphere_samples(n, file, {3, 3, 3}, 2);
-    for (const char* matrix : {"nan 0 0 0 1 0 0 0 1", "0 1 0 inf 0 0 0 0 1"}) {
+    // The value named as it stands in the header (1-based), and the index axis it belongs to.
+    const std::pair<const char*, const char*> cases[] = {
+        {"nan 0 0 0 1 0 0 0 1", "TransformMatrix value 1 is nan: a non-finite direction component of index axis 0"},
+        {"0 1 0 inf 0 0 0 0 1", "TransformMatrix value 4 is inf: a non-finite direction component of index axis 1"}};
+    for (const auto& [matrix, message] : cases) {
         const std::string path =
             s.file("nan.mha", std::string("ObjectType = Image\nNDims = 3\nDimSize = 4 4 4\nElementType = MET_FLOAT\n"
                                           "TransformMatrix = ") +
                                   matrix + "\nElementByteOrderMSB = False\nElementDataFile = LOCAL\n" + samples);
         INFO(matrix);
-        CHECK_THROWS_WITH(read_volume_info(path), Catch::Contains("TransformMatrix") && Catch::Contains("non-finite"));
+        CHECK_THROWS_WITH(read_volume_info(path), Catch::Contains(path) && Catch::Contains(message));
     }
 }
 

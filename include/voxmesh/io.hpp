@@ -131,6 +131,11 @@ struct VolumeInfo {
 // non-finite transform, a non-finite position, and a transform that would put a position
 // beyond the float range (a far world_origin: floats would turn it into inf).
 void to_world(Mesh& mesh, const VolumeInfo& info);
+// Whether to_world moves a mesh of the Volume `info` describes: false where the world transform
+// is the loaded samples' own placement (`directions` the identity, `world_origin` the origin):
+// without rotation_dropped, and where dropped directions do not span 3-D (to_world cannot
+// place them either).
+bool has_world_transform(const VolumeInfo& info);
 
 // The iso voxmesh recorded for meshing a volume it wrote: the NRRD line "voxmesh_iso:=value"
 // (`voxmesh voxelize` writes 0 for a distance field and 127.5 for occupancy, voxmesh-bench

@@ -124,7 +124,7 @@ int run_info(const InfoArgs& a) {
     if (const std::string axes = flipped_axes(info.flipped); !axes.empty())
         std::cout << "flipped:   " << axes
                   << " (stored in the negative direction; reversed on load, origin is the minimum corner)\n";
-    if (info.rotation_dropped && !world_transform_applies(info)) {
+    if (info.rotation_dropped && !has_world_transform(info)) {
         std::cout << "rotation:  dropped (the direction matrix is not axis-aligned and its directions do not span "
                      "3-D; mesh --world cannot apply it)\n";
     } else if (info.rotation_dropped) {

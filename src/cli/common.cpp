@@ -207,7 +207,7 @@ Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads
     Volume v = input.read([&] { return is_raw ? read_raw(path, raw_layout(path, raw)) : read_volume(path, info); });
     // A Volume has no orientation: say so when the file's direction matrix is left out,
     // since the mesh then lies in index-aligned axes, not where other tools put it.
-    if (info.rotation_dropped && !world_transform_applies(info))
+    if (info.rotation_dropped && !has_world_transform(info))
         std::cerr << "voxmesh: warning: '" << input.display()
                   << "': the direction matrix is not axis-aligned and its directions do not span 3-D; its rotation "
                      "is dropped (--world too cannot apply it) and the mesh is in the volume's index axes\n";
@@ -218,10 +218,6 @@ Volume load_volume(const std::string& arg, const RawFlags& raw, unsigned threads
                      "world frame)\n";
     if (info_out) *info_out = std::move(info);
     return finite_samples(std::move(v), input.display(), threads);
-}
-
-bool world_transform_applies(const VolumeInfo& info) {
-    return info.directions != std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1} || info.world_origin != info.origin;
 }
 
 std::string format_bytes(std::uint64_t bytes) {

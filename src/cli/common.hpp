@@ -124,13 +124,10 @@ void write_volume_output(const std::string& output, const VolumeView& volume,
 // scanning for them on `threads` threads (0: every CPU this process may use).
 // info (may be null): the file's header as read_volume gives it (a default VolumeInfo for raw samples).
 // world: the caller places the mesh with to_world, so a dropped rotation is not warned about
-// (unless to_world cannot apply it, see world_transform_applies).
+// (unless to_world cannot apply it, see has_world_transform).
 Volume load_volume(const std::string& path, const RawFlags& raw, unsigned threads = 0, VolumeInfo* info = nullptr,
                    bool world = false);
 RawLayout raw_layout(const std::string& path, const RawFlags& raw);
-// Whether to_world moves a mesh of the volume `info` describes: not without a rotation, nor for
-// a dropped one whose directions do not span 3-D (left as the identity: --world cannot place it).
-bool world_transform_applies(const VolumeInfo& info);
 
 
 std::string format_bytes(std::uint64_t bytes);

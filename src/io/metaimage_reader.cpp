@@ -139,7 +139,9 @@ VolumeHeader read_metaimage_header(const InputFile& file) {
     if (!matrix) matrix = optional("rotation");
     if (!matrix) matrix = optional("orientation");
     std::array<std::vector<double>, 3> axes = transform_axes(path, matrix, ndims);
-    check_directions(path, "TransformMatrix", axes);
+    check_directions(path, axes, [ndims](std::size_t a, std::size_t c) {
+        return "TransformMatrix value " + std::to_string(a * ndims + c + 1);
+    });
     for (std::size_t a = 0; a < 3; ++a)
         if (negative_spacing[a]) reverse_direction(axes, a);  // position = Offset + M (index * spacing)
     apply_directions(h, axis_directions(axes));

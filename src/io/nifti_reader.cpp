@@ -60,13 +60,10 @@ ScalarType nifti_type(const std::string& path, int datatype) {
 std::array<std::vector<double>, 3> sform_axes(const std::string& path, const HeaderBytes& hdr) {
     std::array<std::vector<double>, 3> axes;
     for (std::size_t a = 0; a < 3; ++a)
-        for (std::size_t row = 0; row < 3; ++row) {
-            const double v = hdr.f32(280 + 16 * row + 4 * a);
-            if (!std::isfinite(v))
-                fail(path, std::string("srow_") + "xyz"[row] + "[" + std::to_string(a) + "] is " + shortest_text(v) +
-                               "; the sform must be finite");
-            axes[a].push_back(v);
-        }
+        for (std::size_t row = 0; row < 3; ++row) axes[a].push_back(hdr.f32(280 + 16 * row + 4 * a));
+    check_directions(path, axes, [](std::size_t a, std::size_t row) {
+        return std::string("srow_") + "xyz"[row] + "[" + std::to_string(a) + "]";
+    });
     return axes;
 }
 

@@ -73,12 +73,14 @@ double vector_length(const std::vector<double>& v) {
     return largest * std::sqrt(norm2);
 }
 
-void check_directions(const std::string& path, const char* field, const std::array<std::vector<double>, 3>& axes) {
+void check_directions(const std::string& path, const std::array<std::vector<double>, 3>& axes,
+                      const std::function<std::string(std::size_t axis, std::size_t component)>& name) {
     for (std::size_t a = 0; a < 3; ++a)
-        for (const double c : axes[a])
-            if (!std::isfinite(c))
-                fail(path, std::string("'") + field + "' gives index axis " + std::to_string(a) +
-                               " a non-finite direction component (" + shortest_text(c) + ")");
+        for (std::size_t c = 0; c < axes[a].size(); ++c)
+            if (!std::isfinite(axes[a][c]))
+                fail(path, name(a, c) + " is " + shortest_text(axes[a][c]) +
+                               ": a non-finite direction component of index axis " + std::to_string(a) +
+                               " (the direction matrix must be finite)");
 }
 
 AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes) {

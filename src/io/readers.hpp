@@ -8,6 +8,7 @@
 #include <voxmesh/io.hpp>
 
 #include <array>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -50,9 +51,12 @@ struct AxisDirections {
 // `axes[a]` is index axis a's direction vector in world components (any length; components
 // past the third count as off-axis). A zero vector says nothing and is left alone.
 AxisDirections axis_directions(const std::array<std::vector<double>, 3>& axes);
-// Fails naming `field` where a direction component is NaN or infinite (axis_directions would
-// otherwise skip that axis, silently keeping the samples unrotated).
-void check_directions(const std::string& path, const char* field, const std::array<std::vector<double>, 3>& axes);
+// Fails where a direction component is NaN or infinite (axis_directions would otherwise skip
+// that axis, silently keeping the samples unrotated), naming it as the header does:
+// name(a, c) for component c of index axis a's direction (NIfTI's srow_y[2], MetaImage's
+// TransformMatrix value).
+void check_directions(const std::string& path, const std::array<std::vector<double>, 3>& axes,
+                      const std::function<std::string(std::size_t axis, std::size_t component)>& name);
 // A direction vector's length (an axis's spacing where the header gives vectors).
 double vector_length(const std::vector<double>& v);
 // A negative spacing along index axis a: its direction reversed, or, where the header gives

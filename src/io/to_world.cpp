@@ -12,14 +12,18 @@
 
 namespace voxmesh {
 
+bool has_world_transform(const VolumeInfo& info) {
+    return info.directions != std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1} || info.world_origin != info.origin;
+}
+
 void to_world(Mesh& mesh, const VolumeInfo& info) {
     if (mesh.positions.size() % 3 || mesh.indices.size() % 3)
         throw Error("to_world: positions and indices must be whole triples");
     if (!mesh.normals.empty() && mesh.normals.size() != mesh.positions.size())
         throw Error("to_world: normals are not one per vertex");
-    const std::array<double, 9>& m = info.directions;
     // Identity: leave the floats as they are (p - origin + origin might round).
-    if (m == std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1} && info.world_origin == info.origin) return;
+    if (!has_world_transform(info)) return;
+    const std::array<double, 9>& m = info.directions;
 
     // Cofactors: the inverse-transpose is cof / det; its scale goes with renormalising, but
     // not its sign, which keeps outward normals outward under a mirroring.
