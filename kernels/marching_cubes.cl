@@ -44,7 +44,7 @@ typedef CAT(VOXEL_T, 16) voxel16;
 #endif
 #endif
 #ifndef PREFETCH
-#define PREFETCH(p) ((void)0)
+#define PREFETCH(p) ((void)(p)) /* uses the address, so its computation is not an unused variable */
 #endif
 
 // Bits of word q that stand for x < limit.
@@ -142,12 +142,14 @@ inline int pack_row(__global const voxel* s, const voxel thr, const uint nx, con
 // in order), as the CPU engine's packer does: the packs' loads otherwise waited on memory
 // (perf, sphere u8 512³: three quarters of classify_pack's samples on its compare).
 // Nothing on other devices.
+#ifdef CPU_PREFETCH
 inline uint rows_ahead(const uint nx) { return max(1u, 8192u / (nx * (uint)sizeof(voxel))); }
 
 inline void prefetch_row(__global const voxel* row, const uint nx) {
     __global const uchar* line = (__global const uchar*)row;
     for (uint b = 0; b < nx * (uint)sizeof(voxel); b += 64) PREFETCH(line + b);
 }
+#endif
 
 // One work-item per bit row: its nx samples into `words` words, and its ROW_ kind.
 __kernel void classify_pack(__global const voxel* data, const voxel thr, const uint nx, const uint ny, const uint words,
@@ -299,6 +301,12 @@ inline uint scanned_count(__global const uint* base, uint r, uint rows, uint end
     return (r + 1 < rows ? base[r + 1] : end) - base[r];
 }
 
+// Whether classify_repack packs bit row r: a row past the meta rows, or one that owns a
+// crossed edge (the others are filled from their first sample).
+inline bool repacks_row(uint r, uint meta_rows, __global const uint* vbase, uint vend) {
+    return r >= meta_rows || scanned_count(vbase, r, meta_rows, vend) != 0;
+}
+
 // classify_pack again, for a chunk already counted (its samples are known to be finite): a
 // meta row that owns no crossed edge has no crossed x-edge, so its samples are all inside or
 // all outside, and its words are filled from its first sample instead of packing them (on a
@@ -313,10 +321,9 @@ __kernel void classify_repack(__global const voxel* data, const voxel thr, const
     __global uint* out = bits + r * words;
 #ifdef CPU_PREFETCH
     const uint ahead = r + rows_ahead(nx);  // only a row that will be packed
-    if (ahead < rows && (ahead >= meta_rows || scanned_count(vbase, ahead, meta_rows, vend) != 0))
-        prefetch_row(data + first_sample + ahead * nx, nx);
+    if (ahead < rows && repacks_row(ahead, meta_rows, vbase, vend)) prefetch_row(data + first_sample + ahead * nx, nx);
 #endif
-    if (r >= meta_rows || scanned_count(vbase, r, meta_rows, vend) != 0) {
+    if (repacks_row(r, meta_rows, vbase, vend)) {
         uint state;
         pack_row(s, thr, nx, words, out, &state);
         return;
