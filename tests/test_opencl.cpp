@@ -188,9 +188,9 @@ TEST_CASE("OpenCL matches the CPU engine on sphere, torus and gyroid", "[opencl]
     CHECK(topo.euler == 2);
 }
 
-TEST_CASE("OpenCL matches the CPU engine for every scalar type", "[opencl]") {
-    if (!have_device()) return;
-    Grid g{{29, 31, 27}, {1, 0.5, 2}, {1, 2, 3}};
+// A gyroid on grid g as every scalar type, each at a threshold between its values and (u8)
+// one on them.
+void compare_every_scalar_type(const Grid& g) {
     const std::vector<float> f = gyroid(g);  // in [-1.5, 1.5]
     Options o;
     auto check = [&](const void* data, ScalarType type, double iso) {
@@ -215,7 +215,15 @@ TEST_CASE("OpenCL matches the CPU engine for every scalar type", "[opencl]") {
     check(i32.data(), ScalarType::I32, -1.0e8 - 0.25);
     check(f.data(), ScalarType::F32, 0.3);
     check(f64.data(), ScalarType::F64, 2e-4);
+}
+
+TEST_CASE("OpenCL matches the CPU engine for every scalar type", "[opencl]") {
+    if (!have_device()) return;
+    const Grid g{{29, 31, 27}, {1, 0.5, 2}, {1, 2, 3}};
+    compare_every_scalar_type(g);
     // A threshold no sample reaches: an empty mesh, as the CPU engine.
+    const auto u8 = to_type<std::uint8_t>(gyroid(g), 80, 128);
+    Options o;
     o.iso = 300;
     const Mesh empty = run(view_of(u8.data(), ScalarType::U8, g), o, Backend::OpenCL);
     CHECK(empty.indices.empty());
@@ -234,6 +242,18 @@ public:
 private:
     void (*hook_)(bool);
 };
+
+// What a GPU compiles: the kernels without the CPU-only hints (row prefetches, and pack16's
+// lane masks by multiplies instead of the x86 builtin), which PoCL otherwise never builds.
+// Rows of 70 samples: two whole words (pack_word) and a partial one; with and without copies.
+TEST_CASE("OpenCL's kernels as built for a GPU match the CPU engine for every scalar type", "[opencl]") {
+    if (!have_device()) return;
+    const Pretend gpu(detail::opencl_pretend_gpu_build);
+    const Grid g{{70, 23, 19}, {0.5, 1, 1.5}, {-1, 0, 2}};
+    compare_every_scalar_type(g);
+    const Pretend discrete(detail::opencl_pretend_discrete);
+    compare_every_scalar_type(g);
+}
 
 // Makes the device and Hybrid's CPU worker slower for a scope (detail::opencl_pretend_slow).
 struct Slow {

@@ -64,6 +64,7 @@ constexpr unsigned kPieceSamples = kPieceRows + 3 * kKeptPieceRows;
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
 std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
+std::atomic<bool> g_pretend_gpu_build{false};  // test hook: build the kernels without CPU-only hints
 // Test hook: a slower device (per chunk counted, per piece generated), a slower CPU worker
 // (per chunk counted, its own or taken over), a CPU worker that starts late (before its first run).
 std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{0}, g_slow_cpu_start_s{0};
@@ -411,7 +412,7 @@ void Engine::prepare(DeviceJob& job) {
     job.options = std::string("-cl-std=CL1.2 -DVOXEL_T=") + cl_type_name(job.device_type);
     if (is_integer(job.device_type)) job.options += " -DVOXEL_INTEGER";
     if (job.device_type == ScalarType::F64) job.options += " -DVOXEL_DOUBLE";
-    if (job.device->info.type == DeviceType::Cpu) job.options += " -DCPU_PREFETCH";
+    if (job.device->info.type == DeviceType::Cpu && !g_pretend_gpu_build) job.options += " -DCPU_PREFETCH";
     job.word_id_bytes = (nx_ + 31) / 32 <= kMaxWordsFor16BitBases ? 2 : 4;
     job.options += job.word_id_bytes == 2 ? " -Dword_id=ushort" : " -Dword_id=uint";
     if (job.fp64) job.options += " -DUSE_FP64";
@@ -1363,6 +1364,8 @@ void opencl_build_program(const std::string& source, const std::string& options,
 void opencl_pretend_no_fp64(bool pretend) { g_pretend_no_fp64 = pretend; }
 
 void opencl_pretend_discrete(bool pretend) { g_pretend_discrete = pretend; }
+
+void opencl_pretend_gpu_build(bool pretend) { g_pretend_gpu_build = pretend; }
 
 void opencl_staging_block_bytes(std::size_t bytes) { cl_engine::set_staging_block_bytes(bytes); }
 
