@@ -906,6 +906,39 @@ TEST_CASE("OpenCL and Hybrid stats account for every voxel when half a chunk fal
     }
 }
 
+// Stats::backend is what ran: with a budget no plane fits in, every chunk runs on the CPU
+// engine, and the OpenCL backend says Cpu (it said OpenCL); with one that fits some chunks it
+// says OpenCL; Hybrid always says Hybrid.
+TEST_CASE("OpenCL's stats say Cpu when every chunk fell back to the CPU engine", "[opencl]") {
+    if (!have_device()) return;
+    Grid g{{32, 32, 4}};
+    const std::vector<float> f = gyroid(g);
+    const VolumeView v = view_of(f.data(), ScalarType::F32, g);
+    const Mesh cpu = run(v, Options{}, Backend::Cpu);
+    REQUIRE(cpu.triangle_count() > 0);
+    Options o;
+    o.devices = {0};
+    o.chunk_planes = 2;
+    o.threads = 1;
+    for (const Backend backend : {Backend::OpenCL, Backend::Hybrid}) {
+        for (const std::size_t budget : {1000u, 30000u}) {
+            o.memory_budget = budget;
+            Stats stats;
+            require_same(cpu, run(v, o, backend, &stats), v);
+            std::size_t device_voxels = 0;
+            for (const DeviceStats& d : stats.devices)
+                if (d.name != "cpu" && d.name != "cpu (fallback)") device_voxels += d.voxels;
+            INFO(backend_name(backend) << ", budget " << budget << ", device voxels " << device_voxels);
+            CHECK((budget == 1000u) == (device_voxels == 0));
+            const Backend ran = backend == Backend::Hybrid ? Backend::Hybrid
+                                : device_voxels == 0       ? Backend::Cpu
+                                                           : Backend::OpenCL;
+            CHECK(stats.backend == ran);
+            if (budget == 1000u && backend == Backend::OpenCL) CHECK(!stats.warnings.empty());
+        }
+    }
+}
+
 #ifdef VOXMESH_HAS_OPENCL  // uses test hooks of the OpenCL build
 // With automatic chunks, a call plans its split from what the previous call on the same
 // device and volume shape measured; the plan only moves work, never the mesh.

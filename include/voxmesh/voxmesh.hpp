@@ -122,7 +122,9 @@ struct DeviceStats {
 };
 
 struct Stats {
-    Backend backend = Backend::Cpu;  // what actually ran
+    // What actually ran: Cpu where OpenCL was asked for and every chunk ran on the CPU engine
+    // instead (no device could mesh one; the warnings say why). Hybrid stays Hybrid.
+    Backend backend = Backend::Cpu;
     // Options::threads resolved (0 becomes the usable CPUs): the CPU slabs, which run on no more
     // threads than the process may use at once; 0 for the OpenCL engine alone.
     unsigned threads = 0;

@@ -1297,6 +1297,11 @@ Mesh Engine::run(Stats& stats) {
     // By voxels: a chunk cut in halves to fit a device counts where it starts, so a fallback
     // of only its upper half has voxels and no chunk (and was left out of the stats).
     if (fallback_stats_.voxels > 0) stats.devices.push_back(fallback_stats_);
+    // No device meshed a sample (each chunk failed there and ran on the CPU engine): the CPU
+    // is what ran, as Sculptor::stats() says after its fallback. Hybrid stays Hybrid.
+    if (!hybrid_ && mode != HybridMode::DeviceAlone && fallback_stats_.voxels > 0 &&
+        std::all_of(jobs.begin(), jobs.end(), [](const DeviceJob& job) { return job.stats.voxels == 0; }))
+        stats.backend = Backend::Cpu;
     stats.times.classify = cpu_pass_seconds_[0];
     stats.times.scan = cpu_pass_seconds_[1];
     stats.times.generate = cpu_pass_seconds_[2];
