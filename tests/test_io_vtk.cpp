@@ -110,6 +110,53 @@ TEST_CASE("vtk: files written by VTK read with their geometry and every sample",
             for (std::size_t i = 0; i < 256; ++i) REQUIRE(static_cast<const std::uint8_t*>(v.data)[i] == i);
         }
     }
+    // Found by a review: an empty string in an INFORMATION string vector is a blank line,
+    // which ended the METADATA skip, and the strings after it were read as a keyword.
+    SECTION("INFORMATION keys of every kind, where a DATA line's count may be an integer's value") {
+        // As VTK 9.1's reader reads each of them (checked).
+        const std::string head = "# vtk DataFile Version 5.1\nt\nASCII\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\n"
+                                 "CELL_DATA 1\nSCALARS c float\nLOOKUP_TABLE default\n7\nMETADATA\nINFORMATION 1\n";
+        const std::string tail = "POINT_DATA 8\nSCALARS v short\nLOOKUP_TABLE default\n1 2 3 4 5 6 7 8\n";
+        const std::string integer = "NAME GUI_HIDE LOCATION vtkAbstractArray\n";
+        const std::string strings = "NAME INPUT_REQUIRED_DATA_TYPE LOCATION vtkAlgorithm\n";
+        const std::string numbers = "NAME COMPONENT_RANGE LOCATION vtkDataArray\n";
+        Scratch s;
+        for (const std::string& key : {integer + "DATA 1\n\n",        // the block's end after it
+                                       integer + "DATA 2\n\n\n",      // and a blank line more
+                                       strings + "DATA 2\na\n\n\n",   // "a" and "", then the end
+                                       strings + "DATA 1\n\n\n",      // "", then the end
+                                       strings + "DATA 0\n\n",        // none
+                                       "\n" + numbers + "DATA 2 1 2\n\n"}) {
+            INFO(key);
+            const Volume v = read_volume(s.file("key.vtk", head + key + tail));
+            for (std::size_t i = 0; i < 8; ++i)
+                CHECK(static_cast<const std::int16_t*>(v.data)[i] == static_cast<int>(i + 1));
+        }
+    }
+    // Found by a review: a keyword after more blank bytes than half the 64 kB window the header
+    // is read through was not seen (LOOKUP_TABLE's line read as samples), and a line of blanks
+    // longer than the window was refused as too long. VTK reads past blanks of any length.
+    SECTION("keywords after long runs of blank lines and spaces") {
+        Scratch s;
+        for (const std::string& blanks : {std::string(40000, '\n'), std::string(100000, '\n'),
+                                          std::string(40000, ' ') + "\n", std::string(200000, '\n') + "  ",
+                                          std::string(1, '\n').append(70000, ' ')}) {
+            INFO(blanks.size() << " blank bytes");
+            for (const bool binary : {false, true}) {
+                const std::string samples =
+                    binary ? std::string("\0\1\0\2\0\3\0\4\0\5\0\6\0\7\0\x08\n", 17) : "1 2 3 4 5 6 7 8\n";
+                const std::string text = std::string("# vtk DataFile Version 5.1\nt\n") + (binary ? "BINARY" : "ASCII") +
+                                         "\nDATASET STRUCTURED_POINTS\nDIMENSIONS 2 2 2\nCELL_DATA 1\nSCALARS c float" +
+                                         blanks + "\nLOOKUP_TABLE default\n" +
+                                         (binary ? std::string("\x40\xe0\0\0\n", 5) : "7\n") + blanks + "\nMETADATA" +
+                                         "\nCOMPONENT_NAMES\nc0\n\nPOINT_DATA 8" + blanks + "\nSCALARS v short" + blanks +
+                                         "\nLOOKUP_TABLE default\n" + samples;
+                const Volume v = read_volume(s.file("blanks.vtk", text));
+                for (std::size_t i = 0; i < 8; ++i)
+                    CHECK(static_cast<const std::int16_t*>(v.data)[i] == static_cast<int>(i + 1));
+            }
+        }
+    }
     // Found by reviews: the dataset's field data and cell data, which VTK writes before the
     // point data, were refused ("FIELD/CELL_DATA before POINT_DATA is not supported"); then the
     // blank line VTK writes before an array's METADATA (after ASCII values whose count is a
@@ -118,7 +165,8 @@ TEST_CASE("vtk: files written by VTK read with their geometry and every sample",
     SECTION("short after the dataset's field data (numbers, strings, ids, longs, bits) and cell data, with METADATA") {
         for (const char* name : {"i16_field_data_ascii.vtk", "i16_field_data_binary.vtk", "i16_field_data_binary_v42.vtk",
                                  "i16_cell_data_ascii.vtk", "i16_cell_data_binary.vtk", "i16_cell_data_binary_v42.vtk",
-                                 "i16_metadata_ascii.vtk", "i16_metadata_binary.vtk"}) {
+                                 "i16_metadata_ascii.vtk", "i16_metadata_binary.vtk", "i16_information_ascii.vtk",
+                                 "i16_information_binary.vtk"}) {
             INFO(name);
             const Volume v = read_volume(corpus(name));
             CHECK(v.type == ScalarType::I16);

@@ -113,6 +113,22 @@ def main():
     meta.GetCellData().AddArray(labels)
     write(meta, "i16_metadata_ascii.vtk", binary=False)
     write(meta, "i16_metadata_binary.vtk")
+    # INFORMATION keys of each kind the reader has to pass: a string vector with an empty string
+    # (a blank line inside the METADATA block), an integer (a "DATA 1" line like a vector's
+    # count), a string, a double vector; on the cell data, which is skipped.
+    info = image((4, 3, 2), vtk.VTK_SHORT, np.int16)
+    density = numpy_support.numpy_to_vtk(np.arange(info.GetNumberOfCells()).astype(np.float32), deep=1,
+                                         array_type=vtk.VTK_FLOAT)
+    density.SetName("density")
+    keys = density.GetInformation()
+    for text in ("image", "", "label map"):
+        vtk.vtkAlgorithm.INPUT_REQUIRED_DATA_TYPE().Append(keys, text)
+    keys.Set(vtk.vtkAbstractArray.GUI_HIDE(), 1)
+    keys.Set(vtk.vtkDataArray.UNITS_LABEL(), "g/cm3")
+    keys.Set(vtk.vtkDataArray.COMPONENT_RANGE(), [0.0, 5.0], 2)
+    info.GetCellData().SetScalars(density)
+    write(info, "i16_information_ascii.vtk", binary=False)
+    write(info, "i16_information_binary.vtk")
     # Written with EXTENT (and a negative spacing): the first sample is at ORIGIN + first * SPACING.
     extent = image((4, 3, 2), vtk.VTK_SHORT, np.int16, spacing=(0.5, -1, 2))
     extent.SetExtent(-3, 0, 4, 6, 1, 2)

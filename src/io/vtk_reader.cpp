@@ -76,8 +76,14 @@ public:
             move_to(base_ + window_.size());
         pos_ = end == std::string::npos ? window_.size() : end + 1;
     }
-    // The next non-blank line, as words.
+    // The next non-blank line, as words. Blanks before it of any length (a line of them longer
+    // than the window was refused as too long).
     std::vector<std::string_view> words(const char* wanted) {
+        for (;;) {
+            while (pos_ < window_.size() && is_blank(window_[pos_])) ++pos_;
+            if (pos_ < window_.size() || file_ends_in_window()) break;
+            move_to(base_ + window_.size());
+        }
         for (;;) {
             const std::string_view line = trim(raw(wanted));
             if (!line.empty()) return split_words(line);
@@ -113,14 +119,28 @@ public:
     // Whether the next non-blank line starts with `keyword`. Past blanks of any kind, as
     // words() reads the line: an indented "  LOOKUP_TABLE default" (or one after a line of
     // spaces) was taken for the first samples, silently in BINARY.
+    // Reads nothing: a run of blanks longer than the window (which hid the keyword) is
+    // looked past in the file, the window left where it is (BINARY data may start here).
     bool next_starts_with(std::string_view keyword) {
         if (window_.size() - pos_ < kMaxVtkHeader / 2 && !file_ends_in_window()) move_to(offset());
         std::size_t at = pos_;
-        while (at < window_.size() && trim(std::string_view(window_).substr(at, 1)).empty()) ++at;
-        return lower(std::string_view(window_).substr(at, keyword.size())) == lower(keyword);
+        while (at < window_.size() && is_blank(window_[at])) ++at;
+        if (at + keyword.size() <= window_.size() || file_ends_in_window())
+            return lower(std::string_view(window_).substr(at, keyword.size())) == lower(keyword);
+        for (std::size_t from = base_ + at;;) {
+            const std::string more = file_.read(from, kMaxVtkHeader);
+            std::size_t i = 0;
+            while (i < more.size() && is_blank(more[i])) ++i;
+            if (i < more.size() || from + more.size() >= file_.size())
+                return lower(file_.read(from + i, keyword.size())) == lower(keyword);
+            from += more.size();
+        }
     }
+    // Back to a place offset() gave (a look ahead that did not match).
+    void seek(std::size_t offset) { move_to(offset); }
 
 private:
+    static bool is_blank(char c) { return trim(std::string_view(&c, 1)).empty(); }
     void move_to(std::size_t offset) {
         window_ = file_.read(offset, kMaxVtkHeader);
         base_ = offset;
@@ -176,19 +196,66 @@ std::uint64_t skip_lookup_table_line(Lines& lines, bool binary, std::size_t& dat
     return w.size() - 2;
 }
 
+// Whether the next `count` lines are one encoded string each (vtkDataWriter writes blanks and
+// '%' as %XX, so a string line has no blank in it; an empty one is a blank line) and the line
+// after them can follow a key: a blank one (the block's end), the next key's NAME, or the
+// file's end. Reads them when so; else reads nothing.
+bool skip_string_lines(Lines& lines, std::uint64_t count, const char* context) {
+    const std::size_t start = lines.offset();
+    if (count > lines.bytes_left()) return false;  // a line a string
+    bool strings = true;
+    for (std::uint64_t i = 0; i < count && strings; ++i) {
+        if (lines.bytes_left() == 0) strings = false;
+        else strings = split_words(lines.raw(context)).size() <= 1;
+    }
+    if (strings && lines.bytes_left() > 0) {
+        const std::size_t after = lines.offset();
+        const std::string_view next = trim(lines.raw(context));
+        strings = next.empty() || next.substr(0, 5) == "NAME ";
+        lines.seek(after);
+    }
+    if (!strings) lines.seek(start);
+    return strings;
+}
+
+// An array's INFORMATION keys ("INFORMATION count" read), as vtkDataWriter writes them: a
+// "NAME key LOCATION class" line (after any blank lines), then "DATA" and the value on one
+// line, but a string vector's strings on lines of their own after "DATA count". An empty
+// string is a blank line, which ended the METADATA skip early ("unknown cell data attribute").
+// Which keys hold string vectors only VTK's key registry knows, so a "DATA n" line is taken
+// for one where the n lines after it read as strings (an integer key's n otherwise).
+void skip_information(Lines& lines, const std::string& path, std::string_view count, const char* context) {
+    const std::size_t keys = parse_size(path, "INFORMATION", count);
+    if (keys > lines.bytes_left()) fail(path, std::string("ends inside ") + context + " (truncated)");  // a line a key
+    for (std::size_t k = 0; k < keys; ++k) {
+        const std::vector<std::string_view> name = lines.words(context);
+        if (name[0] != "NAME") continue;  // VTK's reader passes over such a line, as one key
+        const std::vector<std::string_view> data = split_words(lines.raw(context));
+        if (data.size() == 2 && data[0] == "DATA" && data[1].find_first_not_of("0123456789") == std::string_view::npos &&
+            data[1].size() < 19)
+            (void)skip_string_lines(lines, std::stoull(std::string(data[1])), context);
+    }
+}
+
 // Skips an array's METADATA block, if one follows, as VTK's reader does: the blank lines before
 // it (ASCII values end with one when their count is a multiple of nine, strings always do),
 // then lines to a blank one, but COMPONENT_NAMES is one line a component, and an unnamed
-// component's is blank. Taking the blank line before METADATA, or an unnamed component's, for
-// the block's end refused files VTK wrote ("unknown cell data attribute 'METADATA'").
+// component's is blank (INFORMATION's keys: skip_information). Taking the blank line before
+// METADATA, or an unnamed component's, for the block's end refused files VTK wrote ("unknown
+// cell data attribute 'METADATA'").
 void skip_metadata(Lines& lines, const std::string& path, std::uint64_t components, const std::string& what) {
     if (!lines.next_starts_with("METADATA")) return;
     const std::string context = "the METADATA block of " + what;
     (void)lines.words(context.c_str());  // METADATA, after any blank lines
     for (;;) {
-        const std::string_view line = trim(lines.raw(context.c_str()));
+        const std::vector<std::string_view> line = split_words(lines.raw(context.c_str()));
         if (line.empty()) return;
-        if (lower(line) != "component_names") continue;
+        if (line.size() == 2 && lower(line[0]) == "information") {
+            const std::string count(line[1]);  // the window moves on under later reads
+            skip_information(lines, path, count, context.c_str());
+            continue;
+        }
+        if (line.size() != 1 || lower(line[0]) != "component_names") continue;
         if (components > lines.bytes_left()) fail(path, "ends inside " + context + " (truncated)");  // a line a name
         for (std::uint64_t c = 0; c < components; ++c) lines.skip_line(context.c_str());
     }
