@@ -244,12 +244,14 @@ private:
 };
 
 // What a GPU compiles: the kernels without the CPU-only hints (row prefetches, and pack16's
-// lane masks by multiplies instead of the x86 builtin), which PoCL otherwise never builds.
-// Rows of 70 samples: two whole words (pack_word) and a partial one; with and without copies.
+// lane masks by multiplies instead of the x86 builtin), which PoCL otherwise never builds, and
+// the scans in GPU work-groups (256 items of 8 where PoCL's are 1 of 1024).
+// Rows of 70 samples: two whole words (pack_word) and a partial one; 64 x 40 rows, more than
+// one GPU scan block of 2048 where the volume is one chunk; with and without copies.
 TEST_CASE("OpenCL's kernels as built for a GPU match the CPU engine for every scalar type", "[opencl]") {
     if (!have_device()) return;
     const Pretend gpu(detail::opencl_pretend_gpu_build);
-    const Grid g{{70, 23, 19}, {0.5, 1, 1.5}, {-1, 0, 2}};
+    const Grid g{{70, 64, 40}, {0.5, 1, 1.5}, {-1, 0, 2}};
     compare_every_scalar_type(g);
     const Pretend discrete(detail::opencl_pretend_discrete);
     compare_every_scalar_type(g);

@@ -64,7 +64,7 @@ constexpr unsigned kPieceSamples = kPieceRows + 3 * kKeptPieceRows;
 
 std::atomic<bool> g_pretend_no_fp64{false};  // test hook: run the float paths on fp64 devices
 std::atomic<bool> g_pretend_discrete{false};  // test hook: copy in and out as for a discrete GPU
-std::atomic<bool> g_pretend_gpu_build{false};  // test hook: build the kernels without CPU-only hints
+std::atomic<bool> g_pretend_gpu_build{false};  // test hook: kernels built and scans shaped as for a GPU
 // Test hook: a slower device (per chunk counted, per piece generated), a slower CPU worker
 // (per chunk counted, its own or taken over), a CPU worker that starts late (before its first run).
 std::atomic<double> g_slow_count_s{0}, g_slow_generate_s{0}, g_slow_cpu_count_s{0}, g_slow_cpu_start_s{0};
@@ -796,8 +796,8 @@ void Engine::count_on_device(DeviceJob& job, Piece& piece) {
                  u(s.cell_end), u(s.rows), d.pair_corners, piece.vbase, piece.tbase, piece.cell_groups);
         launch(job, rows, s.rows, Pass::Classify, log);
 
-        scan_into(d, piece.vbase, s.rows, counts, kVertexTotal, log);
-        scan_into(d, piece.tbase, s.rows, counts, kTriangleTotal, log);
+        scan_into(d, piece.vbase, s.rows, counts, kVertexTotal, log, g_pretend_gpu_build);
+        scan_into(d, piece.tbase, s.rows, counts, kTriangleTotal, log, g_pretend_gpu_build);
         if (s.owned_rows < s.rows)  // plane `end`'s first vertex id: its first row's base
             d.queue.enqueueCopyBuffer(piece.vbase, counts, s.owned_rows * sizeof(cl_uint),
                                       kEndPlaneVertex * sizeof(cl_uint), sizeof(cl_uint), nullptr,

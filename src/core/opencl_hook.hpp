@@ -43,8 +43,9 @@ void opencl_pretend_no_fp64(bool pretend);
 // Treats every device as not sharing host memory: samples are copied in and the mesh read
 // back, the code path of discrete GPUs, on PoCL too.
 void opencl_pretend_discrete(bool pretend);
-// Builds the kernels as for a device that is not a CPU: without the CPU-only hints (row
-// prefetches, the x86 lane-mask builtin), so that the kernel code GPUs compile runs on PoCL.
+// Builds the kernels as for a device that is not a CPU (without the CPU-only hints: row
+// prefetches, the x86 lane-mask builtin) and launches the engine's scans in GPU work-groups,
+// so that the kernel code GPUs compile runs on PoCL.
 void opencl_pretend_gpu_build(bool pretend);
 // Copies to and from discrete devices go through pinned blocks of this many bytes (0: the
 // default), so that tests run many blocks through the double buffering.
