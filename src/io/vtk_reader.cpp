@@ -79,11 +79,9 @@ public:
     // The next non-blank line, as words. Blanks before it of any length (a line of them longer
     // than the window was refused as too long).
     std::vector<std::string_view> words(const char* wanted) {
-        for (;;) {
-            while (pos_ < window_.size() && is_blank(window_[pos_])) ++pos_;
-            if (pos_ < window_.size() || file_ends_in_window()) break;
-            move_to(base_ + window_.size());
-        }
+        const std::size_t at = first_non_blank();
+        if (at >= base_ + window_.size()) move_to(at);
+        else pos_ = at - base_;
         for (;;) {
             const std::string_view line = trim(raw(wanted));
             if (!line.empty()) return split_words(line);
@@ -123,24 +121,30 @@ public:
     // looked past in the file, the window left where it is (BINARY data may start here).
     bool next_starts_with(std::string_view keyword) {
         if (window_.size() - pos_ < kMaxVtkHeader / 2 && !file_ends_in_window()) move_to(offset());
-        std::size_t at = pos_;
-        while (at < window_.size() && is_blank(window_[at])) ++at;
-        if (at + keyword.size() <= window_.size() || file_ends_in_window())
-            return lower(std::string_view(window_).substr(at, keyword.size())) == lower(keyword);
-        for (std::size_t from = base_ + at;;) {
-            const std::string more = file_.read(from, kMaxVtkHeader);
-            std::size_t i = 0;
-            while (i < more.size() && is_blank(more[i])) ++i;
-            if (i < more.size() || from + more.size() >= file_.size())
-                return lower(file_.read(from + i, keyword.size())) == lower(keyword);
-            from += more.size();
-        }
+        const std::size_t at = first_non_blank();
+        if (at + keyword.size() <= base_ + window_.size() || file_ends_in_window())
+            return lower(std::string_view(window_).substr(at - base_, keyword.size())) == lower(keyword);
+        return lower(file_.read(at, keyword.size())) == lower(keyword);
     }
     // Back to a place offset() gave (a look ahead that did not match).
     void seek(std::size_t offset) { move_to(offset); }
 
 private:
     static bool is_blank(char c) { return trim(std::string_view(&c, 1)).empty(); }
+    // Where the first byte from offset() on that is not blank lies in the file (its size when
+    // none is), past a run of blanks of any length; moves nothing.
+    std::size_t first_non_blank() const {
+        std::size_t at = pos_;
+        while (at < window_.size() && is_blank(window_[at])) ++at;
+        if (at < window_.size() || file_ends_in_window()) return base_ + at;
+        for (std::size_t from = base_ + at;;) {
+            const std::string more = file_.read(from, kMaxVtkHeader);
+            std::size_t i = 0;
+            while (i < more.size() && is_blank(more[i])) ++i;
+            if (i < more.size() || from + more.size() >= file_.size()) return from + i;
+            from += more.size();
+        }
+    }
     void move_to(std::size_t offset) {
         window_ = file_.read(offset, kMaxVtkHeader);
         base_ = offset;
