@@ -8,8 +8,13 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <memory>
 #include <random>
+#include <sstream>
+#include <string>
 #include <vector>
 
 #if defined(__linux__)
@@ -107,6 +112,49 @@ TEST_CASE("a page written is resident, a fresh mapping's is not", "[core][pages]
     CHECK_FALSE(voxmesh::detail::page_resident(middle));
     if (populate_for_writing(fresh, bytes)) CHECK(voxmesh::detail::page_resident(middle));
     munmap(fresh, bytes);
+}
+
+namespace {
+
+// The VmFlags line of the mapping that holds p in /proc/self/smaps ("hg": huge pages advised);
+// empty where there is none.
+std::string vm_flags(const void* p) {
+    const auto at = reinterpret_cast<std::uintptr_t>(p);
+    std::ifstream smaps("/proc/self/smaps");
+    bool inside = false;
+    for (std::string line; std::getline(smaps, line);) {
+        unsigned long long begin = 0, end = 0;
+        char dash = 0;
+        std::istringstream words(line);
+        if (words >> std::hex >> begin >> dash >> end && dash == '-' && line.find(':') > line.find(' '))
+            inside = begin <= at && at < end;
+        else if (inside && line.rfind("VmFlags:", 0) == 0)
+            return line + " ";
+    }
+    return {};
+}
+
+}  // namespace
+
+// The ctest voxmesh_pages_without_huge_pages runs the [pages] tests again with
+// VOXMESH_HUGE_PAGES=off (tests/pages.cmake).
+TEST_CASE("huge pages are advised unless VOXMESH_HUGE_PAGES is off", "[core][pages]") {
+    const char* setting = std::getenv("VOXMESH_HUGE_PAGES");
+    if (setting && std::string(setting) != "off") {
+        WARN("skipped: VOXMESH_HUGE_PAGES is neither unset nor off");
+        return;
+    }
+    const bool off = setting != nullptr;
+    CHECK(voxmesh::detail::huge_pages_advised() == !off);
+    const std::shared_ptr<void> block = voxmesh::detail::allocate_zeroed(std::size_t{8} << 20);
+    const std::string flags = vm_flags(block.get());
+    INFO(flags);
+    REQUIRE(flags.rfind("VmFlags:", 0) == 0);
+    // madvise(MADV_HUGEPAGE) sets the flag whatever THP's mode, where the kernel has THP at all.
+    if (std::ifstream("/sys/kernel/mm/transparent_hugepage/enabled")) CHECK((flags.find(" hg ") != std::string::npos) == !off);
+    // Advice only: the memory is the same zeroed memory either way.
+    const auto* bytes = static_cast<const unsigned char*>(block.get());
+    CHECK(std::all_of(bytes, bytes + (std::size_t{8} << 20), [](unsigned char b) { return b == 0; }));
 }
 #endif
 

@@ -1,11 +1,15 @@
 #include "huge_pages.hpp"
 
+#include "env_word.hpp"
 #include "parallel.hpp"  // share_of
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <new>
+#include <optional>
+#include <string>
 
 #if defined(__linux__)
 #include <sys/mman.h>
@@ -18,8 +22,21 @@ namespace {
 constexpr std::size_t kHuge = std::size_t{2} << 20;  // a transparent huge page on x86-64 and arm64
 }  // namespace
 
+bool huge_pages_advised() {
+    static const bool advised = [] {
+        const std::optional<std::string> value = env_word("VOXMESH_HUGE_PAGES");
+        if (!value || *value == "on" || *value == "1") return true;
+        if (*value == "off" || *value == "0") return false;
+        std::fprintf(stderr, "voxmesh: warning: VOXMESH_HUGE_PAGES='%s' is not 'on' or 'off'; ignored\n",
+                     std::getenv("VOXMESH_HUGE_PAGES"));
+        return true;
+    }();
+    return advised;
+}
+
 void advise_huge_pages(const void* data, std::size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
+    if (!huge_pages_advised()) return;
     const auto begin = (reinterpret_cast<std::uintptr_t>(data) + kHuge - 1) & ~(kHuge - 1);
     const auto end = (reinterpret_cast<std::uintptr_t>(data) + bytes) & ~(kHuge - 1);
     if (end > begin) madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);  // advice: errors ignored

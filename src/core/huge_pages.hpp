@@ -11,8 +11,15 @@
 
 namespace voxmesh::detail {
 
+// Whether the library advises huge pages: yes unless VOXMESH_HUGE_PAGES is "off" or "0" (read
+// once; another value than on/1/off/0 is named on stderr and ignored). Off is for machines where
+// a fresh huge page costs more than 512 small ones: a VM whose host takes back the guest's free
+// 2 MiB blocks (free page reporting) faults each in again on the host, 4-5 ms per 2 MiB in a
+// process's first calls on the project's machine (bench/NOTES.md, fifty-third session).
+bool huge_pages_advised();
+
 // Advises huge pages for the 2 MiB-aligned part of [data, data + bytes); smaller ranges are
-// left alone.
+// left alone, and so is everything where huge_pages_advised() is false.
 void advise_huge_pages(const void* data, std::size_t bytes);
 
 // Faults in the whole pages of [data, data + bytes) for writing now (Linux's

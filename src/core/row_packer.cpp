@@ -1,12 +1,13 @@
 #include "row_packer.hpp"
 
-#include <algorithm>
-#include <cctype>
+#include "env_word.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <string>
 #include <type_traits>
 
@@ -47,14 +48,13 @@ enum class IsaLimit { None, Popcnt, Portable };
 
 IsaLimit isa_limit() {
     static const IsaLimit limit = [] {
-        const char* isa = std::getenv("VOXMESH_ISA");
-        if (!isa) return IsaLimit::None;
-        std::string value(isa);
-        std::transform(value.begin(), value.end(), value.begin(), [](unsigned char c) { return std::tolower(c); });
-        if (value == "portable") return IsaLimit::Portable;
-        if (value == "popcnt") return IsaLimit::Popcnt;
-        if (!value.empty() && value != "native")
-            std::fprintf(stderr, "voxmesh: warning: VOXMESH_ISA='%s' is not 'portable', 'popcnt' or 'native'; ignored\n", isa);
+        const std::optional<std::string> value = env_word("VOXMESH_ISA");
+        if (!value) return IsaLimit::None;
+        if (*value == "portable") return IsaLimit::Portable;
+        if (*value == "popcnt") return IsaLimit::Popcnt;
+        if (*value != "native")
+            std::fprintf(stderr, "voxmesh: warning: VOXMESH_ISA='%s' is not 'portable', 'popcnt' or 'native'; ignored\n",
+                         std::getenv("VOXMESH_ISA"));
         return IsaLimit::None;
     }();
     return limit;
