@@ -226,6 +226,22 @@ TEST_CASE("sculpt OpenCL: float vertex math (devices without fp64) stays within 
     CHECK(worst.position_ulps <= 4);  // PoCL: 1 ulp, normals within 1 epsilon
 }
 
+// The row scans as a GPU runs them (work-groups of 256 items of 8 rows, where PoCL runs 1 of
+// 1024): the first update meshes every block in one batch of about 4,000 rows, more than one
+// GPU scan block of 2,048, so each block's offset is used.
+TEST_CASE("sculpt OpenCL: row scans in GPU work-groups give the CPU's block meshes", "[sculpt][opencl]") {
+    if (!have_device()) return;
+    voxmesh::detail::sculpt::DeviceBlockTuning tuning;
+    tuning.gpu_scans = true;
+    const TuningScope tuning_scope(tuning);
+    Worst worst;
+    std::uint32_t seed = 301;
+    for (const TypeSetup& ts : kTypes) {
+        INFO(voxmesh::scalar_name(ts.type));
+        run_sequence(ts, {29, 23, 26}, 8, seed++, 6, Tolerance{}, worst);
+    }
+}
+
 TEST_CASE("sculpt OpenCL: spacing, origin, inside_below, normals off and many small batches", "[sculpt][opencl]") {
     if (!have_device()) return;
     voxmesh::detail::sculpt::DeviceBlockTuning tuning;

@@ -28,6 +28,7 @@ constexpr std::size_t kBatchSamples = std::size_t(8) << 20;  // staged samples p
 
 std::atomic<std::size_t> g_batch_samples{0};  // test hooks (set_device_block_tuning)
 std::atomic<bool> g_no_fp64{false};
+std::atomic<bool> g_gpu_scans{false};
 
 const char* cl_type_name(ScalarType type) {
     switch (type) {
@@ -54,6 +55,7 @@ public:
         const ScalarType type = setup.volume.type;
         sample_bytes_ = scalar_size(type);
         fp64_ = device_->info.fp64 && !g_no_fp64;
+        gpu_scans_ = g_gpu_scans;
         options_ = std::string("-cl-std=CL1.2 -DVOXEL_T=") + cl_type_name(type);
         if (type != ScalarType::F32) options_ += " -DVOXEL_INTEGER";
         if (fp64_) options_ += " -DUSE_FP64";
@@ -73,7 +75,7 @@ public:
                            device_->device));
         local_ = 1;
         while (local_ * 2 <= local) local_ *= 2;
-        device_->scan_shape();
+        device_->scan_shape(gpu_scans_);
     }
 
     const std::string& device_name() const override { return device_->info.name; }
@@ -143,6 +145,7 @@ private:
     DeviceBlockSetup setup_;
     std::size_t sample_bytes_ = 4;
     bool fp64_ = false;
+    bool gpu_scans_ = false;  // test hook (DeviceBlockTuning::gpu_scans)
     std::size_t local_ = 1;  // work-items per group along the rows
     std::string options_;
     std::vector<unsigned char> threshold_;
@@ -222,8 +225,8 @@ void OpenclBlockMesher::run_batch(std::span<const BlockBox> boxes, std::size_t f
 
     // In place: vcount/tcount become every row's first vertex/triangle in the batch.
     cl::Buffer& totals = d.buffer(kTotals, 2 * sizeof(cl_uint));
-    scan_into(d, vcount, rows, totals, 0, log);
-    scan_into(d, tcount, rows, totals, 1, log);
+    scan_into(d, vcount, rows, totals, 0, log, gpu_scans_);
+    scan_into(d, tcount, rows, totals, 1, log, gpu_scans_);
     cl_uint got[2] = {};
     d.queue.enqueueReadBuffer(totals, CL_TRUE, 0, sizeof(got), got);  // one wait for both totals
     const std::uint64_t vertices = got[0], triangles = got[1];
@@ -296,6 +299,7 @@ std::shared_ptr<Device> pick_device(int index) {
 void set_device_block_tuning(const DeviceBlockTuning& tuning) {
     g_batch_samples = tuning.batch_samples;
     g_no_fp64 = tuning.no_fp64;
+    g_gpu_scans = tuning.gpu_scans;
 }
 
 std::unique_ptr<DeviceBlockMesher> open_opencl_block_mesher(const DeviceBlockSetup& setup, int device,

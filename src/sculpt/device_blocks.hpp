@@ -47,11 +47,13 @@ public:
 };
 
 // Test hooks: a smaller batch (staged samples per batch; 0 = the default) so that one
-// update runs several batches, and float vertex math on fp64 devices (the path of most
-// GPUs). Read when a mesher is opened (no_fp64) and at every mesh() call (batch_samples).
+// update runs several batches, float vertex math on fp64 devices (the path of most GPUs), and
+// the row scans in GPU work-groups (256 items of 8, where a CPU device's are 1 of 1024). Read
+// when a mesher is opened (no_fp64, gpu_scans) and at every mesh() call (batch_samples).
 struct DeviceBlockTuning {
     std::size_t batch_samples = 0;
     bool no_fp64 = false;
+    bool gpu_scans = false;
 };
 void set_device_block_tuning(const DeviceBlockTuning& tuning);
 
