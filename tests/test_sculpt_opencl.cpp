@@ -190,6 +190,19 @@ struct TuningScope {
     TuningScope& operator=(const TuningScope&) = delete;
 };
 
+// run_sequence for every sample type under a device mesher tuning (seeds from `seed` on, six
+// dabs each); returns the worst differences seen.
+Worst run_every_type(const voxmesh::detail::sculpt::DeviceBlockTuning& tuning, Dims d, std::size_t block,
+                     std::uint32_t seed, const Tolerance& tol) {
+    const TuningScope tuning_scope(tuning);
+    Worst worst;
+    for (const TypeSetup& ts : kTypes) {
+        INFO(voxmesh::scalar_name(ts.type));
+        run_sequence(ts, d, block, seed++, 6, tol, worst);
+    }
+    return worst;
+}
+
 }  // namespace
 
 TEST_CASE("sculpt OpenCL: random edit sequences give the CPU's block meshes and extract's mesh", "[sculpt][opencl]") {
@@ -215,31 +228,19 @@ TEST_CASE("sculpt OpenCL: float vertex math (devices without fp64) stays within 
     if (!have_device()) return;
     voxmesh::detail::sculpt::DeviceBlockTuning tuning;
     tuning.no_fp64 = true;
-    const TuningScope tuning_scope(tuning);
-    Worst worst;
-    std::uint32_t seed = 101;
-    for (const TypeSetup& ts : kTypes) {
-        INFO(voxmesh::scalar_name(ts.type));
-        run_sequence(ts, {25, 27, 22}, 7, seed++, 6, Tolerance{4}, worst);
-    }
+    const Worst worst = run_every_type(tuning, {25, 27, 22}, 7, 101, Tolerance{4});
     INFO("worst position ulps " << worst.position_ulps << ", worst normal difference " << worst.normal);
     CHECK(worst.position_ulps <= 4);  // PoCL: 1 ulp, normals within 1 epsilon
 }
 
 // The row scans as a GPU runs them (work-groups of 256 items of 8 rows, where PoCL runs 1 of
-// 1024): the first update meshes every block in one batch of about 4,000 rows, more than one
-// GPU scan block of 2,048, so each block's offset is used.
+// 1024): the first update meshes all 48 blocks in one batch of 2,900 rows, more than one GPU
+// scan block of 2,048, so a block's offset is used.
 TEST_CASE("sculpt OpenCL: row scans in GPU work-groups give the CPU's block meshes", "[sculpt][opencl]") {
     if (!have_device()) return;
     voxmesh::detail::sculpt::DeviceBlockTuning tuning;
     tuning.gpu_scans = true;
-    const TuningScope tuning_scope(tuning);
-    Worst worst;
-    std::uint32_t seed = 301;
-    for (const TypeSetup& ts : kTypes) {
-        INFO(voxmesh::scalar_name(ts.type));
-        run_sequence(ts, {29, 23, 26}, 8, seed++, 6, Tolerance{}, worst);
-    }
+    run_every_type(tuning, {29, 23, 26}, 8, 301, Tolerance{});
 }
 
 TEST_CASE("sculpt OpenCL: spacing, origin, inside_below, normals off and many small batches", "[sculpt][opencl]") {

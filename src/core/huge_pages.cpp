@@ -27,7 +27,7 @@ bool huge_pages_advised() {
         const std::optional<std::string> value = env_word("VOXMESH_HUGE_PAGES");
         if (!value || *value == "on" || *value == "1") return true;
         if (*value == "off" || *value == "0") return false;
-        std::fprintf(stderr, "voxmesh: warning: VOXMESH_HUGE_PAGES='%s' is not 'on' or 'off'; ignored\n",
+        std::fprintf(stderr, "voxmesh: warning: VOXMESH_HUGE_PAGES='%s' is not 'on', 'off', '1' or '0'; ignored\n",
                      std::getenv("VOXMESH_HUGE_PAGES"));
         return true;
     }();
