@@ -20,3 +20,5 @@ echo "# one process, per call (2 threads, sphere f32 512^3, two sizers)"
 /tmp/voxmesh-calls 2 14 x s f
 echo "# the same, one thread"
 /tmp/voxmesh-calls 1 10 x s f
+echo "# the same into one kept mesh (extract_into), 2 threads"
+/tmp/voxmesh-calls 2 10 r s f
