@@ -416,7 +416,7 @@ TEST_CASE("cli: killed while reading standard input, no copy of it is left", "[c
 TEST_CASE("cli: outputs to standard output", "[cli]") {
     Scratch s;
     const std::string head = quote(data_file("headsq.nrrd")), torus = quote(data_file("torus.stl"));
-    for (const char* format : {"stl", "ply", "obj"}) {
+    for (const char* format : {"stl", "ply", "obj", "glb"}) {
         INFO(format);
         const std::string file = s.path(std::string("f.") + format);
         REQUIRE(run(s, "mesh " + head + " -o " + quote(file) + " --iso 499.5").code == 0);

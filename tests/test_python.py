@@ -2,8 +2,10 @@
 command line tool, which runs the C++ library directly. Run by ctest with PYTHONPATH at the
 build's python/ folder; exits 77 (skipped) where numpy is missing, except under CI."""
 
+import json
 import os
 import pathlib
+import struct
 import subprocess
 import sys
 import tempfile
@@ -657,12 +659,15 @@ class BytesAndFilesTest(unittest.TestCase):
     def test_mesh_bytes_are_the_files_bytes_and_read_back(self):
         mesh = voxmesh.extract(sphere(20, 6.0))
         scratch = tempfile.mkdtemp(dir=os.environ.get("VOXMESH_TEST_SCRATCH"))
-        for fmt in ("stl", "ply", "obj"):
+        for fmt in ("stl", "ply", "obj", "glb"):
             path = os.path.join(scratch, "mesh." + fmt)
             mesh.write(path)
             data = mesh.to_bytes(fmt)
             with open(path, "rb") as f:
                 self.assertEqual(f.read(), data)
+            if fmt == "glb":  # written, not read: checked by glTF's own rules below
+                self.check_glb(data, mesh)
+                continue
             back = voxmesh.read_mesh(data, name="part." + fmt)
             self.assertTrue(np.array_equal(back.indices, voxmesh.read_mesh(path).indices))
             self.assertTrue(np.array_equal(back.positions, voxmesh.read_mesh(path).positions))
@@ -672,6 +677,36 @@ class BytesAndFilesTest(unittest.TestCase):
             voxmesh.read_mesh(b"solid x\n")
         with self.assertRaisesRegex(voxmesh.VoxmeshError, "'junk.stl'"):
             voxmesh.read_mesh(b"solid x\nfacet normal 0 0\n", name="junk.stl")
+
+    def check_glb(self, data, mesh):
+        """The container (header, JSON chunk, BIN chunk), then the arrays its accessors name."""
+        magic, version, length = struct.unpack_from("<4sII", data, 0)
+        self.assertEqual((magic, version, length), (b"glTF", 2, len(data)))
+        json_length, json_type = struct.unpack_from("<I4s", data, 12)
+        self.assertEqual(json_type, b"JSON")
+        gltf = json.loads(data[20:20 + json_length])
+        bin_length, bin_type = struct.unpack_from("<I4s", data, 20 + json_length)
+        self.assertEqual(bin_type, b"BIN\0")
+        chunk = data[28 + json_length:]
+        self.assertEqual(len(chunk), bin_length)
+        self.assertEqual(gltf["buffers"], [{"byteLength": bin_length}])
+        primitive = gltf["meshes"][gltf["nodes"][gltf["scenes"][gltf["scene"]]["nodes"][0]]["mesh"]]["primitives"][0]
+        self.assertEqual(primitive["mode"], 4)
+
+        def array(index, dtype, width):
+            accessor = gltf["accessors"][index]
+            view = gltf["bufferViews"][accessor["bufferView"]]
+            start = view["byteOffset"] + accessor.get("byteOffset", 0)
+            values = np.frombuffer(chunk, dtype=dtype, count=accessor["count"] * width, offset=start)
+            return accessor, values.reshape(-1, width) if width > 1 else values
+
+        position, positions = array(primitive["attributes"]["POSITION"], "<f4", 3)
+        self.assertTrue(np.array_equal(positions, mesh.positions))
+        # The bounds as written, read back as float32: the floats themselves.
+        self.assertEqual(np.float32(position["min"]).tolist(), positions.min(axis=0).tolist())
+        self.assertEqual(np.float32(position["max"]).tolist(), positions.max(axis=0).tolist())
+        self.assertTrue(np.array_equal(array(primitive["attributes"]["NORMAL"], "<f4", 3)[1], mesh.normals))
+        self.assertTrue(np.array_equal(array(primitive["indices"], "<u4", 1)[1], mesh.indices.reshape(-1)))
 
     def test_volumes_from_bytes_with_what_the_file_said(self):
         path = os.path.join(DATA, "headsq.nrrd")

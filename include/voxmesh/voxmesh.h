@@ -151,7 +151,7 @@ voxmesh_status voxmesh_mesh_get_device_stats(const voxmesh_mesh* mesh, size_t in
  * ...), one a line; "" when there were none. Valid until voxmesh_mesh_free. */
 const char* voxmesh_mesh_warnings(const voxmesh_mesh* mesh);
 
-/* .stl, .ply or .obj by extension, through a temporary renamed into place. */
+/* .stl, .ply, .obj or .glb (binary glTF 2.0) by extension, through a temporary renamed into place. */
 voxmesh_status voxmesh_write_mesh(const char* path, const voxmesh_mesh* mesh);
 /* STL (binary or ASCII), PLY or OBJ by extension (as voxmesh::read_mesh). */
 voxmesh_status voxmesh_read_mesh(const char* path, voxmesh_mesh** mesh);

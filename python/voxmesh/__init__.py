@@ -434,9 +434,9 @@ class Mesh:
         self.warnings = _lib.voxmesh_mesh_warnings(pointer).decode(errors="replace").splitlines()
 
     def to_bytes(self, format="stl"):
-        """The bytes write() would write for a file of that format ("stl", "ply" or "obj")."""
+        """The bytes write() would write for a file of that format ("stl", "ply", "obj" or "glb")."""
         if not isinstance(format, str):
-            raise VoxmeshError(f"format must be a str (\"stl\", \"ply\" or \"obj\"); got {format!r}")
+            raise VoxmeshError(f"format must be a str (\"stl\", \"ply\", \"obj\" or \"glb\"); got {format!r}")
         return _take_bytes(lambda out: _lib.voxmesh_write_mesh_to_memory(self._handle.pointer,
                                                                           f"mesh.{format}".encode(), out))
 
@@ -468,7 +468,7 @@ class Mesh:
         return self.indices.shape[0]
 
     def write(self, path):
-        """.stl, .ply or .obj by extension, through a temporary file renamed into place."""
+        """.stl, .ply, .obj or .glb (binary glTF 2.0) by extension, through a temporary file renamed into place."""
         _check(_lib.voxmesh_write_mesh(_path(path), self._handle.pointer))
 
     def topology(self):

@@ -169,7 +169,7 @@ Command add_mesh(CLI::App& app) {
     CLI::App* sub = app.add_subcommand("mesh", "Extract the iso-surface of a volume file into a mesh file");
     sub->add_option("INPUT", a->input, "volume: .nrrd, .nhdr, .mhd, .mha, .nii, .nii.gz, .vtk, .npy, or .raw with --dims --type (-: standard input, a format told from its content, or raw samples with --dims --type)")
         ->required();
-    sub->add_option("-o,--output", a->output, "mesh file: .stl (binary), .ply (binary) or .obj; -: standard output (with --format)")
+    sub->add_option("-o,--output", a->output, "mesh file: .stl (binary), .ply (binary), .obj or .glb (binary glTF 2.0); -: standard output (with --format)")
         ->required();
     add_mesh_format_option(sub, a->format);
     a->iso_option = sub->add_option("--iso", a->iso,

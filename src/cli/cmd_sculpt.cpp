@@ -111,7 +111,7 @@ Command add_sculpt(CLI::App& app) {
                     "stroke script: one dab per line 'op x y z radius strength', op add|subtract|smooth|set, "
                     "'#' comments; coordinates in samples, or model units after a line 'units world' (-: standard input). Without it, "
                     "the model is voxelized and meshed again as it is");
-    sub->add_option("-o,--output", a->output, "mesh file to write (.stl, .ply or .obj; -: standard output, with --format)")
+    sub->add_option("-o,--output", a->output, "mesh file to write (.stl, .ply, .obj or .glb; -: standard output, with --format)")
         ->required();
     add_mesh_format_option(sub, a->format);
     sub->add_option("--resolution", a->resolution, "voxels along the longest side of the model (8..2048)")

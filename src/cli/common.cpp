@@ -128,13 +128,13 @@ void check_output_path(const std::string& path, const std::vector<std::string>& 
 std::ostream& report_stream(const std::string& output) { return is_stdout(output) ? std::cerr : std::cout; }
 
 void add_mesh_format_option(CLI::App* sub, std::string& format) {
-    sub->add_option("--format", format, "stl, ply or obj: the format with -o - (standard output)")
-        ->check(CLI::IsMember({"stl", "ply", "obj"}));
+    sub->add_option("--format", format, "stl, ply, obj or glb: the format with -o - (standard output)")
+        ->check(CLI::IsMember({"stl", "ply", "obj", "glb"}));
 }
 
 void check_mesh_output(const std::string& output, const std::string& format) {
-    check_output_path(output, {".stl", ".ply", ".obj"});
-    if (is_stdout(output) && format.empty()) throw BadInput("-o - (standard output) needs --format stl, ply or obj");
+    check_output_path(output, {".stl", ".ply", ".obj", ".glb"});
+    if (is_stdout(output) && format.empty()) throw BadInput("-o - (standard output) needs --format stl, ply, obj or glb");
     if (!is_stdout(output) && !format.empty())
         throw BadInput("--format applies only to -o - (standard output); '" + output +
                        "' is written in the format its extension names");

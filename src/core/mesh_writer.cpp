@@ -1,4 +1,5 @@
 #include "atomic_file.hpp"
+#include "glb_writer.hpp"
 #include "mesh_arrays.hpp"
 #include "parallel.hpp"
 #include "write_to_stream.hpp"
@@ -220,7 +221,8 @@ Writer checked_writer(const std::string& ext, const Mesh& mesh, const std::strin
     if (ext == ".stl") writer = {write_stl, stl_bytes};
     else if (ext == ".ply") writer = {write_ply, ply_bytes};
     else if (ext == ".obj") writer = {write_obj, nullptr};
-    else throw Error("cannot write '" + name + "': unknown mesh format '" + ext + "' (use .stl, .ply or .obj)");
+    else if (ext == ".glb") writer = {detail::write_glb, detail::glb_bytes};
+    else throw Error("cannot write '" + name + "': unknown mesh format '" + ext + "' (use .stl, .ply, .obj or .glb)");
     detail::check_mesh_arrays(mesh);
     // Before anything is sized or created (write_mesh_to_memory reserves 50 bytes a triangle).
     if (ext == ".stl" && mesh.triangle_count() > 0xffffffffull)
@@ -229,6 +231,7 @@ Writer checked_writer(const std::string& ext, const Mesh& mesh, const std::strin
     // "nan" and "inf" in a mesh file: most readers (ours included) refuse them.
     detail::check_finite_vertices(mesh.positions, "cannot write '" + name + "': ", "coordinate");
     detail::check_finite_vertices(mesh.normals, "cannot write '" + name + "': ", "normal");
+    if (ext == ".glb") detail::check_glb_size(mesh, name);
     return writer;
 }
 

@@ -12,7 +12,7 @@
 
 namespace voxmesh::detail {
 
-// `format`: ".stl", ".ply" or ".obj"; `name` names the output in errors ("cannot write 'name': ...").
+// `format`: ".stl", ".ply", ".obj" or ".glb"; `name` names the output in errors ("cannot write 'name': ...").
 void write_mesh_to(std::FILE* file, const Mesh& mesh, const std::string& format, const std::string& name);
 void write_nrrd_to(std::FILE* file, const VolumeView& volume, const std::map<std::string, std::string>& key_values,
                    const std::string& name);

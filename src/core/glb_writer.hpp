@@ -1,0 +1,26 @@
+// glTF 2.0 in its binary container (.glb): one buffer holding the positions, the normals and
+// the indices as they are in the Mesh, described by a JSON chunk (one scene, one node, one
+// mesh of one triangle primitive), for web viewers, three.js, Blender and the like.
+#pragma once
+
+#include <voxmesh/voxmesh.hpp>
+
+#include <cstddef>
+#include <cstdio>
+#include <string>
+
+namespace voxmesh::detail {
+
+// The JSON chunk's text, padded with spaces to a multiple of 4 bytes as the container asks.
+std::string glb_json(const Mesh& mesh);
+
+// The whole file's size: the 12-byte header, the JSON chunk, and the binary chunk (none for a
+// mesh without vertices).
+std::size_t glb_bytes(const Mesh& mesh);
+
+// Throws Error naming `name` where the file would pass the container's 32-bit length.
+void check_glb_size(const Mesh& mesh, const std::string& name);
+
+void write_glb(std::FILE* f, const Mesh& mesh);
+
+}  // namespace voxmesh::detail
