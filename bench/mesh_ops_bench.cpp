@@ -68,7 +68,7 @@ int run_mesh_ops(const std::vector<voxmesh::Field>& fields, const std::vector<vo
                 ops.push_back({"analyze_topology_1_worker", [&] { (void)voxmesh::detail::topology_with_workers(mesh, 1); }, {}});
                 ops.push_back({"analyze_topology", [&] { (void)voxmesh::analyze_topology(mesh); }, {}});
                 ops.push_back({"keep_largest_components", [&] { (void)voxmesh::keep_largest_components(mesh, 1); }, {}});
-                for (const char* ext : {"stl", "ply", "obj"}) {
+                for (const char* ext : {"stl", "ply", "obj", "glb"}) {
                     const std::string path = (dir / (std::string("mesh.") + ext)).string();
                     ops.push_back({std::string("write_") + ext, [path, &mesh] {
                                        voxmesh::write_mesh(path, mesh);

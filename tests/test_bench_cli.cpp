@@ -191,7 +191,7 @@ TEST_CASE("bench: --mesh-ops times each operation on one mesh and leaves no file
         ops.push_back(json_value(line, "op"));
     }
     CHECK(ops == std::vector<std::string>{"extract", "analyze_topology_1_worker", "analyze_topology",
-                                          "keep_largest_components", "write_stl", "write_ply", "write_obj",
+                                          "keep_largest_components", "write_stl", "write_ply", "write_obj", "write_glb",
                                           "vertex_edges", "triangle_cells", "edge_cell_ranges"});
     CHECK(std::stoul(json_value(lines[0], "triangles")) > 1000);
     CHECK(json_value(lines[0], "vs_extract") == "1.000");
