@@ -210,6 +210,13 @@ TEST_CASE("write_mesh: .glb refuses what the others refuse and writes nothing", 
     voxmesh::Mesh mesh = sphere_mesh(true);
     mesh.normals[7] = std::numeric_limits<float>::quiet_NaN();
     CHECK_THROWS_WITH(voxmesh::write_mesh(dir.file("n.glb"), mesh), Catch::Contains("non-finite normal"));
+    mesh.normals[7] = 0.5f;  // not of unit length: glTF's validator calls that an error
+    CHECK_THROWS_WITH(voxmesh::write_mesh(dir.file("u.glb"), mesh),
+                      Catch::Contains("u.glb") && Catch::Contains("vertex 2's normal has length") &&
+                          Catch::Contains("unit normals"));
+    mesh.normals[7] = 0;
+    mesh.normals[6] = mesh.normals[8] = 0;  // a zero normal too
+    CHECK_THROWS_WITH(voxmesh::write_mesh_to_memory(mesh, "z.glb"), Catch::Contains("length 0"));
     mesh.normals.pop_back();
     CHECK_THROWS_AS(voxmesh::write_mesh(dir.file("m.glb"), mesh), voxmesh::Error);
     CHECK(dir.entries().empty());

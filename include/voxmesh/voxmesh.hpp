@@ -228,7 +228,8 @@ void release_scratch_memory();
 // Writes .stl (binary), .ply (binary), .obj or .glb (binary glTF 2.0: the arrays as they
 // are, one scene of one mesh; glTF viewers read its coordinates as metres with +Y up, so a
 // mesh in millimetres looks a thousand times too large there until scaled, and a mesh with
-// vertices but no triangles is written as points), chosen by extension, through a temporary
+// vertices but no triangles is written as points; normals must be of unit length there, as
+// glTF asks: the engines' are), chosen by extension, through a temporary
 // file renamed into place: a failure never leaves a partial file. A malformed mesh (see
 // analyze_topology) or a NaN or infinite coordinate or normal is an Error; nothing is written.
 // A symbolic link at `path` is written through (the file it names is replaced, the link

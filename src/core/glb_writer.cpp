@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <bit>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -21,6 +22,7 @@ constexpr std::uint32_t kBinChunk = 0x004E4942;   // "BIN\0"
 constexpr std::uint32_t kArrayBuffer = 34962, kElementArrayBuffer = 34963;
 constexpr std::uint32_t kFloat = 5126, kUnsignedInt = 5125;
 constexpr std::uint32_t kPoints = 0, kTriangles = 4;
+constexpr double kUnitTolerance = 0.00674;  // glTF-Validator's for VEC3 (ACCESSOR_NON_UNIT)
 
 std::size_t bin_bytes(const Mesh& mesh) {
     return (mesh.positions.size() + mesh.normals.size()) * sizeof(float) + mesh.indices.size() * sizeof(std::uint32_t);
@@ -113,13 +115,20 @@ std::size_t glb_bytes(const Mesh& mesh) {
     return 12 + 8 + glb_json(mesh).size() + (bin > 0 ? 8 + bin : 0);
 }
 
-void check_glb_size(const Mesh& mesh, const std::string& name) {
+void check_glb_writable(const Mesh& mesh, const std::string& name) {
     // 24 bytes a vertex and 12 a triangle at most: far past the limit, skip the exact size.
     const std::size_t bin = bin_bytes(mesh);
     if (bin > std::numeric_limits<std::uint32_t>::max() || glb_bytes(mesh) > std::numeric_limits<std::uint32_t>::max())
         throw Error("cannot write '" + name + "': " + std::to_string(mesh.vertex_count()) + " vertices and " +
                     std::to_string(mesh.triangle_count()) +
                     " triangles are more than glTF binary's 32-bit length can hold (use .ply or .obj)");
+    for (std::size_t v = 0; v < mesh.normals.size() / 3; ++v) {
+        const double x = mesh.normals[3 * v], y = mesh.normals[3 * v + 1], z = mesh.normals[3 * v + 2];
+        const double length = std::sqrt(x * x + y * y + z * z);
+        if (std::fabs(length - 1) > kUnitTolerance)
+            throw Error("cannot write '" + name + "': vertex " + std::to_string(v) + "'s normal has length " +
+                        std::to_string(length) + "; glTF needs unit normals (normalise them, or write without normals)");
+    }
 }
 
 void write_glb(std::FILE* f, const Mesh& mesh) {

@@ -18,8 +18,10 @@ std::string glb_json(const Mesh& mesh);
 // mesh without vertices).
 std::size_t glb_bytes(const Mesh& mesh);
 
-// Throws Error naming `name` where the file would pass the container's 32-bit length.
-void check_glb_size(const Mesh& mesh, const std::string& name);
+// Throws Error naming `name` where the file would pass the container's 32-bit length, or a
+// normal is not of unit length, which glTF requires (within the 0.00674 its validator allows;
+// the engines' normals are within about 1e-7).
+void check_glb_writable(const Mesh& mesh, const std::string& name);
 
 void write_glb(std::FILE* f, const Mesh& mesh);
 

@@ -231,7 +231,7 @@ Writer checked_writer(const std::string& ext, const Mesh& mesh, const std::strin
     // "nan" and "inf" in a mesh file: most readers (ours included) refuse them.
     detail::check_finite_vertices(mesh.positions, "cannot write '" + name + "': ", "coordinate");
     detail::check_finite_vertices(mesh.normals, "cannot write '" + name + "': ", "normal");
-    if (ext == ".glb") detail::check_glb_size(mesh, name);
+    if (ext == ".glb") detail::check_glb_writable(mesh, name);
     return writer;
 }
 
