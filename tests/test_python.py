@@ -702,9 +702,9 @@ class BytesAndFilesTest(unittest.TestCase):
 
         position, positions = array(primitive["attributes"]["POSITION"], "<f4", 3)
         self.assertTrue(np.array_equal(positions, mesh.positions))
-        # The bounds as written, read back as float32: the floats themselves.
-        self.assertEqual(np.float32(position["min"]).tolist(), positions.min(axis=0).tolist())
-        self.assertEqual(np.float32(position["max"]).tolist(), positions.max(axis=0).tolist())
+        # The bounds as written are the floats' own values, read as doubles.
+        self.assertEqual(position["min"], positions.min(axis=0).tolist())
+        self.assertEqual(position["max"], positions.max(axis=0).tolist())
         self.assertTrue(np.array_equal(array(primitive["attributes"]["NORMAL"], "<f4", 3)[1], mesh.normals))
         self.assertTrue(np.array_equal(array(primitive["indices"], "<u4", 1)[1], mesh.indices.reshape(-1)))
 

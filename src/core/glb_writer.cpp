@@ -30,16 +30,19 @@ std::size_t bin_bytes(const Mesh& mesh) {
 
 std::string number(std::uint64_t value) { return std::to_string(value); }
 
-// The shortest text that reads back as the same float (JSON has no NaN or infinity; the
-// writer refuses those before this runs).
-std::string shortest(float value) {
+// The float's exact value, as the shortest text that reads back as that double: a reader
+// comparing in double (the data's floats widened) and one rounding to float first (Khronos'
+// glTF-Validator) both find the bounds equal to the data. The float's own shortest text
+// ("4.9168634") is another double, which the first kind reports as a mismatch. (JSON has no
+// NaN or infinity; the writer refuses those before this runs.)
+std::string exact(float value) {
     char text[32];
-    return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
+    return std::string(text, std::to_chars(text, text + sizeof text, static_cast<double>(value)).ptr);
 }
 
 std::string vec3(const float v[3]) {
     std::string text = "[";
-    for (unsigned d = 0; d < 3; ++d) text.append(d ? "," : "").append(shortest(v[d]));
+    for (unsigned d = 0; d < 3; ++d) text.append(d ? "," : "").append(exact(v[d]));
     return text.append("]");
 }
 
