@@ -6,9 +6,12 @@
 #include "support/json_value.hpp"
 #include "support/mesh_checks.hpp"
 
+#include "core/glb_writer.hpp"
+
 #include <voxmesh/voxmesh.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <limits>
@@ -53,8 +56,8 @@ TEST_CASE("write_mesh: .glb holds the mesh's arrays, its bounds and one triangle
         const std::string path = dir.file("sphere.glb");
         voxmesh::write_mesh(path, mesh);
         const std::string bytes = read_all(path);
-        CHECK(bytes == std::string(reinterpret_cast<const char*>(voxmesh::write_mesh_to_memory(mesh, "x.GLB").data()),
-                                   bytes.size()));
+        const std::vector<unsigned char> in_memory = voxmesh::write_mesh_to_memory(mesh, "x.GLB");
+        CHECK(bytes == std::string(in_memory.begin(), in_memory.end()));
         const vmtest::GlbContents back = read_glb(bytes);
         CHECK(back.mode == 4);
         CHECK(back.meshes == 1);
@@ -105,26 +108,50 @@ TEST_CASE("write_mesh: .glb refuses what the others refuse and writes nothing", 
     voxmesh::Mesh mesh = sphere_mesh(true);
     mesh.normals[7] = std::numeric_limits<float>::quiet_NaN();
     CHECK_THROWS_WITH(voxmesh::write_mesh(dir.file("n.glb"), mesh), Catch::Contains("non-finite normal"));
-    mesh.normals[7] = 0.5f;  // not of unit length: glTF's validator calls that an error
-    CHECK_THROWS_WITH(voxmesh::write_mesh(dir.file("u.glb"), mesh),
-                      Catch::Contains("u.glb") && Catch::Contains("vertex 2's normal has length") &&
-                          Catch::Contains("unit normals"));
-    mesh.normals[7] = 0;
-    mesh.normals[6] = mesh.normals[8] = 0;  // a zero normal too
-    CHECK_THROWS_WITH(voxmesh::write_mesh_to_memory(mesh, "z.glb"), Catch::Contains("length 0"));
+    // Normals off unit length by more than glTF-Validator's 0.00674 are refused, by less kept.
+    for (const double length : {0.5, 0.0, 1.0068, 0.9932, 1.0067, 0.9933, 1 + 1e-6}) {
+        INFO(length);
+        mesh.normals[6] = 0;
+        mesh.normals[7] = static_cast<float>(length);
+        mesh.normals[8] = 0;
+        const bool unit = std::fabs(length - 1) <= 0.00674;
+        if (unit) {
+            CHECK_NOTHROW(voxmesh::write_mesh_to_memory(mesh, "u.glb"));
+        } else {
+            CHECK_THROWS_WITH(voxmesh::write_mesh(dir.file("u.glb"), mesh),
+                              Catch::Contains("u.glb") && Catch::Contains("vertex 2's normal has length") &&
+                                  Catch::Contains("unit normals"));
+        }
+    }
     mesh.normals.pop_back();
     CHECK_THROWS_AS(voxmesh::write_mesh(dir.file("m.glb"), mesh), voxmesh::Error);
     CHECK(dir.entries().empty());
+}
+
+TEST_CASE("glb: a file past the container's 32-bit length is refused, counted without the arrays", "[core][glb]") {
+    using voxmesh::detail::checked_glb_bytes;
+    // 12 + 8 + JSON + 8 + 12 per vertex (24 with normals) + 12 per triangle.
+    CHECK(checked_glb_bytes(0, false, 0, 100, "e.glb") == 120);  // no BIN chunk
+    CHECK(checked_glb_bytes(3, true, 1, 1000, "t.glb") == 12 + 8 + 1000 + 8 + 72 + 12);
+    const std::uint64_t limit = 0xffffffffull;
+    // The largest file that fits, by its triangle count, and one byte of JSON more.
+    const std::uint64_t json = limit - 12 - 8 - 8 - 24 * 1000 - 12 * 357000000ull;
+    CHECK(checked_glb_bytes(1000, true, 357000000ull, json, "big.glb") == limit);
+    CHECK_THROWS_WITH(checked_glb_bytes(1000, true, 357000000ull, json + 1, "big.glb"),
+                      Catch::Contains("big.glb") && Catch::Contains("4294967296 bytes") && Catch::Contains("32-bit"));
+    CHECK_THROWS(checked_glb_bytes(400000000ull, false, 0, 1000, "v.glb"));
 }
 
 TEST_CASE("parse_json reads what the .glb reader needs and refuses the malformed", "[core][glb]") {
     const JsonValue v = vmtest::parse_json(R"( {"a":[1,-2.5e3,true,false,null],"b":{"c":"x\"y"}}  )");
     CHECK(v["a"].size() == 5);
     CHECK(v["a"][1].number == -2500);
+    CHECK(vmtest::parse_json("[0,-0,0.5,1E-2,10e+1]")[4].number == 100);
     CHECK(v["a"][2].boolean);
     CHECK_FALSE(v["a"][3].boolean);
     CHECK(v["a"][4].kind == JsonValue::Kind::Null);
     CHECK(v["b"]["c"].text == "x\"y");
-    for (const char* bad : {"{", "[1,]", R"({"a":1,"a":2})", "1 2", R"({"a" 1})", "-", "\"abc"})
+    for (const char* bad : {"{", "[1,]", R"({"a":1,"a":2})", "1 2", R"({"a" 1})", "-", "\"abc", "01", "1.", "1.e5", ".5",
+                            "1e", "+1", "-01", "1e+"})
         CHECK_THROWS(vmtest::parse_json(bad));
 }

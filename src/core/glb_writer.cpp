@@ -35,10 +35,12 @@ std::string number(std::uint64_t value) { return std::to_string(value); }
 // glTF-Validator) both find the bounds equal to the data. The float's own shortest text
 // ("4.9168634") is another double, which the first kind reports as a mismatch. (JSON has no
 // NaN or infinity; the writer refuses those before this runs.)
-std::string exact(float value) {
+std::string decimal(double value) {
     char text[32];
-    return std::string(text, std::to_chars(text, text + sizeof text, static_cast<double>(value)).ptr);
+    return std::string(text, std::to_chars(text, text + sizeof text, value).ptr);
 }
+
+std::string exact(float value) { return decimal(static_cast<double>(value)); }
 
 std::string vec3(const float v[3]) {
     std::string text = "[";
@@ -118,19 +120,27 @@ std::size_t glb_bytes(const Mesh& mesh) {
     return 12 + 8 + glb_json(mesh).size() + (bin > 0 ? 8 + bin : 0);
 }
 
+std::uint64_t checked_glb_bytes(std::uint64_t vertices, bool normals, std::uint64_t triangles, std::uint64_t json_bytes,
+                                const std::string& name) {
+    // Counts from a Mesh's arrays: none of these products overflows 64 bits.
+    const std::uint64_t bin = 12 * vertices * (normals ? 2 : 1) + 12 * triangles;
+    const std::uint64_t total = 12 + 8 + json_bytes + (bin > 0 ? 8 + bin : 0);
+    if (total > std::numeric_limits<std::uint32_t>::max())
+        throw Error("cannot write '" + name + "': " + std::to_string(vertices) + " vertices and " +
+                    std::to_string(triangles) + " triangles make " + std::to_string(total) +
+                    " bytes, more than glTF binary's 32-bit length can hold (use .ply or .obj)");
+    return total;
+}
+
 void check_glb_writable(const Mesh& mesh, const std::string& name) {
-    // 24 bytes a vertex and 12 a triangle at most: far past the limit, skip the exact size.
-    const std::size_t bin = bin_bytes(mesh);
-    if (bin > std::numeric_limits<std::uint32_t>::max() || glb_bytes(mesh) > std::numeric_limits<std::uint32_t>::max())
-        throw Error("cannot write '" + name + "': " + std::to_string(mesh.vertex_count()) + " vertices and " +
-                    std::to_string(mesh.triangle_count()) +
-                    " triangles are more than glTF binary's 32-bit length can hold (use .ply or .obj)");
+    checked_glb_bytes(mesh.vertex_count(), !mesh.normals.empty(), mesh.triangle_count(), glb_json(mesh).size(), name);
     for (std::size_t v = 0; v < mesh.normals.size() / 3; ++v) {
         const double x = mesh.normals[3 * v], y = mesh.normals[3 * v + 1], z = mesh.normals[3 * v + 2];
         const double length = std::sqrt(x * x + y * y + z * z);
         if (std::fabs(length - 1) > kUnitTolerance)
             throw Error("cannot write '" + name + "': vertex " + std::to_string(v) + "'s normal has length " +
-                        std::to_string(length) + "; glTF needs unit normals (normalise them, or write without normals)");
+                        decimal(length) + "; glTF needs unit normals, within 0.00674 (normalise " +
+                        "them, or write without normals)");
     }
 }
 

@@ -6,6 +6,7 @@
 #include <voxmesh/voxmesh.hpp>
 
 #include <cstddef>
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -17,6 +18,11 @@ std::string glb_json(const Mesh& mesh);
 // The whole file's size: the 12-byte header, the JSON chunk, and the binary chunk (none for a
 // mesh without vertices).
 std::size_t glb_bytes(const Mesh& mesh);
+
+// The file's size for a mesh of these counts whose JSON chunk takes `json_bytes`; throws Error
+// naming `name` where that passes the container's 32-bit length.
+std::uint64_t checked_glb_bytes(std::uint64_t vertices, bool normals, std::uint64_t triangles, std::uint64_t json_bytes,
+                                const std::string& name);
 
 // Throws Error naming `name` where the file would pass the container's 32-bit length, or a
 // normal is not of unit length, which glTF requires (within the 0.00674 its validator allows;

@@ -45,6 +45,8 @@ GlbFile parse_container(const std::string& bytes) {
     require(bytes.compare(16, 4, "JSON") == 0, "first chunk is not JSON");
     require(20 + std::size_t{json_length} <= bytes.size(), "JSON chunk past the end");
     const std::string json_text = bytes.substr(20, json_length);
+    for (const char c : json_text)  // ASCII, so valid UTF-8, as glTF requires of the chunk
+        require(static_cast<unsigned char>(c) >= 0x20 && static_cast<unsigned char>(c) < 0x7f, "JSON chunk not printable ASCII");
     GlbFile file;
     file.json = parse_json(json_text);  // trailing padding spaces are JSON whitespace
     require(json_text.find_first_not_of(' ', json_text.find_last_of('}') + 1) == std::string::npos,
@@ -101,7 +103,8 @@ GlbContents read_glb(const std::string& bytes) {
     const JsonValue& json = file.json;
     require(json["asset"]["version"].text == "2.0", "asset.version is not 2.0");
     GlbContents out;
-    const JsonValue& scene = json["scenes"][index_of(json["scene"])];
+    // "scene" may be left out; voxmesh writes its one scene as 0.
+    const JsonValue& scene = json["scenes"][json.has("scene") ? index_of(json["scene"]) : 0];
     if (!scene.has("nodes")) {
         require(!json.has("meshes") && !file.has_bin, "a scene without nodes, but meshes or data");
         return out;

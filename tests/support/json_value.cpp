@@ -106,13 +106,27 @@ private:
             return v;
         }
         if (word("null")) return v;
-        // A number as JSON writes it: -?digits[.digits][e[+-]digits]; strtod reads it.
+        // A number as JSON's grammar has it: -?(0|[1-9][0-9]*)(.[0-9]+)?([eE][+-]?[0-9]+)?
         const std::size_t start = at_;
         if (s_[at_] == '-') ++at_;
-        if (at_ >= s_.size() || s_[at_] < '0' || s_[at_] > '9') fail("not a value");
-        while (at_ < s_.size() && ((s_[at_] >= '0' && s_[at_] <= '9') || s_[at_] == '.' || s_[at_] == 'e' ||
-                                   s_[at_] == 'E' || s_[at_] == '+' || s_[at_] == '-'))
+        const auto digits = [&] {
+            const std::size_t first = at_;
+            while (at_ < s_.size() && s_[at_] >= '0' && s_[at_] <= '9') ++at_;
+            return at_ - first;
+        };
+        const std::size_t int_start = at_;
+        const std::size_t int_digits = digits();
+        if (int_digits == 0) fail("not a value");
+        if (int_digits > 1 && s_[int_start] == '0') fail("a number with a leading zero");
+        if (at_ < s_.size() && s_[at_] == '.') {
             ++at_;
+            if (digits() == 0) fail("no digits after a decimal point");
+        }
+        if (at_ < s_.size() && (s_[at_] == 'e' || s_[at_] == 'E')) {
+            ++at_;
+            if (at_ < s_.size() && (s_[at_] == '+' || s_[at_] == '-')) ++at_;
+            if (digits() == 0) fail("no digits in an exponent");
+        }
         const std::string number = s_.substr(start, at_ - start);
         char* end = nullptr;
         v.kind = JsonValue::Kind::Number;
