@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include "support/glb_reader.hpp"
+#include "support/io_scratch.hpp"
 #include "support/json_value.hpp"
 #include "support/mesh_checks.hpp"
 
@@ -13,9 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <fstream>
 #include <limits>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -38,13 +37,6 @@ voxmesh::Mesh sphere_mesh(bool normals) {
     return voxmesh::extract(vmtest::view_of(values, dims, {0.5, 0.75, 1.0}, {-2.5, 1.0, 100.0}), o);
 }
 
-std::string read_all(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
 }  // namespace
 
 TEST_CASE("write_mesh: .glb holds the mesh's arrays, its bounds and one triangle primitive", "[core][glb]") {
@@ -55,7 +47,7 @@ TEST_CASE("write_mesh: .glb holds the mesh's arrays, its bounds and one triangle
         vmtest::TempDir dir;
         const std::string path = dir.file("sphere.glb");
         voxmesh::write_mesh(path, mesh);
-        const std::string bytes = read_all(path);
+        const std::string bytes = iotest::read_file(path);
         const std::vector<unsigned char> in_memory = voxmesh::write_mesh_to_memory(mesh, "x.GLB");
         CHECK(bytes == std::string(in_memory.begin(), in_memory.end()));
         const vmtest::GlbContents back = read_glb(bytes);

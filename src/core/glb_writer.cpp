@@ -24,8 +24,14 @@ constexpr std::uint32_t kFloat = 5126, kUnsignedInt = 5125;
 constexpr std::uint32_t kPoints = 0, kTriangles = 4;
 constexpr double kUnitTolerance = 0.00674;  // glTF-Validator's for VEC3 (ACCESSOR_NON_UNIT)
 
-std::size_t bin_bytes(const Mesh& mesh) {
-    return (mesh.positions.size() + mesh.normals.size()) * sizeof(float) + mesh.indices.size() * sizeof(std::uint32_t);
+// The binary chunk's bytes: xyz floats per vertex (twice with normals), three uint32 per triangle.
+// Counts from a Mesh's arrays: none of these products overflows 64 bits.
+std::uint64_t bin_bytes(std::uint64_t vertices, bool normals, std::uint64_t triangles) {
+    return 12 * vertices * (normals ? 2 : 1) + 12 * triangles;
+}
+
+std::uint64_t bin_bytes(const Mesh& mesh) {
+    return bin_bytes(mesh.vertex_count(), !mesh.normals.empty(), mesh.triangle_count());
 }
 
 std::string number(std::uint64_t value) { return std::to_string(value); }
@@ -115,15 +121,9 @@ std::string glb_json(const Mesh& mesh) {
     return json;
 }
 
-std::size_t glb_bytes(const Mesh& mesh) {
-    const std::size_t bin = bin_bytes(mesh);
-    return 12 + 8 + glb_json(mesh).size() + (bin > 0 ? 8 + bin : 0);
-}
-
 std::uint64_t checked_glb_bytes(std::uint64_t vertices, bool normals, std::uint64_t triangles, std::uint64_t json_bytes,
                                 const std::string& name) {
-    // Counts from a Mesh's arrays: none of these products overflows 64 bits.
-    const std::uint64_t bin = 12 * vertices * (normals ? 2 : 1) + 12 * triangles;
+    const std::uint64_t bin = bin_bytes(vertices, normals, triangles);
     const std::uint64_t total = 12 + 8 + json_bytes + (bin > 0 ? 8 + bin : 0);
     if (total > std::numeric_limits<std::uint32_t>::max())
         throw Error("cannot write '" + name + "': " + std::to_string(vertices) + " vertices and " +
@@ -132,8 +132,7 @@ std::uint64_t checked_glb_bytes(std::uint64_t vertices, bool normals, std::uint6
     return total;
 }
 
-void check_glb_writable(const Mesh& mesh, const std::string& name) {
-    checked_glb_bytes(mesh.vertex_count(), !mesh.normals.empty(), mesh.triangle_count(), glb_json(mesh).size(), name);
+void check_glb_normals(const Mesh& mesh, const std::string& name) {
     for (std::size_t v = 0; v < mesh.normals.size() / 3; ++v) {
         const double x = mesh.normals[3 * v], y = mesh.normals[3 * v + 1], z = mesh.normals[3 * v + 2];
         const double length = std::sqrt(x * x + y * y + z * z);
@@ -144,10 +143,9 @@ void check_glb_writable(const Mesh& mesh, const std::string& name) {
     }
 }
 
-void write_glb(std::FILE* f, const Mesh& mesh) {
-    const std::string json = glb_json(mesh);
-    const std::size_t bin = bin_bytes(mesh);
-    const std::size_t total = 12 + 8 + json.size() + (bin > 0 ? 8 + bin : 0);
+void write_glb(std::FILE* f, const Mesh& mesh, const std::string& json) {
+    const std::uint64_t bin = bin_bytes(mesh);
+    const std::uint64_t total = 12 + 8 + json.size() + (bin > 0 ? 8 + bin : 0);
     put_u32(f, kMagic);
     put_u32(f, 2);
     put_u32(f, static_cast<std::uint32_t>(total));

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -207,22 +208,17 @@ void write_obj(std::FILE* f, const Mesh& mesh) {
                 [&](std::string& out, std::size_t t) { append_face(out, &mesh.indices[3 * t], normals); });
 }
 
-// A format's writer, and its output's size where that is known before writing (0: not).
+// A format's writer, bound to the mesh it writes, and the output's size where that is known
+// before writing (0: not).
 struct Writer {
-    void (*write)(std::FILE*, const Mesh&) = nullptr;
-    std::size_t (*bytes)(const Mesh&) = nullptr;
-    void operator()(std::FILE* f, const Mesh& mesh) const { write(f, mesh); }
-    std::size_t expected_bytes(const Mesh& mesh) const { return bytes ? bytes(mesh) : 0; }
+    std::function<void(std::FILE*)> write;
+    std::size_t bytes = 0;
 };
 
 // The writer of format `ext`, once `mesh` is known to be writable; Error naming `name` if not.
 Writer checked_writer(const std::string& ext, const Mesh& mesh, const std::string& name) {
-    Writer writer;
-    if (ext == ".stl") writer = {write_stl, stl_bytes};
-    else if (ext == ".ply") writer = {write_ply, ply_bytes};
-    else if (ext == ".obj") writer = {write_obj, nullptr};
-    else if (ext == ".glb") writer = {detail::write_glb, detail::glb_bytes};
-    else throw Error("cannot write '" + name + "': unknown mesh format '" + ext + "' (use .stl, .ply, .obj or .glb)");
+    if (ext != ".stl" && ext != ".ply" && ext != ".obj" && ext != ".glb")
+        throw Error("cannot write '" + name + "': unknown mesh format '" + ext + "' (use .stl, .ply, .obj or .glb)");
     detail::check_mesh_arrays(mesh);
     // Before anything is sized or created (write_mesh_to_memory reserves 50 bytes a triangle).
     if (ext == ".stl" && mesh.triangle_count() > 0xffffffffull)
@@ -231,25 +227,33 @@ Writer checked_writer(const std::string& ext, const Mesh& mesh, const std::strin
     // "nan" and "inf" in a mesh file: most readers (ours included) refuse them.
     detail::check_finite_vertices(mesh.positions, "cannot write '" + name + "': ", "coordinate");
     detail::check_finite_vertices(mesh.normals, "cannot write '" + name + "': ", "normal");
-    if (ext == ".glb") detail::check_glb_writable(mesh, name);
-    return writer;
+    if (ext == ".stl") return {[&mesh](std::FILE* f) { write_stl(f, mesh); }, stl_bytes(mesh)};
+    if (ext == ".ply") return {[&mesh](std::FILE* f) { write_ply(f, mesh); }, ply_bytes(mesh)};
+    if (ext == ".obj") return {[&mesh](std::FILE* f) { write_obj(f, mesh); }, 0};
+    // The JSON (the positions' bounds) is built once, for the size check and the write.
+    std::string json = detail::glb_json(mesh);
+    const std::uint64_t bytes =
+        detail::checked_glb_bytes(mesh.vertex_count(), !mesh.normals.empty(), mesh.triangle_count(), json.size(), name);
+    detail::check_glb_normals(mesh, name);
+    return {[&mesh, json = std::move(json)](std::FILE* f) { detail::write_glb(f, mesh, json); },
+            static_cast<std::size_t>(bytes)};
 }
 
 }  // namespace
 
 void write_mesh(const std::string& path, const Mesh& mesh) {
     const Writer writer = checked_writer(lower_extension(path), mesh, path);
-    detail::write_file_atomically(path, [&](std::FILE* f) { writer(f, mesh); });
+    detail::write_file_atomically(path, writer.write);
 }
 
 std::vector<unsigned char> write_mesh_to_memory(const Mesh& mesh, const std::string& name) {
     const Writer writer = checked_writer(lower_extension(name), mesh, name);
-    return detail::write_to_memory(name, [&](std::FILE* f) { writer(f, mesh); }, writer.expected_bytes(mesh));
+    return detail::write_to_memory(name, writer.write, writer.bytes);
 }
 
 void detail::write_mesh_to(std::FILE* file, const Mesh& mesh, const std::string& format, const std::string& name) {
     const Writer writer = checked_writer(format, mesh, name);
-    detail::write_to_stream(file, name, [&](std::FILE* f) { writer(f, mesh); });
+    detail::write_to_stream(file, name, writer.write);
 }
 
 }  // namespace voxmesh
